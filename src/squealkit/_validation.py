@@ -1,0 +1,137 @@
+"""Validators for the inputs squealkit shares across modules.
+
+One validator per kind of input, each raising :class:`InputError` (a ``ValueError``)
+with a message that names the parameter, its value and what is allowed. The CLI turns
+these into one line on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+from numbers import Real
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "InputError",
+    "parse_range",
+    "validate_angle",
+    "validate_array_finite",
+    "validate_finite",
+    "validate_fs",
+    "validate_positive",
+    "validate_sign",
+]
+
+
+class InputError(ValueError):
+    """Bad user input: a parameter value, a range, a file or a configuration.
+
+    Subclasses ``ValueError`` so library users can catch it as such; the CLI reports it
+    in one line and exits with code 2.
+    """
+
+
+def _as_float(name: str, value: object) -> float:
+    if isinstance(value, bool) or not isinstance(value, Real | np.number | str):
+        raise InputError(f"Parameter {name}={value!r} is not a number.")
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as e:
+        raise InputError(f"Parameter {name}={value!r} is not a number.") from e
+
+
+def validate_finite(name: str, value: object) -> float:
+    """Return ``value`` as a float, rejecting non-numbers, NaN and infinities."""
+    x = _as_float(name, value)
+    if not math.isfinite(x):
+        raise InputError(f"Parameter {name}={x!r} must be finite.")
+    return x
+
+
+def validate_positive(name: str, value: object, *, allow_zero: bool = False) -> float:
+    """Return ``value`` as a float that is finite and > 0 (or >= 0 with ``allow_zero``)."""
+    x = validate_finite(name, value)
+    if x < 0 or (x == 0 and not allow_zero):
+        need = ">= 0" if allow_zero else "> 0"
+        raise InputError(f"Parameter {name}={x!r} must be {need}.")
+    return x
+
+
+def validate_angle(name: str, value: object) -> float:
+    """Return an angle in radians, finite and strictly inside (-90 deg, 90 deg)."""
+    x = validate_finite(name, value)
+    if not abs(x) < math.pi / 2:
+        raise InputError(
+            f"Parameter {name}={x!r} rad ({math.degrees(x):.6g} deg) must lie strictly "
+            "between -90 and 90 deg."
+        )
+    return x
+
+
+def validate_sign(name: str, value: object) -> int:
+    """Return +1 or -1; anything else is rejected."""
+    x = validate_finite(name, value)
+    if x not in (1.0, -1.0):
+        raise InputError(f"Parameter {name}={value!r} must be +1 or -1.")
+    return int(x)
+
+
+def validate_fs(fs: object, name: str = "fs") -> float:
+    """Return a sample rate in Hz: finite and > 0."""
+    return validate_positive(name, fs)
+
+
+def validate_array_finite(name: str, values: ArrayLike) -> NDArray[np.float64]:
+    """Return ``values`` as a float64 array with only finite entries."""
+    try:
+        arr = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise InputError(f"Parameter {name} must be numeric: {e}") from e
+    if not np.all(np.isfinite(arr)):
+        bad = arr[~np.isfinite(arr)].ravel()[0]
+        raise InputError(f"Parameter {name} contains a non-finite value ({bad!r}).")
+    return arr
+
+
+_RANGE_RE = re.compile(r"^\s*([^:]+):([^:]+):([^:]+)\s*$")
+
+
+def parse_range(name: str, text: str | Sequence[float] | float) -> NDArray[np.float64]:
+    """Parse a grid given as ``"START:STOP:N"`` (N points, both ends included) or a number.
+
+    Examples
+    --------
+    >>> parse_range("mu", "0:0.8:5")
+    array([0. , 0.2, 0.4, 0.6, 0.8])
+    """
+    if isinstance(text, int | float | np.number) and not isinstance(text, bool):
+        return np.array([validate_finite(name, text)])
+    if not isinstance(text, str):
+        return validate_array_finite(name, text)
+    m = _RANGE_RE.match(text)
+    if m is None:
+        try:
+            return np.array([validate_finite(name, text.strip())])
+        except InputError:
+            raise InputError(
+                f"Parameter {name}={text!r} is not a range: use START:STOP:N "
+                "(N points, ends included) or a single number."
+            ) from None
+    start = validate_finite(f"{name} start", m.group(1).strip())
+    stop = validate_finite(f"{name} stop", m.group(2).strip())
+    n_text = m.group(3).strip()
+    try:
+        n = int(n_text)
+    except ValueError:
+        raise InputError(
+            f"Parameter {name}={text!r}: the point count N={n_text!r} is not a whole number."
+        ) from None
+    if n < 1:
+        raise InputError(f"Parameter {name}={text!r}: the point count N={n} must be >= 1.")
+    if n == 1 and start != stop:
+        raise InputError(f"Parameter {name}={text!r}: one point needs START == STOP.")
+    return np.linspace(start, stop, n)

@@ -1,0 +1,1 @@
+"""The ``squealkit`` command line: thin subcommands over the public API."""

@@ -1,0 +1,90 @@
+"""Options shared by the subcommands, and helpers to act on them."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import click
+import numpy as np
+
+from .._validation import InputError
+
+F = Callable[..., Any]
+
+
+def model_options(f: F) -> F:
+    """--preset, --config and --set: which model a command works on."""
+    f = click.option(
+        "--set", "sets", metavar="NAME=VALUE", multiple=True,
+        help="Override a model parameter (SI units; angles as NAME_deg=DEG). Repeatable, "
+        "e.g. --set c1=0 --set alpha_deg=2.5.",
+    )(f)
+    f = click.option(
+        "--config", type=click.Path(dir_okay=False, path_type=Path), default=None,
+        help="Model file (TOML) describing your rig or model; see the README.",
+    )(f)
+    f = click.option(
+        "--preset", default=None, metavar="NAME",
+        help="Built-in model (default lv2013, the paper's rig); 'squealkit presets' lists them.",
+    )(f)
+    return f
+
+
+def output_options(*, dataset: bool = True, plot: bool = True) -> Callable[[F], F]:
+    """--json, --out FILE (.nc or .zarr) and --plot FILE.png."""
+
+    def deco(f: F) -> F:
+        if plot:
+            f = click.option(
+                "--plot", "plot_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+                help="Write a figure (.png, .svg or .pdf).",
+            )(f)
+        if dataset:
+            f = click.option(
+                "--out", "out_path", type=click.Path(path_type=Path), default=None,
+                help="Write the full result as netCDF (.nc) or zarr (.zarr).",
+            )(f)
+        f = click.option(
+            "--json", "as_json", is_flag=True, help="Print a machine-readable summary on stdout.",
+        )(f)
+        return f
+
+    return deco
+
+
+def build_model_from_options(preset: str | None, config: Path | None, sets: tuple[str, ...]):
+    """The model named by --preset/--config with the --set overrides applied."""
+    from ..models import build_model, parse_assignments
+
+    return build_model(preset, config, parse_assignments(sets))
+
+
+def _jsonable(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, np.generic):
+        return _jsonable(obj.item())
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, Path):
+        return str(obj)
+    return obj
+
+
+def emit_json(obj: Any) -> None:
+    """Print ``obj`` as JSON on stdout (NaN and infinity become null)."""
+    click.echo(json.dumps(_jsonable(obj), indent=2, allow_nan=False))
+
+
+def check_output_suffix(path: Path | None, suffixes: tuple[str, ...], option: str) -> None:
+    """Reject an output path whose suffix the command cannot write, before any work."""
+    if path is not None and path.suffix.lower() not in suffixes:
+        raise InputError(f"{option} {str(path)!r} must end in {' or '.join(suffixes)}.")

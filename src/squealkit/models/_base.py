@@ -1,0 +1,238 @@
+"""The model abstraction: linear friction-coupled systems.
+
+Every squealkit model is a frozen dataclass describing
+
+    M x'' + C x' + K(mu, tan_theta) x = F(mu, tan_theta, q)
+
+where the stiffness matrix and the load split into a structural part, a part carried by
+the normal contact force and a part carried by the friction force (paper, eq. 4):
+
+    K = K0 + (1 - mu tan_theta) Kn + s (mu + tan_theta) Kf
+    F = F0 + q [(1 - mu tan_theta) fn + s (mu + tan_theta) ff]
+
+``s`` is the sliding direction (+1 or -1). ``mu + tan_theta`` is the paper's equivalent
+friction coefficient mu_e (eqs. 5-6). Matrices are computed for whole grids at once:
+``mu`` and ``tan_theta`` broadcast, and ``stiffness_matrix`` returns shape ``(..., n, n)``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._validation import (
+    InputError,
+    validate_angle,
+    validate_finite,
+    validate_positive,
+    validate_sign,
+)
+
+__all__ = ["FrictionModel", "SystemMatrices", "param"]
+
+#: Kinds of scalar parameter and the validator that checks each.
+_KINDS = {
+    "positive": lambda n, v: validate_positive(n, v),
+    "nonnegative": lambda n, v: validate_positive(n, v, allow_zero=True),
+    "angle": validate_angle,
+    "finite": validate_finite,
+    "sign": validate_sign,
+}
+
+
+def param(default: Any, *, unit: str, doc: str, kind: str = "positive") -> Any:
+    """Declare a model parameter: a dataclass field with its unit, meaning and check."""
+    if kind not in _KINDS and kind != "array":
+        raise ValueError(f"unknown parameter kind {kind!r}")
+    return field(default=default, metadata={"unit": unit, "doc": doc, "kind": kind})
+
+
+@dataclass(frozen=True)
+class SystemMatrices:
+    """Mass, damping and stiffness matrices of a model at given friction and slope.
+
+    Attributes
+    ----------
+    M, C : ndarray, shape (n, n)
+        Mass [kg] and damping [N s/m] matrices (constant).
+    K : ndarray, shape (..., n, n)
+        Stiffness matrix [N/m], one per grid point.
+    """
+
+    M: NDArray[np.float64]
+    C: NDArray[np.float64]
+    K: NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class FrictionModel(ABC):
+    """Base of all linear friction-coupled models.
+
+    Subclasses are frozen dataclasses whose fields are declared with :func:`param`;
+    every field is validated on construction, so an instance is always physical.
+    """
+
+    #: Short name used in files and reports.
+    kind: ClassVar[str] = "abstract"
+    #: Names of the degrees of freedom, in the order of the state vector.
+    dof_names: ClassVar[tuple[str, ...]] = ()
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            kind = f.metadata.get("kind")
+            if kind in _KINDS:
+                value = _KINDS[kind](f.name, getattr(self, f.name))
+                object.__setattr__(self, f.name, value)
+        self._check_mass_matrix()
+
+    def _check_mass_matrix(self) -> None:
+        M = self.mass_matrix()
+        if not np.allclose(M, M.T, rtol=1e-12, atol=0.0):
+            raise InputError("The mass matrix M must be symmetric.")
+        try:
+            np.linalg.cholesky(M)
+        except np.linalg.LinAlgError:
+            raise InputError("The mass matrix M must be positive definite.") from None
+
+    # -- what a subclass supplies ------------------------------------------------------
+    @abstractmethod
+    def mass_matrix(self) -> NDArray[np.float64]:
+        """Mass matrix M [kg], shape (n, n)."""
+
+    @abstractmethod
+    def damping_matrix(self) -> NDArray[np.float64]:
+        """Damping matrix C [N s/m], shape (n, n)."""
+
+    @abstractmethod
+    def stiffness_parts(
+        self,
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Structural, normal-contact and friction parts ``(K0, Kn, Kf)`` of K [N/m]."""
+
+    @abstractmethod
+    def load_parts(
+        self,
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Constant load F0 [N] and the run-out load vectors ``(fn, ff)`` [N/m]."""
+
+    @property
+    def sliding_direction(self) -> int:
+        """+1 for the equations as printed, -1 for the disc sliding the other way."""
+        return 1
+
+    # -- derived -----------------------------------------------------------------------
+    @property
+    def n_dof(self) -> int:
+        """Number of degrees of freedom n."""
+        return len(self.dof_names)
+
+    def stiffness_matrix(self, mu: ArrayLike, tan_theta: ArrayLike = 0.0) -> NDArray[np.float64]:
+        """Stiffness matrix K(mu, tan_theta) [N/m] (paper, eq. 4).
+
+        Parameters
+        ----------
+        mu : array_like
+            Friction coefficient(s).
+        tan_theta : array_like
+            Slope(s) of the disc surface, tan(theta); broadcasts against ``mu``.
+
+        Returns
+        -------
+        ndarray, shape ``broadcast(mu, tan_theta).shape + (n, n)``
+        """
+        mu_a, t_a = np.broadcast_arrays(np.asarray(mu, float), np.asarray(tan_theta, float))
+        K0, Kn, Kf = self.stiffness_parts()
+        g = (1.0 - mu_a * t_a)[..., None, None]
+        e = (self.sliding_direction * (mu_a + t_a))[..., None, None]
+        return K0 + g * Kn + e * Kf
+
+    def load_vector(
+        self, mu: ArrayLike, tan_theta: ArrayLike = 0.0, q: ArrayLike = 0.0
+    ) -> NDArray[np.float64]:
+        """Load vector F(mu, tan_theta, q) [N] (paper, eq. 4), shape ``(..., n)``."""
+        mu_a, t_a, q_a = np.broadcast_arrays(
+            np.asarray(mu, float), np.asarray(tan_theta, float), np.asarray(q, float)
+        )
+        F0, fn, ff = self.load_parts()
+        g = (1.0 - mu_a * t_a)[..., None]
+        e = (self.sliding_direction * (mu_a + t_a))[..., None]
+        return F0 + q_a[..., None] * (g * fn + e * ff)
+
+    def matrices(self, mu: ArrayLike, tan_theta: ArrayLike = 0.0) -> SystemMatrices:
+        """All three matrices at once; ``K`` has one matrix per grid point."""
+        return SystemMatrices(
+            self.mass_matrix(), self.damping_matrix(), self.stiffness_matrix(mu, tan_theta)
+        )
+
+    def static_equilibrium(
+        self, mu: float = 0.0, tan_theta: float = 0.0, q: float = 0.0
+    ) -> NDArray[np.float64]:
+        """Static deflection x solving K(mu, tan_theta) x = F(mu, tan_theta, q) [m]."""
+        K = self.stiffness_matrix(mu, tan_theta)
+        F = self.load_vector(mu, tan_theta, q)
+        return np.linalg.solve(K, F)
+
+    # -- parameters --------------------------------------------------------------------
+    @classmethod
+    def parameter_info(cls) -> dict[str, dict[str, str]]:
+        """Each parameter's unit, meaning and kind, in declaration order."""
+        return {
+            f.name: {"unit": f.metadata["unit"], "doc": f.metadata["doc"], "kind": f.metadata["kind"]}
+            for f in dataclasses.fields(cls)
+            if "unit" in f.metadata
+        }
+
+    def parameters(self) -> dict[str, Any]:
+        """Parameter values in SI units (angles in radians), as plain Python objects."""
+        out: dict[str, Any] = {}
+        for name in self.parameter_info():
+            v = getattr(self, name)
+            out[name] = v.tolist() if isinstance(v, np.ndarray) else v
+        return out
+
+    def replace(self, **changes: Any) -> FrictionModel:
+        """A new model with some parameters changed (validated); ``*_deg`` names accepted.
+
+        Examples
+        --------
+        >>> from squealkit.models import PinOnDisc3DOF
+        >>> PinOnDisc3DOF().replace(c1=0.0, alpha_deg=3.0).alpha  # doctest: +ELLIPSIS
+        0.05235...
+        """
+        info = self.parameter_info()
+        resolved: dict[str, Any] = {}
+        for key, value in changes.items():
+            name = key
+            if key not in info and key.endswith("_deg") and info.get(key[:-4], {}).get("kind") == "angle":
+                name = key[:-4]
+                value = math.radians(validate_finite(key, value))
+            if name not in info:
+                known = ", ".join(sorted(info))
+                raise InputError(f"Unknown parameter {key!r} for model {self.kind!r}; known: {known}.")
+            resolved[name] = value
+        return dataclasses.replace(self, **resolved)
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"kind": ..., "parameters": {...}}``, enough to rebuild the model."""
+        return {"kind": self.kind, "parameters": self.parameters()}
+
+    def to_json(self) -> str:
+        """The model as a JSON string (stored in result attributes)."""
+        return json.dumps(self.to_dict(), sort_keys=True)
+
+    def undamped(self) -> FrictionModel:
+        """The same model with its damping matrix set to zero (paper, eq. 7)."""
+        info = self.parameter_info()
+        zeros = {
+            k: (np.zeros_like(getattr(self, k)) if v["kind"] == "array" else 0.0)
+            for k, v in info.items()
+            if v["unit"].startswith("N s/m")
+        }
+        return self.replace(**zeros)

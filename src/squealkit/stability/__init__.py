@@ -1,0 +1,28 @@
+"""Stability of friction-coupled systems: complex eigenvalues, critical friction, tolerances."""
+
+from .critical import (
+    CriticalFriction,
+    RunoutTolerance,
+    critical_friction,
+    critical_friction_curve,
+    critical_friction_sensitivity,
+    runout_tolerance,
+)
+from .eigen import UNSTABLE_RTOL, eigenvalues, stability_map, stability_summary, unstable_threshold
+from .tracking import lock_in, track_modes
+
+__all__ = [
+    "UNSTABLE_RTOL",
+    "CriticalFriction",
+    "RunoutTolerance",
+    "critical_friction",
+    "critical_friction_curve",
+    "critical_friction_sensitivity",
+    "eigenvalues",
+    "lock_in",
+    "runout_tolerance",
+    "stability_map",
+    "stability_summary",
+    "track_modes",
+    "unstable_threshold",
+]

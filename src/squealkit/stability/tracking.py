@@ -1,0 +1,138 @@
+"""Mode tracking over a 2-D parameter grid, and lock-in (coalescence) detection.
+
+Eigenvalue solvers return the modes of each grid point in an arbitrary order (here:
+by frequency). Tracking reorders them so that index k follows one physical branch across
+the grid, through crossings and veering: at each step the eigenvalues are matched to a
+prediction (linear extrapolation from the two previous points) by the permutation with the
+least total squared distance. The first ``mu`` column is tracked along ``mu``, then each
+row along ``theta`` from it.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numba as nb
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["lock_in", "track_modes"]
+
+_MAX_BRUTE_FORCE = 5
+
+
+@nb.njit(cache=True, nogil=True)
+def _assign_step(prev1, prev2, have2, cand, perms, out):
+    """Reorder ``cand`` to follow the prediction made from ``prev1`` (and ``prev2``)."""
+    n = cand.shape[0]
+    pred = np.empty(n, dtype=np.complex128)
+    for k in range(n):
+        pred[k] = 2.0 * prev1[k] - prev2[k] if have2 else prev1[k]
+    if perms.shape[0] > 0:
+        best = np.inf
+        best_p = 0
+        for p in range(perms.shape[0]):
+            cost = 0.0
+            for k in range(n):
+                d = cand[perms[p, k]] - pred[k]
+                cost += d.real * d.real + d.imag * d.imag
+                if cost >= best:
+                    break
+            if cost < best:
+                best = cost
+                best_p = p
+        for k in range(n):
+            out[k] = cand[perms[best_p, k]]
+        return
+    # greedy nearest-first assignment for larger n
+    used = np.zeros(n, dtype=np.bool_)
+    for _ in range(n):
+        best = np.inf
+        bk = 0
+        bj = 0
+        for k in range(n):
+            if out[k] != out[k]:  # NaN marks an unassigned slot
+                for j in range(n):
+                    if not used[j]:
+                        d = cand[j] - pred[k]
+                        c = d.real * d.real + d.imag * d.imag
+                        if c < best:
+                            best, bk, bj = c, k, j
+        out[bk] = cand[bj]
+        used[bj] = True
+
+
+@nb.njit(cache=True, parallel=True)
+def _track(lam, perms):
+    nmu, nth, n = lam.shape
+    out = np.empty_like(lam)
+    nan = complex(np.nan, np.nan)
+    out[0, 0] = lam[0, 0]
+    for i in range(1, nmu):
+        for k in range(n):
+            out[i, 0, k] = nan
+        _assign_step(out[i - 1, 0], out[i - 2, 0] if i > 1 else out[i - 1, 0], i > 1,
+                     lam[i, 0], perms, out[i, 0])
+    for i in nb.prange(nmu):
+        for j in range(1, nth):
+            for k in range(n):
+                out[i, j, k] = nan
+            _assign_step(out[i, j - 1], out[i, j - 2] if j > 1 else out[i, j - 1], j > 1,
+                         lam[i, j], perms, out[i, j])
+    return out
+
+
+def track_modes(lam: NDArray[np.complexfloating]) -> NDArray[np.complex128]:
+    """Reorder eigenvalues so each mode index follows one branch over the grid.
+
+    Parameters
+    ----------
+    lam : ndarray, shape (n_mu, n_theta, n_mode)
+        Eigenvalues (one per conjugate pair) in any order at each grid point.
+
+    Returns
+    -------
+    ndarray, same shape
+        Tracked eigenvalues; at ``[0, 0]`` the order of the input is kept.
+    """
+    lam = np.ascontiguousarray(lam, dtype=np.complex128)
+    n = lam.shape[-1]
+    if n <= _MAX_BRUTE_FORCE:
+        perms = np.array(list(itertools.permutations(range(n))), dtype=np.int64)
+    else:
+        perms = np.empty((0, n), dtype=np.int64)
+    return _track(lam, perms)
+
+
+def lock_in(
+    omega: NDArray[np.floating],
+    growth_rate: NDArray[np.floating],
+    *,
+    rtol: float = 1e-3,
+    unstable_threshold: float = 0.0,
+) -> NDArray[np.bool_]:
+    """Where two modes have locked in: equal frequency (within ``rtol``) and one unstable.
+
+    Parameters
+    ----------
+    omega, growth_rate : ndarray, shape (..., n_mode)
+        Imaginary and real parts of the eigenvalues [rad/s, 1/s].
+    rtol : float
+        Relative frequency tolerance for coalescence.
+    unstable_threshold : float or ndarray
+        Growth rate above which a mode counts as unstable [1/s].
+
+    Returns
+    -------
+    ndarray of bool, shape (...)
+    """
+    w = np.asarray(omega)
+    s = np.asarray(growth_rate)
+    dw = np.abs(w[..., :, None] - w[..., None, :])
+    scale = np.maximum(np.abs(w[..., :, None]), np.abs(w[..., None, :]))
+    close = dw <= rtol * scale
+    n = w.shape[-1]
+    close &= ~np.eye(n, dtype=bool)
+    thr = np.asarray(unstable_threshold)[..., None, None] if np.ndim(unstable_threshold) else unstable_threshold
+    unstable_pair = (s[..., :, None] > thr) | (s[..., None, :] > thr)
+    return np.any(close & unstable_pair, axis=(-2, -1))
