@@ -88,7 +88,7 @@ def save_dataset(ds: xr.Dataset, path: str | Path) -> Path:
     engine = _engine_for(final)
     with atomic_path(final, directory=engine == "zarr") as tmp:
         if engine == "zarr":
-            ds.to_zarr(tmp, mode="w", consolidated=True)
+            ds.to_zarr(tmp, mode="w", consolidated=False)
         else:
             ds.to_netcdf(tmp, engine="h5netcdf")
     return final
@@ -101,7 +101,7 @@ def load_dataset(path: str | Path) -> xr.Dataset:
     if not p.exists():
         raise InputError(f"Dataset {str(p)!r} does not exist.")
     if engine == "zarr":
-        with xr.open_zarr(p, consolidated=True) as ds:
+        with xr.open_zarr(p, consolidated=False) as ds:
             return ds.load()
     with xr.open_dataset(p, engine="h5netcdf") as ds:
         return ds.load()

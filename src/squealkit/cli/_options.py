@@ -88,3 +88,37 @@ def check_output_suffix(path: Path | None, suffixes: tuple[str, ...], option: st
     """Reject an output path whose suffix the command cannot write, before any work."""
     if path is not None and path.suffix.lower() not in suffixes:
         raise InputError(f"{option} {str(path)!r} must end in {' or '.join(suffixes)}.")
+
+
+class progress_callback:
+    """A rich progress bar on stderr as a ``progress(done, total)`` callback.
+
+    Disabled (yields None) when ``enabled`` is False or stderr is not a terminal user's.
+    """
+
+    def __init__(self, description: str, *, enabled: bool = True) -> None:
+        self.description = description
+        self.enabled = enabled
+        self._progress = None
+
+    def __enter__(self):
+        if not self.enabled:
+            return None
+        from rich.console import Console
+        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+        self._progress = Progress(
+            TextColumn("{task.description}"), BarColumn(), TextColumn("{task.percentage:>5.1f}%"),
+            TimeElapsedColumn(), TimeRemainingColumn(), console=Console(stderr=True), transient=True,
+        )
+        self._progress.start()
+        task = self._progress.add_task(self.description, total=None)
+
+        def update(done: int, total: int) -> None:
+            self._progress.update(task, completed=done, total=total)
+
+        return update
+
+    def __exit__(self, *exc: object) -> None:
+        if self._progress is not None:
+            self._progress.stop()

@@ -21,6 +21,7 @@ COMMANDS: dict[str, str] = {
     "stability": "squealkit.cli.stability:stability",
     "critical": "squealkit.cli.critical:critical",
     "presets": "squealkit.cli.presets:presets",
+    "tolerance": "squealkit.cli.tolerance:tolerance",
 }
 
 
@@ -82,6 +83,7 @@ def cli() -> None:
     Start here:
       squealkit stability --plot fig2.png      # paper Fig. 2, lock-in band
       squealkit critical --theta 0 --json      # critical friction
+      squealkit tolerance --mu 0.3 --wavelength 1e-3   # allowed run-out
       squealkit presets                        # built-in models
 
     Every subcommand takes --help with an example. Units are SI; angles are

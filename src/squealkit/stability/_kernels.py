@@ -24,6 +24,8 @@ import numba as nb
 import numpy as np
 
 _MAX_ITER = 60
+#: LLVM fast-math flags that keep NaN/inf semantics (the iteration checks for them)
+_FASTMATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
 #: a correction this small is rounding noise
 _TOL_ROUNDING = 1.0e-14
 #: a correction this small, after a superlinear step, leaves an error ~ its cube
@@ -89,7 +91,7 @@ def _companion_roots(b, roots):
         roots[i] = w[i]
 
 
-@nb.njit(cache=True, nogil=True)
+@nb.njit(cache=True, nogil=True, fastmath=_FASTMATH)
 def _aberth(b, z):
     """Refine all roots ``z`` of the monic polynomial ``b`` in place; True if converged.
 
@@ -134,6 +136,56 @@ def _aberth(b, z):
     return False
 
 
+@nb.njit(cache=True, nogil=True, fastmath=_FASTMATH)
+def _aberth_conj(b, u):
+    """Aberth-Ehrlich on the n upper-half-plane roots ``u`` of a real polynomial of degree 2n.
+
+    The other n roots are the conjugates, so only n polynomial evaluations are needed per
+    sweep; the conjugates enter the Aberth sum directly. Returns False (caller falls back
+    to the general iteration) if a root approaches the real axis or anything goes wrong.
+    """
+    deg = b.shape[0] - 1
+    n = u.shape[0]
+    prev = np.inf
+    for _ in range(_MAX_ITER):
+        worst = 0.0
+        for k in range(n):
+            zk = u[k]
+            p = complex(b[deg])
+            dp = 0j
+            for d in range(deg - 1, -1, -1):
+                dp = dp * zk + p
+                p = p * zk + b[d]
+            if p == 0j:
+                continue
+            if dp == 0j:
+                return False
+            ratio = p / dp
+            acc = 1.0 / (zk - zk.conjugate())
+            for j in range(n):
+                acc += 1.0 / (zk - u[j].conjugate())
+                if j != k:
+                    diff = zk - u[j]
+                    if diff == 0j:
+                        return False
+                    acc += 1.0 / diff
+            w = ratio / (1.0 - ratio * acc)
+            if not (np.isfinite(w.real) and np.isfinite(w.imag)):
+                return False
+            znew = zk - w
+            mag = abs(znew)
+            if not znew.imag > 1e-9 * mag:
+                return False
+            u[k] = znew
+            rel = abs(w) / mag
+            if rel > worst:
+                worst = rel
+        if worst <= _TOL_ROUNDING or (worst <= _TOL_FAST and worst <= prev * prev):
+            return True
+        prev = worst
+    return False
+
+
 @nb.njit(cache=True, nogil=True)
 def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop):
     n = M.shape[0]
@@ -144,7 +196,12 @@ def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop):
     tmp_a = np.empty(deg + 3)
     tmp_b = np.empty(deg + 3)
     z = np.empty(deg, dtype=np.complex128)
+    u = np.empty(n, dtype=np.complex128)
+    pw = np.empty(deg + 1)
+    w0 = 1.0
+    have_scale = False
     n_guess = 0
+    n_conj = 0
     n_fallback = 0
     for idx in range(start, stop):
         gi = g[idx]
@@ -154,15 +211,32 @@ def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop):
                 K[r, c] = K0[r, c] + gi * Kn[r, c] + ei * Kf[r, c]
         _charpoly(M, C, K, perms, signs, a, tmp_a, tmp_b)
         lead = a[deg]
-        # scale s = w0 z so that the monic polynomial in z has unit geometric-mean roots
-        c0 = abs(a[0])
-        w0 = (c0 / abs(lead)) ** (1.0 / deg) if c0 > 0.0 else 1.0
-        scale = 1.0
-        for d in range(deg + 1):
-            b[d] = a[d] * scale / (lead * w0**deg)
-            scale *= w0
+        if not have_scale:
+            # scale s = w0 z so that the monic polynomial in z has unit geometric-mean
+            # roots; one scale per chunk (roots vary little between neighbours)
+            c0 = abs(a[0])
+            w0 = (c0 / abs(lead)) ** (1.0 / deg) if c0 > 0.0 else 1.0
+            for d in range(deg + 1):
+                pw[d] = w0 ** (d - deg)
+            have_scale = True
+        for d in range(deg):
+            b[d] = a[d] * pw[d] / lead
         b[deg] = 1.0
+        # fast path: only the n upper roots, predicted from the previous points
         converged = False
+        if n_conj > 0:
+            for k in range(n):
+                zk = roots[idx - 1, k]
+                if n_conj > 1:
+                    zk = 2.0 * zk - roots[idx - 2, k]
+                u[k] = zk / w0
+            if _aberth_conj(b, u):
+                for k in range(n):
+                    roots[idx, k] = u[k] * w0
+                    roots[idx, n + k] = u[k].conjugate() * w0
+                n_conj += 1
+                n_guess += 1
+                continue
         if n_guess > 0:
             for k in range(deg):
                 zk = roots[idx - 1, k]
@@ -176,8 +250,21 @@ def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop):
             n_fallback += 1
             if not converged:
                 _companion_roots(b, z)
+        # store with the upper roots first when every root is complex (enables the fast path)
+        n_up = 0
         for k in range(deg):
-            roots[idx, k] = z[k] * w0
+            if z[k].imag > 1e-9 * abs(z[k]):
+                u[n_up % n] = z[k]
+                n_up += 1
+        if n_up == n:
+            for k in range(n):
+                roots[idx, k] = u[k] * w0
+                roots[idx, n + k] = u[k].conjugate() * w0
+            n_conj = 1
+        else:
+            for k in range(deg):
+                roots[idx, k] = z[k] * w0
+            n_conj = 0
         n_guess += 1
     return n_fallback
 
@@ -200,11 +287,12 @@ def quadratic_eigvals(M, C, K0, Kn, Kf, g, e, perms, signs, roots, chunk):
 
 @nb.njit(cache=True, parallel=True)
 def select_modes(roots, out):
-    """Pick n of the 2n roots per point: one of each conjugate pair (Im >= 0).
+    """Pick n of the 2n roots per point, one per conjugate pair, lowest frequency first.
 
-    Sorting by imaginary part descending (ties by real part descending) keeps the upper
-    root of every complex pair, and of real roots (overdamped or divergent modes) the
-    largest, so the most unstable root is never dropped.
+    Of each complex pair the root with Im > 0 is kept; of real roots (overdamped or
+    divergent modes) the largest, so the most unstable root is never dropped. Sorting by
+    imaginary part descending (ties by real part descending) and taking the first n does
+    exactly that; the n are then written in ascending frequency.
     """
     npts, deg = roots.shape
     n = out.shape[1]
@@ -220,4 +308,52 @@ def select_modes(roots, out):
                 j -= 1
             r[j + 1] = key
         for k in range(n):
-            out[i, k] = r[k]
+            out[i, k] = r[n - 1 - k]
+
+
+@nb.njit(cache=True, parallel=True)
+def derived_quantities(lam, unstable_rtol, lock_rtol):
+    """Per-mode and per-point quantities of a stability map in one pass.
+
+    ``lam`` has shape (npts, n). Returns growth rate, omega, damping ratio, the unstable
+    flag per mode, and per point the largest growth rate, whether any mode is unstable
+    and whether two modes have locked in (frequencies within ``lock_rtol``, one unstable).
+    """
+    npts, n = lam.shape
+    sigma = np.empty((npts, n))
+    omega = np.empty((npts, n))
+    zeta = np.empty((npts, n))
+    unstable = np.empty((npts, n), dtype=np.bool_)
+    smax = np.empty(npts)
+    any_u = np.empty(npts, dtype=np.bool_)
+    locked = np.empty(npts, dtype=np.bool_)
+    for i in nb.prange(npts):
+        mag_max = 0.0
+        for k in range(n):
+            mag_max = max(mag_max, abs(lam[i, k]))
+        thr = unstable_rtol * mag_max
+        best = -np.inf
+        anyu = False
+        for k in range(n):
+            s = lam[i, k].real
+            w = lam[i, k].imag
+            mag = abs(lam[i, k])
+            sigma[i, k] = s
+            omega[i, k] = w
+            zeta[i, k] = -s / mag if mag > 0.0 else 0.0
+            u = s > thr
+            unstable[i, k] = u
+            anyu = anyu or u
+            best = max(best, s)
+        smax[i] = best
+        any_u[i] = anyu
+        lk = False
+        for k in range(n):
+            for m in range(k + 1, n):
+                if unstable[i, k] or unstable[i, m]:
+                    wk = omega[i, k]
+                    wm = omega[i, m]
+                    if abs(wk - wm) <= lock_rtol * max(abs(wk), abs(wm)):
+                        lk = True
+        locked[i] = lk
+    return sigma, omega, zeta, unstable, smax, any_u, locked

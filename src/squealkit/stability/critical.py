@@ -167,17 +167,19 @@ def critical_friction_curve(
 
     s0 = unstable_at(np.zeros_like(t))
     # stable at mu = 0: search upwards; unstable: search downwards for the boundary
-    up_a, up_b, up_found, _ = _first_change(unstable_at, np.zeros_like(t), mu_max, scan)
-    dn_a, dn_b, dn_found, _ = _first_change(unstable_at, np.zeros_like(t), -mu_max, scan)
+    up_a, _up_b, up_found, _ = _first_change(unstable_at, np.zeros_like(t), mu_max, scan)
+    _dn_a, dn_b, dn_found, _ = _first_change(unstable_at, np.zeros_like(t), -mu_max, scan)
     # the boundary value: the stable side's end of the bracket (rounding-level bracket)
     mu_c = np.where(s0, dn_b, up_a)
-    mu_unst = np.where(s0, dn_a, up_b)
     found = np.where(s0, dn_found, up_found)
     status = np.where(s0, 1, np.where(found, 0, 2))
     mu_c = np.where(found, mu_c, np.nan)
     omega = np.full_like(t, np.nan)
     if found.any():
-        omega[found] = _onset_frequency(model, mu_unst[found], t[found], damped)
+        # On the rounding-level bracket every growth rate is noise-sized; a step of 1e-6
+        # into the unstable side (always towards larger mu) makes the onset mode stand out.
+        step = 1e-6 * np.maximum(1.0, np.abs(mu_c[found]))
+        omega[found] = _onset_frequency(model, mu_c[found] + step, t[found], damped)
     ds = xr.Dataset(
         {
             "mu_critical": ("theta", mu_c, {"units": "1", "long_name": "critical friction coefficient"}),

@@ -18,8 +18,8 @@ from numpy.typing import ArrayLike, NDArray
 from .. import __version__
 from .._validation import InputError, validate_array_finite
 from ..models import FrictionModel
-from ._kernels import permutations_table, quadratic_eigvals, select_modes
-from .tracking import lock_in, track_modes
+from ._kernels import derived_quantities, permutations_table, quadratic_eigvals, select_modes
+from .tracking import track_modes
 
 __all__ = [
     "UNSTABLE_RTOL",
@@ -87,7 +87,7 @@ def eigenvalues(
 
     One eigenvalue per mode: of each conjugate pair the one with ``omega >= 0``; of real
     pairs (overdamped or divergent modes) the larger. Modes are ordered by frequency,
-    highest first, at each point (use :func:`stability_map` for tracked modes).
+    lowest first, at each point (use :func:`stability_map` for tracked modes).
 
     Parameters
     ----------
@@ -188,24 +188,19 @@ def stability_map(
         raise InputError("Parameter theta must lie strictly between -90 and 90 deg.")
     tan_t = np.tan(th_a)
     lam = eigenvalues(model, mu_a[:, None], tan_t[None, :], damped=damped, progress=progress)
+    # lowest frequency first; tracking keeps the order of the first grid point
     if track:
         lam = track_modes(lam)
-        # name modes by frequency at the first grid point, lowest first
-        order = np.argsort(lam[0, 0].imag, kind="stable")
-        lam = lam[..., order]
-    else:
-        lam = lam[..., ::-1]
     return _dataset(model, mu_a, th_a, lam, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol)
 
 
 def _dataset(model, mu, theta, lam, *, damped, tracked, lock_in_rtol) -> xr.Dataset:
-    sigma = lam.real
-    omega = lam.imag
-    mag = np.abs(lam)
-    thr = unstable_threshold(lam)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        zeta = np.where(mag > 0, -sigma / mag, 0.0)
-    unstable = sigma > thr[..., None]
+    n = lam.shape[-1]
+    grid = lam.shape[:-1]
+    flat = np.ascontiguousarray(lam.reshape(-1, n))
+    sigma, omega, zeta, unstable, smax, any_u, locked = (
+        a.reshape(grid + a.shape[1:]) for a in derived_quantities(flat, UNSTABLE_RTOL, lock_in_rtol)
+    )
     dims = ("mu", "theta", "mode")
     n = lam.shape[-1]
     tan_t = np.tan(theta)
@@ -216,14 +211,10 @@ def _dataset(model, mu, theta, lam, *, damped, tracked, lock_in_rtol) -> xr.Data
             "frequency": (dims, omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency"}),
             "damping_ratio": (dims, zeta, {"units": "1", "long_name": "damping ratio -sigma/|lambda|"}),
             "unstable": (dims, unstable, {"long_name": "mode unstable (sigma > 1e-9 |lambda|)"}),
-            "max_growth_rate": (("mu", "theta"), sigma.max(axis=-1),
-                                {"units": "1/s", "long_name": "largest growth rate"}),
-            "any_unstable": (("mu", "theta"), unstable.any(axis=-1),
-                             {"long_name": "some mode unstable"}),
-            "lock_in": (("mu", "theta"),
-                        lock_in(omega, sigma, rtol=lock_in_rtol, unstable_threshold=thr),
-                        {"long_name": "two modes coalesced in frequency, one unstable",
-                         "rtol": lock_in_rtol}),
+            "max_growth_rate": (("mu", "theta"), smax, {"units": "1/s", "long_name": "largest growth rate"}),
+            "any_unstable": (("mu", "theta"), any_u, {"long_name": "some mode unstable"}),
+            "lock_in": (("mu", "theta"), locked,
+                        {"long_name": "two modes coalesced in frequency, one unstable", "rtol": lock_in_rtol}),
         },
         coords={
             "mu": ("mu", mu, {"units": "1", "long_name": "friction coefficient"}),

@@ -5,7 +5,10 @@ by frequency). Tracking reorders them so that index k follows one physical branc
 the grid, through crossings and veering: at each step the eigenvalues are matched to a
 prediction (linear extrapolation from the two previous points) by the permutation with the
 least total squared distance. The first ``mu`` column is tracked along ``mu``, then each
-row along ``theta`` from it.
+row along ``theta`` from it (rows in parallel).
+
+At an exact coalescence (undamped lock-in: equal omega, sigma = +-s) continuity cannot tell
+the branches apart; by convention the lower mode index carries the growing branch there.
 """
 
 from __future__ import annotations
@@ -19,15 +22,14 @@ from numpy.typing import NDArray
 __all__ = ["lock_in", "track_modes"]
 
 _MAX_BRUTE_FORCE = 5
+#: relative tolerance for an exact (undamped) coalescence
+_LOCK_RTOL = 1e-7
 
 
 @nb.njit(cache=True, nogil=True)
-def _assign_step(prev1, prev2, have2, cand, perms, out):
-    """Reorder ``cand`` to follow the prediction made from ``prev1`` (and ``prev2``)."""
+def _assign_step(pred, cand, perms, out):
+    """Write ``cand`` into ``out`` in the order that best matches the prediction ``pred``."""
     n = cand.shape[0]
-    pred = np.empty(n, dtype=np.complex128)
-    for k in range(n):
-        pred[k] = 2.0 * prev1[k] - prev2[k] if have2 else prev1[k]
     if perms.shape[0] > 0:
         best = np.inf
         best_p = 0
@@ -46,12 +48,13 @@ def _assign_step(prev1, prev2, have2, cand, perms, out):
         return
     # greedy nearest-first assignment for larger n
     used = np.zeros(n, dtype=np.bool_)
+    done = np.zeros(n, dtype=np.bool_)
     for _ in range(n):
         best = np.inf
         bk = 0
         bj = 0
         for k in range(n):
-            if out[k] != out[k]:  # NaN marks an unassigned slot
+            if not done[k]:
                 for j in range(n):
                     if not used[j]:
                         d = cand[j] - pred[k]
@@ -60,25 +63,54 @@ def _assign_step(prev1, prev2, have2, cand, perms, out):
                             best, bk, bj = c, k, j
         out[bk] = cand[bj]
         used[bj] = True
+        done[bk] = True
+
+
+@nb.njit(cache=True, nogil=True)
+def _extrapolate(a, b, have_b, out):
+    for k in range(a.shape[0]):
+        out[k] = 2.0 * a[k] - b[k] if have_b else a[k]
+
+
+@nb.njit(cache=True, nogil=True)
+def _order_locked(row):
+    """In each exactly coalesced pair (same omega, sigma = +-s) put +s on the lower index.
+
+    At an exact coalescence of an undamped system continuity cannot tell which branch
+    continues which mode; this convention makes the growing branch one whole surface.
+    """
+    n = row.shape[0]
+    for k in range(n):
+        for m in range(k + 1, n):
+            a = row[k]
+            b = row[m]
+            scale = max(abs(a), abs(b))
+            if abs(a.imag - b.imag) <= _LOCK_RTOL * scale and abs(a.real + b.real) <= _LOCK_RTOL * scale:
+                if a.real < b.real:
+                    row[k] = b
+                    row[m] = a
 
 
 @nb.njit(cache=True, parallel=True)
 def _track(lam, perms):
     nmu, nth, n = lam.shape
     out = np.empty_like(lam)
-    nan = complex(np.nan, np.nan)
+    p1 = np.empty(n, dtype=np.complex128)
     out[0, 0] = lam[0, 0]
+    _order_locked(out[0, 0])
+    # first column along mu
     for i in range(1, nmu):
-        for k in range(n):
-            out[i, 0, k] = nan
-        _assign_step(out[i - 1, 0], out[i - 2, 0] if i > 1 else out[i - 1, 0], i > 1,
-                     lam[i, 0], perms, out[i, 0])
+        _extrapolate(out[i - 1, 0], out[i - 2, 0] if i > 1 else out[i - 1, 0], i > 1, p1)
+        _assign_step(p1, lam[i, 0], perms, out[i, 0])
+        _order_locked(out[i, 0])
+    # rows along theta, in parallel; ties at an exact coalescence are broken by the
+    # convention of _order_locked, the same way in every row
     for i in nb.prange(nmu):
+        q = np.empty(n, dtype=np.complex128)
         for j in range(1, nth):
-            for k in range(n):
-                out[i, j, k] = nan
-            _assign_step(out[i, j - 1], out[i, j - 2] if j > 1 else out[i, j - 1], j > 1,
-                         lam[i, j], perms, out[i, j])
+            _extrapolate(out[i, j - 1], out[i, j - 2] if j > 1 else out[i, j - 1], j > 1, q)
+            _assign_step(q, lam[i, j], perms, out[i, j])
+            _order_locked(out[i, j])
     return out
 
 
@@ -95,7 +127,7 @@ def track_modes(lam: NDArray[np.complexfloating]) -> NDArray[np.complex128]:
     ndarray, same shape
         Tracked eigenvalues; at ``[0, 0]`` the order of the input is kept.
     """
-    lam = np.ascontiguousarray(lam, dtype=np.complex128)
+    lam = np.ascontiguousarray(lam, dtype=np.complex128)  # a no-op for kernel output
     n = lam.shape[-1]
     if n <= _MAX_BRUTE_FORCE:
         perms = np.array(list(itertools.permutations(range(n))), dtype=np.int64)

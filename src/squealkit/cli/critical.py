@@ -1,0 +1,87 @@
+"""``squealkit critical``: critical friction at a run-out incline, and its sensitivities."""
+
+from __future__ import annotations
+
+import math
+
+import click
+
+from ._options import build_model_from_options, emit_json, model_options
+
+
+@click.command()
+@model_options
+@click.option("--theta", "theta_spec", default="0", show_default=True, metavar="DEG|START:STOP:N",
+              help="Run-out incline in DEGREES, or a range for a curve mu_crit(theta).")
+@click.option("--damped", is_flag=True, help="Include the damping matrix.")
+@click.option("--mu-max", default=2.0, show_default=True, type=float, help="Search friction up to this value.")
+@click.option("--sensitivity", is_flag=True,
+              help="Also report d mu_crit / d p and the elasticity for every model parameter.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON on stdout.")
+def critical(preset, config, sets, theta_spec, damped, mu_max, sensitivity, as_json) -> None:
+    """Critical friction: where the brake first loses stability (paper §3, eq. 6).
+
+    Finds mu_crit by root-finding on the stability boundary (scan, then bisection
+    to rounding level), and the critical equivalent friction mu_e = mu_crit +
+    tan(theta), which the paper predicts is nearly independent of theta.
+
+    \b
+    Examples:
+      squealkit critical --theta 0 --json
+      squealkit critical --theta -8:8:17
+      squealkit critical --theta 0 --sensitivity
+      squealkit critical --preset hoffmann2002
+
+    \b
+    --json keys (one theta): mu_critical, mu_e_critical, omega_rad_s,
+    frequency_hz (of the mode that loses stability, at onset), theta_deg,
+    status (onset | unstable_without_friction | stable_in_range), damped;
+    with --sensitivity a list "sensitivity" of {parameter, value, unit, dmu_dp,
+    elasticity}. A range of theta gives the same keys, each a list over theta.
+    """
+    from .._validation import InputError, parse_range
+    from ..stability import critical_friction, critical_friction_curve, critical_friction_sensitivity
+
+    model = build_model_from_options(preset, config, sets)
+    theta_deg = parse_range("--theta", theta_spec)
+    if any(abs(t) >= 90.0 for t in theta_deg):
+        raise InputError(f"--theta {theta_spec!r}: angles must lie strictly between -90 and 90 deg.")
+    if theta_deg.size == 1:
+        res = critical_friction(model, math.radians(float(theta_deg[0])), damped=damped, mu_max=mu_max)
+        out = res.to_dict()
+        out.pop("theta")
+        if sensitivity:
+            out["sensitivity"] = critical_friction_sensitivity(model, res.theta, damped=damped)
+        if as_json:
+            emit_json(out)
+            return
+        click.echo(f"theta = {res.theta_deg:g} deg ({'damped' if damped else 'undamped'}): {res.status}")
+        click.echo(f"  mu_crit   = {res.mu_critical:.8f}")
+        click.echo(f"  mu_e_crit = {res.mu_e_critical:.8f}   (mu_crit + tan theta)")
+        click.echo(f"  frequency = {res.omega_rad_s:.2f} rad/s = {res.frequency_hz:.2f} Hz at onset")
+        if sensitivity:
+            click.echo("  sensitivity of mu_crit (elasticity = % change of mu_crit per % change of p):")
+            for row in out["sensitivity"]:
+                click.echo(f"    {row['parameter']:<8} {row['elasticity']:+9.4f}   d mu/dp = {row['dmu_dp']:+.4g} "
+                           f"per {row['unit']}")
+        return
+    if sensitivity:
+        raise InputError("--sensitivity needs a single --theta value.")
+    ds = critical_friction_curve(model, [math.radians(t) for t in theta_deg], damped=damped, mu_max=mu_max)
+    status = {0: "onset", 1: "unstable_without_friction", 2: "stable_in_range"}
+    out = {
+        "theta_deg": ds.theta_deg.values,
+        "mu_critical": ds.mu_critical.values,
+        "mu_e_critical": ds.mu_e_critical.values,
+        "omega_rad_s": ds.omega_rad_s.values,
+        "frequency_hz": ds.frequency_hz.values,
+        "status": [status[int(s)] for s in ds.status.values],
+        "damped": damped,
+    }
+    if as_json:
+        emit_json(out)
+        return
+    click.echo(f"{'theta [deg]':>12} {'mu_crit':>12} {'mu_e_crit':>12} {'f [Hz]':>10}")
+    for t, m, me, f in zip(out["theta_deg"], out["mu_critical"], out["mu_e_critical"], out["frequency_hz"],
+                           strict=True):
+        click.echo(f"{t:12.4g} {m:12.6f} {me:12.6f} {f:10.2f}")

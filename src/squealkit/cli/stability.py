@@ -1,0 +1,94 @@
+"""``squealkit stability``: complex eigenvalues over a grid of friction and run-out incline."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import click
+
+from ._options import (
+    build_model_from_options,
+    check_output_suffix,
+    emit_json,
+    model_options,
+    output_options,
+    progress_callback,
+)
+
+
+@click.command()
+@model_options
+@click.option("--mu", "mu_spec", default="0:0.8:81", show_default=True, metavar="START:STOP:N",
+              help="Friction coefficients: N points from START to STOP, or one number.")
+@click.option("--theta", "theta_spec", default="-8:8:81", show_default=True, metavar="START:STOP:N",
+              help="Run-out incline angles in DEGREES: N points from START to STOP, or one number.")
+@click.option("--damped", is_flag=True, help="Include the damping matrix (the paper's sweep, eq. 7, is undamped).")
+@click.option("--plot-map", "map_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Also write a stability map with the critical-friction curve (.png/.svg/.pdf).")
+@output_options()
+def stability(preset, config, sets, mu_spec, theta_spec, damped, map_path, as_json, out_path, plot_path) -> None:
+    """Complex eigenvalues over friction mu and SRO incline theta (paper §3, Fig. 2).
+
+    Solves M x'' + K(mu, tan theta) x = 0 (or with C, --damped) at every grid
+    point, tracks the modes across the grid and reports where they lock in and
+    grow. Prints a summary; --json for machine-readable output.
+
+    \b
+    Examples:
+      squealkit stability --plot fig2.png
+      squealkit stability --mu 0:0.8:401 --theta -8:8:401 --out map.nc --json
+      squealkit stability --preset hoffmann2002 --mu 0:0.5:201 --theta 0
+      squealkit stability --set alpha_deg=3 --damped --plot-map map.png
+
+    \b
+    --json keys: unstable_omega_rad_s and unstable_frequency_hz ([min, max] of the
+    most unstable mode's frequency over unstable points, or null),
+    unstable_fraction, lock_in_fraction, max_growth_rate [1/s], grid_points,
+    mu_range, theta_deg_range, damped.
+    """
+    from .._validation import parse_range
+    from ..io import save_dataset, save_figure
+    from ..stability import critical_friction_curve, stability_map, stability_summary
+
+    check_output_suffix(out_path, (".nc", ".zarr"), "--out")
+    check_output_suffix(plot_path, (".png", ".svg", ".pdf"), "--plot")
+    check_output_suffix(map_path, (".png", ".svg", ".pdf"), "--plot-map")
+    model = build_model_from_options(preset, config, sets)
+    mu = parse_range("--mu", mu_spec)
+    theta_deg = parse_range("--theta", theta_spec)
+    if any(abs(t) >= 90.0 for t in theta_deg):
+        from .._validation import InputError
+
+        raise InputError(f"--theta {theta_spec!r}: angles must lie strictly between -90 and 90 deg.")
+    theta = [math.radians(t) for t in theta_deg]
+    with progress_callback("eigenvalues", enabled=not as_json and mu.size * len(theta) > 200_000) as cb:
+        ds = stability_map(model, mu, theta, damped=damped, progress=cb)
+    summary = stability_summary(ds)
+    if out_path is not None:
+        save_dataset(ds, out_path)
+    if plot_path is not None:
+        from ..plotting.stability import fig2_plot
+
+        save_figure(fig2_plot(ds), plot_path)
+    if map_path is not None:
+        from ..plotting.stability import stability_map_plot
+
+        crit = critical_friction_curve(model, theta, damped=damped) if len(theta) <= 2001 else None
+        save_figure(stability_map_plot(ds, critical=crit), map_path)
+    if as_json:
+        emit_json(summary)
+        return
+    click.echo(f"model: {model.kind} ({'damped' if damped else 'undamped'}), "
+               f"{summary['grid_points']} grid points")
+    click.echo(f"unstable fraction: {summary['unstable_fraction']:.4f}")
+    click.echo(f"max growth rate:   {summary['max_growth_rate']:.6g} 1/s")
+    if summary["unstable_omega_rad_s"] is None:
+        click.echo("no unstable point on this grid")
+    else:
+        lo, hi = summary["unstable_omega_rad_s"]
+        flo, fhi = summary["unstable_frequency_hz"]
+        click.echo(f"unstable mode frequency: {lo:.1f}-{hi:.1f} rad/s ({flo:.1f}-{fhi:.1f} Hz)")
+    for label, path in (("dataset", out_path), ("figure", plot_path), ("map", map_path)):
+        if path is not None:
+            click.echo(f"wrote {label}: {path}")

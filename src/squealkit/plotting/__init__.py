@@ -1,0 +1,1 @@
+"""Figures: each ``*_plot(result, ...)`` draws a computed result; matplotlib is imported lazily."""

@@ -1,0 +1,152 @@
+"""Figures of stability results: the paper's Fig. 2, a stability map and a root locus.
+
+Each function draws a result computed elsewhere and returns the matplotlib Figure; none
+computes anything the result does not hold. matplotlib is imported inside the functions.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+__all__ = ["coupled_modes", "fig2_plot", "root_locus_plot", "stability_map_plot"]
+
+
+def _figure(**kwargs: Any):
+    from matplotlib.figure import Figure
+
+    return Figure(**kwargs)
+
+
+def coupled_modes(ds: xr.Dataset) -> list[int]:
+    """Modes that become unstable anywhere on the grid, with the modes they lock in with.
+
+    Falls back to all modes on a grid without instability.
+    """
+    sigma = ds["growth_rate"].values
+    omega = ds["omega"].values
+    unstable = ds["unstable"].values.any(axis=(0, 1))
+    chosen = set(np.flatnonzero(unstable).tolist())
+    if not chosen:
+        return list(range(ds.sizes["mode"]))
+    i, j = np.unravel_index(np.argmax(sigma.max(axis=-1)), sigma.shape[:2])
+    k = int(np.argmax(sigma[i, j]))
+    dw = np.abs(omega[i, j] - omega[i, j, k])
+    dw[k] = np.inf
+    chosen.add(int(np.argmin(dw)))
+    return sorted(chosen)
+
+
+def fig2_plot(ds: xr.Dataset, *, modes: list[int] | None = None, fig=None):
+    """Paper Fig. 2: real and imaginary parts of the eigenvalues over mu and theta.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A stability map (:func:`squealkit.stability.stability_map`).
+    modes : list of int, optional
+        Modes to draw; default the coupled ones (:func:`coupled_modes`).
+    fig : matplotlib Figure, optional
+        Figure to draw into (cleared); a new one otherwise.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig = fig or _figure(figsize=(12, 5.2))
+    fig.clf()
+    modes = coupled_modes(ds) if modes is None else modes
+    MU, TH = np.meshgrid(ds.mu.values, ds.theta_deg.values, indexing="ij")
+    colors = ["tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown"]
+    titles = ("(a) real part: growth rate sigma [1/s]", "(b) imaginary part: omega [rad/s]")
+    for panel, (var, title) in enumerate(zip(("growth_rate", "omega"), titles, strict=True)):
+        ax = fig.add_subplot(1, 2, panel + 1, projection="3d")
+        for n, k in enumerate(modes):
+            Z = ds[var].isel(mode=k).values
+            ax.plot_surface(MU, TH, Z, color=colors[n % len(colors)], alpha=0.75, linewidth=0,
+                            rstride=max(1, MU.shape[0] // 40), cstride=max(1, MU.shape[1] // 40))
+            ax.plot([], [], color=colors[n % len(colors)], label=f"mode {k}")
+        ax.set_xlabel("friction coefficient mu")
+        ax.set_ylabel("incline theta [deg]")
+        ax.set_zlabel("sigma [1/s]" if var == "growth_rate" else "omega [rad/s]")
+        ax.set_title(title, fontsize=10)
+        ax.view_init(elev=22, azim=-128)
+        ax.legend(loc="upper left", fontsize=8)
+    damped = "damped" if ds.attrs.get("damped") else "undamped (eq. 7)"
+    fig.suptitle(f"Complex eigenvalues versus friction and SRO incline, {damped}")
+    return fig
+
+
+def stability_map_plot(ds: xr.Dataset, *, critical: xr.Dataset | None = None, ax=None):
+    """Largest growth rate over (mu, theta) with the stability boundary.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A stability map.
+    critical : xarray.Dataset, optional
+        A critical-friction curve (:func:`squealkit.stability.critical_friction_curve`)
+        drawn over the map.
+    ax : matplotlib Axes, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    if ax is None:
+        fig = _figure(figsize=(7, 5))
+        ax = fig.add_subplot(1, 1, 1)
+    fig = ax.figure
+    sig = ds["max_growth_rate"].values
+    vmax = float(np.nanmax(np.abs(sig))) or 1.0
+    mesh = ax.pcolormesh(ds.mu.values, ds.theta_deg.values, sig.T, cmap="RdBu_r", vmin=-vmax, vmax=vmax,
+                         shading="auto")
+    fig.colorbar(mesh, ax=ax, label="largest growth rate sigma [1/s]")
+    if ds.sizes["mu"] > 1 and ds.sizes["theta"] > 1:
+        ax.contour(ds.mu.values, ds.theta_deg.values, ds["any_unstable"].values.T.astype(float), levels=[0.5],
+                   colors="k", linewidths=1.2)
+    if critical is not None:
+        ax.plot(critical["mu_critical"].values, critical["theta_deg"].values, "k--", lw=1.5,
+                label="critical friction mu_crit(theta)")
+        ax.legend(loc="lower left", fontsize=8)
+    ax.set_xlabel("friction coefficient mu")
+    ax.set_ylabel("run-out incline theta [deg]")
+    ax.set_title("Stability map: unstable where sigma > 0 (red)")
+    return fig
+
+
+def root_locus_plot(ds: xr.Dataset, *, theta_index: int | None = None, ax=None):
+    """Eigenvalues in the complex plane as mu_e = mu + tan(theta) grows (one theta column).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A stability map.
+    theta_index : int, optional
+        Which theta column to follow; default the one nearest theta = 0.
+    ax : matplotlib Axes, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    if ax is None:
+        fig = _figure(figsize=(7, 5))
+        ax = fig.add_subplot(1, 1, 1)
+    fig = ax.figure
+    j = int(np.argmin(np.abs(ds.theta.values))) if theta_index is None else theta_index
+    col = ds.isel(theta=j)
+    mu_e = col["mu_e"].values
+    sc = None
+    for k in range(ds.sizes["mode"]):
+        sc = ax.scatter(col["growth_rate"].isel(mode=k), col["frequency"].isel(mode=k), c=mu_e, s=8,
+                        cmap="viridis")
+    if sc is not None:
+        fig.colorbar(sc, ax=ax, label="mu_e = mu + tan(theta)")
+    ax.axvline(0.0, color="k", lw=0.8)
+    ax.set_xlabel("growth rate sigma [1/s]")
+    ax.set_ylabel("frequency [Hz]")
+    ax.set_title(f"Root locus over mu_e (theta = {float(col.theta_deg):.2f} deg)")
+    return fig
