@@ -88,7 +88,7 @@ class Hoffmann2002(FrictionModel):
         a, b, d = K0[0, 0], K0[1, 0], K0[1, 1] + Kn[1, 1]
         if b == 0.0:
             return math.inf
-        mu = ((a - d) ** 2 + 4.0 * b * b) / (4.0 * b * self.k3)
+        mu = float(((a - d) ** 2 + 4.0 * b * b) / (4.0 * b * self.k3))
         mu *= self.sliding
         if mu < 0:
             raise InputError(

@@ -30,6 +30,8 @@ _FASTMATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
 _TOL_ROUNDING = 1.0e-14
 #: a correction this small, after a superlinear step, leaves an error ~ its cube
 _TOL_FAST = 1.0e-6
+#: accepted roots must solve the scaled polynomial to this backward error
+_BACKWARD_TOL = 1.0e-11
 
 
 def permutations_table(n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -92,6 +94,28 @@ def _companion_roots(b, roots):
 
 
 @nb.njit(cache=True, nogil=True, fastmath=_FASTMATH)
+def _backward_ok(b, z, count):
+    """True if each of the first ``count`` roots ``z`` has a rounding-level backward error.
+
+    ``|p(z)| / sum_d |b_d| |z|^d`` must not exceed ``_BACKWARD_TOL``. This catches the
+    iteration settling where its repulsion term, not a root, makes corrections small
+    (e.g. guesses trapped on the imaginary axis by an even polynomial's symmetry).
+    """
+    deg = b.shape[0] - 1
+    for k in range(count):
+        zk = z[k]
+        r = abs(zk)
+        p = complex(b[deg])
+        scale = abs(b[deg])
+        for d in range(deg - 1, -1, -1):
+            p = p * zk + b[d]
+            scale = scale * r + abs(b[d])
+        if abs(p) > _BACKWARD_TOL * scale:
+            return False
+    return True
+
+
+@nb.njit(cache=True, nogil=True, fastmath=_FASTMATH)
 def _aberth(b, z):
     """Refine all roots ``z`` of the monic polynomial ``b`` in place; True if converged.
 
@@ -131,7 +155,7 @@ def _aberth(b, z):
             if rel > worst:
                 worst = rel
         if worst <= _TOL_ROUNDING or (worst <= _TOL_FAST and worst <= prev * prev):
-            return True
+            return _backward_ok(b, z, deg)
         prev = worst
     return False
 
@@ -181,7 +205,7 @@ def _aberth_conj(b, u):
             if rel > worst:
                 worst = rel
         if worst <= _TOL_ROUNDING or (worst <= _TOL_FAST and worst <= prev * prev):
-            return True
+            return _backward_ok(b, u, n)
         prev = worst
     return False
 
