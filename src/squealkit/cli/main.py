@@ -21,6 +21,8 @@ COMMANDS: dict[str, str] = {
     "stability": "squealkit.cli.stability:stability",
     "critical": "squealkit.cli.critical:critical",
     "presets": "squealkit.cli.presets:presets",
+    "report": "squealkit.cli.reproduce:report",
+    "reproduce": "squealkit.cli.reproduce:reproduce",
     "tolerance": "squealkit.cli.tolerance:tolerance",
 }
 

@@ -1,7 +1,7 @@
 """Models of friction-coupled brake systems (paper §2) and their parameters (§3, §5.1)."""
 
 from ._base import FrictionModel, SystemMatrices
-from .config import PRESETS, build_model, get_preset, load_model, model_from_dict, parse_assignments
+from .config import PRESETS, build_model, get_preset, load_model, load_rig, model_from_dict, parse_assignments
 from .hoffmann import Hoffmann2002
 from .matrix import MatrixModel
 from .pin_on_disc import PinOnDisc3DOF
@@ -27,6 +27,7 @@ __all__ = [
     "contact_stiffness",
     "get_preset",
     "load_model",
+    "load_rig",
     "modal_stiffness",
     "model_from_dict",
     "parse_assignments",

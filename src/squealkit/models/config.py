@@ -37,7 +37,7 @@ from .matrix import MatrixModel
 from .pin_on_disc import PinOnDisc3DOF
 from .rig import PinOnDiscRig
 
-__all__ = ["PRESETS", "build_model", "get_preset", "load_model", "model_from_dict", "parse_assignments"]
+__all__ = ["PRESETS", "build_model", "get_preset", "load_model", "load_rig", "model_from_dict", "parse_assignments"]
 
 #: Built-in presets: name -> (description, factory).
 PRESETS: dict[str, tuple[str, Any]] = {
@@ -123,8 +123,7 @@ def model_from_dict(doc: Mapping[str, Any]) -> FrictionModel:
     return model.replace(**params) if params else model
 
 
-def load_model(path: str | Path) -> FrictionModel:
-    """Read a model file (TOML). Errors name the file and what is wrong in it."""
+def _read_toml(path: str | Path) -> dict[str, Any]:
     p = Path(path)
     try:
         text = p.read_text(encoding="utf-8")
@@ -138,10 +137,29 @@ def load_model(path: str | Path) -> FrictionModel:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise InputError(f"Model file {str(p)!r} is not valid TOML: {e}") from e
+    return doc
+
+
+def load_model(path: str | Path) -> FrictionModel:
+    """Read a model file (TOML). Errors name the file and what is wrong in it."""
+    p = Path(path)
+    doc = _read_toml(p)
     try:
         return model_from_dict(doc)
     except InputError as e:
         raise InputError(f"{p.name}: {e}") from e
+
+
+def load_rig(path: str | Path) -> PinOnDiscRig | None:
+    """The rig described by a model file's ``[rig]`` table, or None if it has none."""
+    doc = _read_toml(path)
+    table = doc.get("rig")
+    if table is None:
+        return None
+    try:
+        return _rig_from_table(table)
+    except InputError as e:
+        raise InputError(f"{Path(path).name}: {e}") from e
 
 
 def parse_assignments(items: Iterable[str]) -> dict[str, float]:

@@ -1,0 +1,138 @@
+"""``reproduce``: rebuild the paper's results, figures and a report in one call.
+
+Everything is written into a staging folder beside the output folder and moved into place
+only when the whole report is done, so an interrupted or failed run leaves no half-written
+file behind: either ``DIR`` holds a complete report or it is as it was.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from .._validation import InputError
+from ..io import write_text
+from ..models import FrictionModel, PinOnDiscRig, get_preset
+from .document import Section
+from .html import render_html
+
+__all__ = ["ReproduceResult", "reproduce"]
+
+Step = Callable[[Path, Path], Section]
+
+
+@dataclass(frozen=True)
+class ReproduceResult:
+    """What a reproduce run wrote and computed.
+
+    Attributes
+    ----------
+    out_dir : Path
+        The output folder: ``report.html``, ``figures/`` (PNG and SVG), ``data/`` (netCDF).
+    sections : tuple of Section
+        The report's content, with the computed numbers of each section in ``numbers``.
+    seconds : float
+        Wall time of the run.
+    """
+
+    out_dir: Path
+    sections: tuple[Section, ...]
+    seconds: float
+
+    @property
+    def report(self) -> Path:
+        return self.out_dir / "report.html"
+
+    def numbers(self) -> dict[str, dict[str, float]]:
+        """The computed numbers by section key."""
+        return {s.key: dict(s.numbers) for s in self.sections}
+
+
+def _paper_steps(model: FrictionModel, rig: PinOnDiscRig | None, published: bool) -> list[tuple[str, Step]]:
+    from .steps_stability import critical_step, fig2_step, parameters_step
+
+    return [
+        ("parameters", lambda fig, dat: parameters_step(model, rig, fig, dat)),
+        ("Fig. 2 eigenvalues", lambda fig, dat: fig2_step(model, fig, dat, published=published)),
+        ("critical friction", lambda fig, dat: critical_step(model, fig, dat)),
+    ]
+
+
+def _commit(stage: Path, out_dir: Path) -> None:
+    """Move the finished staging folder onto ``out_dir`` (replacing an older report)."""
+    backup = None
+    if out_dir.exists():
+        backup = out_dir.with_name(f".{out_dir.name}.old-{os.getpid()}")
+        out_dir.rename(backup)
+    stage.rename(out_dir)
+    if backup is not None:
+        shutil.rmtree(backup, ignore_errors=True)
+
+
+def reproduce(
+    out_dir: str | Path,
+    *,
+    model: FrictionModel | None = None,
+    rig: PinOnDiscRig | None = None,
+    title: str | None = None,
+    progress: Callable[[int, int, str], None] | None = None,
+) -> ReproduceResult:
+    """Recompute the paper's figures and numbers and write a self-contained report.
+
+    Parameters
+    ----------
+    out_dir : path-like
+        Output folder; created, or replaced as a whole when the run succeeds.
+    model : FrictionModel, optional
+        The model (default: the paper's rig, preset ``lv2013``). With a model of your own
+        the published numbers are still shown for reference.
+    rig : PinOnDiscRig, optional
+        The rig the parameters are derived from (default: the paper's, when ``model`` is
+        the default).
+    title : str, optional
+        Report title.
+    progress : callable, optional
+        ``progress(done, total, step_name)`` before each step and at the end.
+
+    Returns
+    -------
+    ReproduceResult
+    """
+    out = Path(out_dir)
+    parent = out.parent if str(out.parent) else Path(".")
+    if not parent.is_dir():
+        raise InputError(f"Output folder's parent {str(parent)!r} does not exist.")
+    if out.exists() and not out.is_dir():
+        raise InputError(f"Output {str(out)!r} exists and is not a folder.")
+    default = model is None
+    model = get_preset("lv2013") if model is None else model
+    if rig is None and default:
+        rig = PinOnDiscRig()
+    steps = _paper_steps(model, rig, published=True)
+    start = time.perf_counter()
+    stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".part", dir=parent))
+    try:
+        figures, data = stage / "figures", stage / "data"
+        figures.mkdir()
+        data.mkdir()
+        sections = []
+        for i, (name, step) in enumerate(steps):
+            if progress is not None:
+                progress(i, len(steps), name)
+            sections.append(step(figures, data))
+        if progress is not None:
+            progress(len(steps), len(steps), "report")
+        title = title or ("Lv, Zhang & Yu (2013), reproduced by squealkit" if default else "squealkit report")
+        subtitle = ("Influence of surface run-out on disc brake squeal, J. Vibroeng. 15(2) 2013"
+                    if default else f"model: {model.kind}")
+        write_text(stage / "report.html", render_html(sections, figures, title=title, subtitle=subtitle))
+        _commit(stage, out)
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+    return ReproduceResult(out, tuple(sections), time.perf_counter() - start)
