@@ -65,7 +65,7 @@ def fig2_plot(ds: xr.Dataset, *, modes: list[int] | None = None, fig=None):
         ax = fig.add_subplot(1, 2, panel + 1, projection="3d")
         for n, k in enumerate(modes):
             Z = ds[var].isel(mode=k).values
-            ax.plot_surface(MU, TH, Z, color=colors[n % len(colors)], alpha=0.75, linewidth=0,
+            ax.plot_surface(MU, TH, Z, color=colors[n % len(colors)], alpha=0.75, linewidth=0, rasterized=True,
                             rstride=max(1, MU.shape[0] // 40), cstride=max(1, MU.shape[1] // 40))
             ax.plot([], [], color=colors[n % len(colors)], label=f"mode {k}")
         ax.set_xlabel("friction coefficient mu")
@@ -102,7 +102,7 @@ def stability_map_plot(ds: xr.Dataset, *, critical: xr.Dataset | None = None, ax
     sig = ds["max_growth_rate"].values
     vmax = float(np.nanmax(np.abs(sig))) or 1.0
     mesh = ax.pcolormesh(ds.mu.values, ds.theta_deg.values, sig.T, cmap="RdBu_r", vmin=-vmax, vmax=vmax,
-                         shading="auto")
+                         shading="auto", rasterized=True)
     fig.colorbar(mesh, ax=ax, label="largest growth rate sigma [1/s]")
     if ds.sizes["mu"] > 1 and ds.sizes["theta"] > 1:
         ax.contour(ds.mu.values, ds.theta_deg.values, ds["any_unstable"].values.T.astype(float), levels=[0.5],
@@ -142,7 +142,7 @@ def root_locus_plot(ds: xr.Dataset, *, theta_index: int | None = None, ax=None):
     sc = None
     for k in range(ds.sizes["mode"]):
         sc = ax.scatter(col["growth_rate"].isel(mode=k), col["frequency"].isel(mode=k), c=mu_e, s=8,
-                        cmap="viridis")
+                        cmap="viridis", rasterized=True)
     if sc is not None:
         fig.colorbar(sc, ax=ax, label="mu_e = mu + tan(theta)")
     ax.axvline(0.0, color="k", lw=0.8)
