@@ -9,7 +9,7 @@ import click
 from ._options import emit_json, model_options
 
 
-def _run(out_dir: Path, *, model=None, rig=None, as_json: bool) -> None:
+def _run(out_dir: Path, *, model=None, rig=None, quick: bool = False, as_json: bool) -> None:
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -23,7 +23,7 @@ def _run(out_dir: Path, *, model=None, rig=None, as_json: bool) -> None:
         def update(done: int, total: int, name: str) -> None:
             progress.update(task, completed=done, total=total, description=name)
 
-        result = reproduce(out_dir, model=model, rig=rig, progress=update)
+        result = reproduce(out_dir, model=model, rig=rig, quick=quick, progress=update)
     if as_json:
         emit_json({"out_dir": str(result.out_dir), "report": str(result.report), "seconds": result.seconds,
                    "numbers": result.numbers()})
@@ -35,8 +35,9 @@ def _run(out_dir: Path, *, model=None, rig=None, as_json: bool) -> None:
 @click.command()
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=Path("squealkit-report"),
               show_default=True, help="Output folder (replaced as a whole when the run succeeds).")
+@click.option("--quick", is_flag=True, help="Coarser grids and shorter runs: a preview in seconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print the computed numbers as JSON on stdout.")
-def reproduce(out_dir: Path, as_json: bool) -> None:
+def reproduce(out_dir: Path, quick: bool, as_json: bool) -> None:
     """Rebuild every result of the paper, with a report, on the paper's rig.
 
     Recomputes Table 1 and §3's parameters from the rig, Fig. 2 (eigenvalues over
@@ -54,15 +55,16 @@ def reproduce(out_dir: Path, as_json: bool) -> None:
     --json keys: out_dir, report, seconds, and numbers (by section: the
     computed values, e.g. numbers.fig2.band_low / band_high in rad/s).
     """
-    _run(out_dir, as_json=as_json)
+    _run(out_dir, quick=quick, as_json=as_json)
 
 
 @click.command()
 @model_options
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=Path("squealkit-report"),
               show_default=True, help="Output folder (replaced as a whole when the run succeeds).")
+@click.option("--quick", is_flag=True, help="Coarser grids and shorter runs: a preview in seconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print the computed numbers as JSON on stdout.")
-def report(preset, config, sets, out_dir: Path, as_json: bool) -> None:
+def report(preset, config, sets, out_dir: Path, quick: bool, as_json: bool) -> None:
     """The paper's analysis for your own rig or model, as one report.
 
     Takes the model from --config (a TOML model file; with a [rig] table the
@@ -80,4 +82,4 @@ def report(preset, config, sets, out_dir: Path, as_json: bool) -> None:
 
     model = build_model_from_options(preset, config, sets)
     rig = load_rig(config) if config is not None else None
-    _run(out_dir, model=model, rig=rig, as_json=as_json)
+    _run(out_dir, model=model, rig=rig, quick=quick, as_json=as_json)

@@ -53,12 +53,15 @@ class ReproduceResult:
         return {s.key: dict(s.numbers) for s in self.sections}
 
 
-def _paper_steps(model: FrictionModel, rig: PinOnDiscRig | None, published: bool) -> list[tuple[str, Step]]:
+def _paper_steps(
+    model: FrictionModel, rig: PinOnDiscRig | None, published: bool, quick: bool
+) -> list[tuple[str, Step]]:
     from .steps_stability import critical_step, fig2_step, parameters_step
 
+    n = 41 if quick else 161
     return [
         ("parameters", lambda fig, dat: parameters_step(model, rig, fig, dat)),
-        ("Fig. 2 eigenvalues", lambda fig, dat: fig2_step(model, fig, dat, published=published)),
+        ("Fig. 2 eigenvalues", lambda fig, dat: fig2_step(model, fig, dat, n_mu=n, n_theta=n, published=published)),
         ("critical friction", lambda fig, dat: critical_step(model, fig, dat)),
     ]
 
@@ -80,6 +83,7 @@ def reproduce(
     model: FrictionModel | None = None,
     rig: PinOnDiscRig | None = None,
     title: str | None = None,
+    quick: bool = False,
     progress: Callable[[int, int, str], None] | None = None,
 ) -> ReproduceResult:
     """Recompute the paper's figures and numbers and write a self-contained report.
@@ -96,6 +100,8 @@ def reproduce(
         the default).
     title : str, optional
         Report title.
+    quick : bool
+        Coarser grids and shorter runs: a preview in seconds, not the published figures.
     progress : callable, optional
         ``progress(done, total, step_name)`` before each step and at the end.
 
@@ -113,7 +119,7 @@ def reproduce(
     model = get_preset("lv2013") if model is None else model
     if rig is None and default:
         rig = PinOnDiscRig()
-    steps = _paper_steps(model, rig, published=True)
+    steps = _paper_steps(model, rig, published=True, quick=quick)
     start = time.perf_counter()
     stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".part", dir=parent))
     try:

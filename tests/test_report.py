@@ -1,0 +1,129 @@
+"""The main job: reproduce the paper as a report, checked in a real headless browser."""
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+
+import pytest
+from click.testing import CliRunner
+
+from squealkit.cli.main import cli
+from squealkit.io import load_dataset
+from squealkit.report import Comparison, reproduce
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+@pytest.fixture(scope="module")
+def paper(tmp_path_factory):
+    # the full run on the built-in default (the paper's rig), as `squealkit reproduce` does
+    return reproduce(tmp_path_factory.mktemp("paper") / "out")
+
+
+def test_reproduce_writes_report_figures_and_data(paper):
+    out = paper.out_dir
+    assert paper.report.is_file()
+    html = paper.report.read_text()
+    for section in paper.sections:
+        assert f"id='{section.key}'" in html
+        for fig in section.figures:
+            assert (out / "figures" / f"{fig.stem}.png").stat().st_size > 1000
+            assert (out / "figures" / f"{fig.stem}.svg").stat().st_size > 1000
+            assert f"id='fig-{fig.stem}'" in html
+        for name in section.data:
+            assert load_dataset(out / "data" / name).sizes
+    assert not [p for p in out.parent.iterdir() if p.name.startswith(".")]  # no staging left
+
+
+def test_reproduce_numbers_match_the_paper(paper):
+    n = paper.numbers()
+    # §3: coupled frequency 14997-15317 rad/s over mu 0-0.8, theta -8..8 deg
+    assert n["fig2"]["band_low"] == pytest.approx(14997.0, abs=2.0)
+    assert n["fig2"]["band_high"] == pytest.approx(15317.0, abs=10.0)
+    # eqs. 5-6: mu + tan(theta) at onset is nearly constant over theta
+    assert n["critical"]["mu_e_spread"] < 0.01
+    html = paper.report.read_text()
+    assert "14997" in html and "15317" in html  # published beside computed
+
+
+@pytest.mark.skipif(CHROMIUM is None and not os.environ.get("CI"), reason="Debian's chromium is not installed")
+def test_report_loads_in_headless_chromium_with_every_figure(paper):
+    assert CHROMIUM is not None, "CI must install Debian's chromium (see .ci/run)"
+    n_figures = sum(len(s.figures) for s in paper.sections)
+    body = _chromium_body(paper.report)
+    assert f'data-figures="{n_figures}"' in body
+    assert f'data-figures-loaded="{n_figures}"' in body
+
+
+@pytest.mark.skipif(CHROMIUM is None and not os.environ.get("CI"), reason="Debian's chromium is not installed")
+def test_browser_check_detects_a_broken_figure(tmp_path, paper):
+    # the check can fail: a report whose first figure does not decode
+    broken = tmp_path / "broken.html"
+    html = paper.report.read_text()
+    broken.write_text(re.sub(r"data:image/png;base64,[A-Za-z0-9+/]{20}", "data:image/png;base64,AAAA", html,
+                             count=1))
+    body = _chromium_body(broken)
+    n_figures = sum(len(s.figures) for s in paper.sections)
+    assert f'data-figures-loaded="{n_figures - 1}"' in body
+
+
+def _chromium_body(path) -> str:
+    with tempfile.TemporaryDirectory() as profile:
+        dom = subprocess.run(
+            [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+             "--disable-background-networking", "--disable-component-update", "--disable-sync",
+             f"--user-data-dir={profile}", "--virtual-time-budget=10000", "--dump-dom", path.resolve().as_uri()],
+            capture_output=True, text=True, timeout=120, check=True,
+        ).stdout
+    m = re.search(r"<body[^>]*>", dom)
+    assert m is not None, dom[:500]
+    return m.group(0)
+
+
+def test_interrupted_run_leaves_nothing_half_written(tmp_path):
+    out = tmp_path / "report"
+    out.mkdir()
+    (out / "report.html").write_text("previous good report")
+
+    def interrupt(done, total, name):
+        if done == 1:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        reproduce(out, quick=True, progress=interrupt)
+    assert (out / "report.html").read_text() == "previous good report"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]
+
+
+def test_cli_reproduce_quick_json(tmp_path):
+    r = CliRunner().invoke(cli, ["reproduce", "--quick", "--out", str(tmp_path / "r"), "--json"])
+    assert r.exit_code == 0, r.output
+    out = json.loads(r.stdout)
+    assert (tmp_path / "r" / "report.html").is_file()
+    assert out["numbers"]["fig2"]["band_low"] == pytest.approx(14997.0, abs=30)
+
+
+def test_cli_report_for_own_rig(tmp_path):
+    cfg = tmp_path / "myrig.toml"
+    cfg.write_text("[rig]\npin_diameter = 0.028\npin_length = 0.045\n[parameters]\nalpha_deg = 2.5\n")
+    r = CliRunner().invoke(cli, ["report", "--config", str(cfg), "--quick", "--out", str(tmp_path / "mine")])
+    assert r.exit_code == 0, r.output
+    html = (tmp_path / "mine" / "report.html").read_text()
+    assert "squealkit report" in html and "m1 from the rig" in html
+
+
+def test_cli_report_bad_input(tmp_path):
+    r = CliRunner().invoke(cli, ["report", "--config", str(tmp_path / "missing.toml")])
+    assert r.exit_code == 2 and "does not exist" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    f = tmp_path / "file"
+    f.write_text("x")
+    r = CliRunner().invoke(cli, ["reproduce", "--out", str(f)])
+    assert r.exit_code == 2 and "is a file" in r.stderr
+
+
+def test_comparison_difference():
+    assert Comparison("k", 100.0, 101.0, "N/m").difference() == "+1.00 %"
+    assert Comparison("band", (10.0, 20.0), (11.0, 19.0), "Hz").difference() == "+10.00 % / -5.00 %"
