@@ -21,6 +21,7 @@ COMMANDS: dict[str, str] = {
     "stability": "squealkit.cli.stability:stability",
     "critical": "squealkit.cli.critical:critical",
     "presets": "squealkit.cli.presets:presets",
+    "simulate": "squealkit.cli.simulate:simulate",
 }
 
 
