@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit, prange
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rhs(x, xd, q, t, mu, v, Minv, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, opts, r, acc):
     """Accelerations ``acc`` at state (x, xd); returns (N cos theta, effective mu)."""
     n = x.shape[0]
@@ -155,3 +155,4 @@ def integrate_chunk(
         for i in range(n):
             X[r, i] = x[i]
             V[r, i] = xd[i]
+

@@ -26,7 +26,7 @@ from .profiles import Smooth, SurfaceProfile
 __all__ = ["response_envelope", "simulate", "simulate_batch", "transient_summary"]
 
 #: RK4 step as a fraction of the period of the fastest mode: dt <= STEP_FACTOR / omega_max.
-STEP_FACTOR = 0.05
+STEP_FACTOR = 0.25
 #: Steps per compiled call (progress and divergence are checked between calls).
 _CHUNK_STEPS = 1 << 17
 
@@ -284,7 +284,7 @@ def simulate(
 
     Integrates ``M x'' + C x' + K(mu, tan_theta(t)) x = F(mu, tan_theta(t), q(t))`` (eq. 4)
     with q and tan(theta) from the profile at ``x = x_start + speed * t`` (eqs. 9-11), by
-    classical RK4 with a fixed step ``dt <= 0.05 / omega_max`` (fastest mode), output every
+    classical RK4 with a fixed step ``dt <= 0.25 / omega_max`` (fastest mode), output every
     ``1/fs``.
 
     Parameters
