@@ -1,5 +1,8 @@
 """Compiled fixed-step RK4 integration of M x'' + C x' + f(x, x', q, tan_theta) = F0.
 
+All matrices and load vectors arrive premultiplied by M^-1 (``K0 = M^-1 K0`` and so on; ``bM``
+and ``fM`` are M^-1 b and M^-1 f), so the right-hand side is the acceleration directly.
+
 Private: :mod:`squealkit.transient.simulate` prepares the arrays. Each call advances a
 batch of R independent runs by one chunk of steps, in parallel over runs (``prange``).
 
@@ -22,7 +25,7 @@ from numba import njit, prange
 
 
 @njit(cache=True, inline="always")
-def _rhs(x, xd, q, t, mu, v, Minv, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, opts, r, acc):
+def _rhs(x, xd, q, t, mu, v, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, opts, r, acc):
     """Accelerations ``acc`` at state (x, xd); returns (N cos theta, effective mu)."""
     n = x.shape[0]
     for i in range(n):
@@ -62,18 +65,15 @@ def _rhs(x, xd, q, t, mu, v, Minv, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s,
         g = 1.0 - me * t
         e = s * (me + t)
         for i in range(n):
-            r[i] += nc * (g * b[i] + e * f[i])
+            r[i] += nc * (g * bM[i] + e * fM[i])
     for i in range(n):
-        a = 0.0
-        for j in range(n):
-            a += Minv[i, j] * r[j]
-        acc[i] = a
+        acc[i] = r[i]
     return nc, me
 
 
 @njit(cache=True, parallel=True)
 def integrate_chunk(
-    X, V, Minv, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+    X, V, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
     qh, th, dt, n_steps, stride, out_x, out_v, out_a, out_nc, out_me, o_start, limit, status, n_valid,
 ):
     """Advance each run r by ``n_steps`` RK4 steps of ``dt``; record every ``stride`` steps.
@@ -101,13 +101,13 @@ def integrate_chunk(
         work = np.empty(n)
         o = o_start
         mu_r, v_r, kc_r, s_r = mu[r], v[r], kc[r], s[r]
-        Minv_r, C_r, K0_r, Kn_r, Kf_r = Minv[r], C[r], K0[r], Kn[r], Kf[r]
+        bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r = bM[r], fM[r], C[r], K0[r], Kn[r], Kf[r]
         F0_r, fn_r, ff_r, b_r, f_r, fhat_r = F0[r], fn[r], ff[r], b[r], f[r], fhat[r]
         for k in range(n_steps + 1):
             i0 = 2 * k
             if k % stride == 0 and (k < n_steps or n_steps == 0):
-                nc, me = _rhs(x, xd, qh[r, i0], th[r, i0], mu_r, v_r, Minv_r, C_r, K0_r, Kn_r, Kf_r, F0_r, fn_r, ff_r,
-                 b_r, f_r, fhat_r, kc_r, s_r, opts, work, k1v)
+                nc, me = _rhs(x, xd, qh[r, i0], th[r, i0], mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+                 F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k1v)
                 bad = False
                 for i in range(n):
                     if not (abs(x[i]) <= limit):
@@ -129,26 +129,26 @@ def integrate_chunk(
             q0, t0 = qh[r, i0], th[r, i0]
             q1, t1 = qh[r, i0 + 1], th[r, i0 + 1]
             q2, t2 = qh[r, i0 + 2], th[r, i0 + 2]
-            _rhs(x, xd, q0, t0, mu_r, v_r, Minv_r, C_r, K0_r, Kn_r, Kf_r, F0_r, fn_r, ff_r,
-                 b_r, f_r, fhat_r, kc_r, s_r, opts, work, k1v)
+            _rhs(x, xd, q0, t0, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+                 F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k1v)
             for i in range(n):
                 k1x[i] = xd[i]
                 xt[i] = x[i] + 0.5 * dt * k1x[i]
                 vt[i] = xd[i] + 0.5 * dt * k1v[i]
-            _rhs(xt, vt, q1, t1, mu_r, v_r, Minv_r, C_r, K0_r, Kn_r, Kf_r, F0_r, fn_r, ff_r,
-                 b_r, f_r, fhat_r, kc_r, s_r, opts, work, k2v)
+            _rhs(xt, vt, q1, t1, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+                 F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k2v)
             for i in range(n):
                 k2x[i] = vt[i]
                 xt[i] = x[i] + 0.5 * dt * k2x[i]
                 vt[i] = xd[i] + 0.5 * dt * k2v[i]
-            _rhs(xt, vt, q1, t1, mu_r, v_r, Minv_r, C_r, K0_r, Kn_r, Kf_r, F0_r, fn_r, ff_r,
-                 b_r, f_r, fhat_r, kc_r, s_r, opts, work, k3v)
+            _rhs(xt, vt, q1, t1, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+                 F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k3v)
             for i in range(n):
                 k3x[i] = vt[i]
                 xt[i] = x[i] + dt * k3x[i]
                 vt[i] = xd[i] + dt * k3v[i]
-            _rhs(xt, vt, q2, t2, mu_r, v_r, Minv_r, C_r, K0_r, Kn_r, Kf_r, F0_r, fn_r, ff_r,
-                 b_r, f_r, fhat_r, kc_r, s_r, opts, work, k4v)
+            _rhs(xt, vt, q2, t2, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+                 F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k4v)
             for i in range(n):
                 x[i] += dt / 6.0 * (k1x[i] + 2.0 * k2x[i] + 2.0 * k3x[i] + vt[i])
                 xd[i] += dt / 6.0 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i])

@@ -120,8 +120,12 @@ def _integrate(
             "Nonlinear contact needs a model with one point contact (Kn = kc b b^T, Kf = kc f b^T); "
             "use contact='linear' for this model."
         )
-    stack = lambda fn: np.ascontiguousarray(np.stack([fn(r) for r in runs]), dtype=float)  # noqa: E731
-    Minv = stack(lambda r: np.linalg.inv(r.model.mass_matrix()))
+    Minv = [np.linalg.inv(r.model.mass_matrix()) for r in runs]
+
+    def stack(fn):
+        """Per-run arrays premultiplied by M^-1 (the kernel works with accelerations)."""
+        return np.ascontiguousarray(np.stack([Minv[i] @ fn(r) for i, r in enumerate(runs)]), dtype=float)
+
     C = stack(lambda r: r.model.damping_matrix())
     K0 = stack(lambda r: r.model.stiffness_parts()[0])
     Kn = stack(lambda r: r.model.stiffness_parts()[1])
@@ -133,6 +137,8 @@ def _integrate(
     b = np.ascontiguousarray(np.stack([g[2] for g in geo]))
     f = np.ascontiguousarray(np.stack([g[3] for g in geo]))
     fhat = np.ascontiguousarray(f / np.maximum(np.linalg.norm(f, axis=1, keepdims=True), 1e-300))
+    bM = np.ascontiguousarray(np.einsum("rij,rj->ri", np.stack(Minv), b))
+    fM = np.ascontiguousarray(np.einsum("rij,rj->ri", np.stack(Minv), f))
     s = np.array([float(r.model.sliding_direction) for r in runs])
     mu = np.array([r.mu for r in runs])
     v = np.array([r.speed for r in runs])
@@ -160,7 +166,7 @@ def _integrate(
         for i, run in enumerate(runs):
             qh[i], th[i] = run.profile.evaluate(x_start + run.speed * th_t)
         _kernels.integrate_chunk(
-            X, V, Minv, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+            X, V, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
             qh, th, dt, m, stride, out_x, out_v, out_a, out_nc, out_me, done // stride, limit, status, n_valid,
         )
         done += m
