@@ -163,8 +163,13 @@ def _integrate(
         th_t = (done + 0.5 * np.arange(2 * m + 1)) * dt
         qh = np.empty((R, 2 * m + 1))
         th = np.empty((R, 2 * m + 1))
+        seen: dict[tuple[int, float], int] = {}
         for i, run in enumerate(runs):
-            qh[i], th[i] = run.profile.evaluate(x_start + run.speed * th_t)
+            j = seen.setdefault((id(run.profile), run.speed), i)  # runs sharing a profile and speed
+            if j == i:
+                qh[i], th[i] = run.profile.evaluate(x_start + run.speed * th_t)
+            else:
+                qh[i], th[i] = qh[j], th[j]
         _kernels.integrate_chunk(
             X, V, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
             qh, th, dt, m, stride, out_x, out_v, out_a, out_nc, out_me, done // stride, limit, status, n_valid,
