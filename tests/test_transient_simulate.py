@@ -204,3 +204,12 @@ def test_bad_profiles_rejected():
         SampledProfile([0, 2, 1, 3], [0, 0, 0, 0])
     with pytest.raises(InputError, match="rng"):
         RandomRoughness.draw(rms=1e-6, wavelength_min=1e-4, wavelength_max=1e-3, rng=None)
+
+
+def test_flat_disc_envelope_grows_at_sigma():
+    # On a flat disc the coefficients are constant: the vibration must grow at exactly the
+    # damped eigenvalue's real part (paper eq. 8); mu = 0.6 gives sigma ~ 16.8 1/s.
+    ds = simulate(LV, mu=0.6, duration=0.15, fs=20_000, perturbation=1e-9, rng=np.random.default_rng(1))
+    (stage,) = transient_summary(ds)["stages"]
+    assert stage["stage"] == "flat"
+    assert stage["rate_per_s"] == pytest.approx(float(ds.growth_rate[0]), rel=0.05)
