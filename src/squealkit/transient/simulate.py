@@ -51,8 +51,11 @@ def _step_size(runs: Sequence[_Run], fs: float, dt: float | None) -> tuple[float
     """RK4 step dt [s] and the number of steps per output sample (1/fs = stride * dt)."""
     if dt is None:
         wmax = 0.0
+        by_model: dict[int, tuple[FrictionModel, list[float]]] = {}
         for run in runs:
-            lam = eigenvalues(run.model, run.mu, 0.0, damped=True)
+            by_model.setdefault(id(run.model), (run.model, []))[1].append(run.mu)
+        for model, mus in by_model.values():
+            lam = eigenvalues(model, np.unique(mus), 0.0, damped=True)
             wmax = max(wmax, float(np.abs(lam).max()))
         dt_max = STEP_FACTOR / wmax if wmax > 0 else 1.0 / fs
     else:
