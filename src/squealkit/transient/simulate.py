@@ -462,7 +462,8 @@ def transient_summary(ds: xr.Dataset, *, max_stages: int = 50) -> dict[str, obje
     """Peak amplitudes, and growth or decay rate of the vibration per run-out stage.
 
     The growth rate of a stage [1/s] is the least-squares slope of the log of the envelope
-    (see :func:`response_envelope`, first DOF's acceleration) over the stage; it is positive
+    (see :func:`response_envelope`, first DOF's acceleration) over the stage, leaving out the
+    first and last 5 ms of the record (filter end effects); it is positive
     where the vibration grows (paper Fig. 4: rising SRO) and negative where it decays.
     """
     model_dofs = [v[: -len("_ddot")] for v in ds.data_vars if str(v).endswith("_ddot")]
@@ -491,15 +492,21 @@ def transient_summary(ds: xr.Dataset, *, max_stages: int = 50) -> dict[str, obje
     stages = []
     if time.size > 32 and fs > 2500.0:
         env = response_envelope(ds, f"{model_dofs[0]}_ddot").values
+        # The zero-phase filter and the Hilbert transform ring for a few ms at both ends of
+        # the record: those samples take no part in the rate fits.
+        edge = np.zeros(time.size, dtype=bool)
+        n_edge = min(int(0.005 * fs), time.size // 4)
+        edge[:n_edge] = edge[time.size - n_edge :] = True
         for a, b, kind in _stages(ds.tan_theta.values):
             if b - a < 16:
                 continue
             seg = env[a:b]
-            ok = seg > 0
+            ok = (seg > 0) & ~edge[a:b]
             rate = float(np.polyfit(time[a:b][ok], np.log(seg[ok]), 1)[0]) if ok.sum() > 8 else math.nan
             stages.append({
                 "stage": kind, "t_start": float(time[a]), "t_end": float(time[b - 1]), "rate_per_s": rate,
                 "sigma_mean_per_s": float(ds.growth_rate.values[a:b].mean()),
+                "partial": a == 0 or b == time.size,  # cut by the record: rate less reliable
             })
     out["stages"] = stages[:max_stages]
     out["stages_truncated"] = len(stages) > max_stages
