@@ -396,7 +396,7 @@ def simulate_batch(
     --------
     >>> from squealkit.models import get_preset
     >>> ds = simulate_batch(get_preset("lv2013"), mu=[0.2, 0.4], duration=0.002)
-    >>> ds.sizes["run"], list(ds.status.values)
+    >>> ds.sizes["run"], ds.status.values.tolist()
     (2, ['completed', 'completed'])
     """
     models_l = list(models) if isinstance(models, Sequence) else [models]
