@@ -24,6 +24,7 @@ COMMANDS: dict[str, str] = {
     "report": "squealkit.cli.reproduce:report",
     "reproduce": "squealkit.cli.reproduce:reproduce",
     "tolerance": "squealkit.cli.tolerance:tolerance",
+    "simulate": "squealkit.cli.simulate:simulate",
 }
 
 
@@ -86,6 +87,7 @@ def cli() -> None:
       squealkit stability --plot fig2.png      # paper Fig. 2, lock-in band
       squealkit critical --theta 0 --json      # critical friction
       squealkit tolerance --mu 0.3 --wavelength 1e-3   # allowed run-out
+      squealkit simulate --sro sine --plot fig4.png    # paper Fig. 4
       squealkit presets                        # built-in models
 
     Every subcommand takes --help with an example. Units are SI; angles are

@@ -1,0 +1,127 @@
+"""Figures of transient runs: paper Figs. 3 and 4 and the response envelope against sigma(t).
+
+Each function takes a dataset from :func:`squealkit.transient.simulate` and returns a
+:class:`matplotlib.figure.Figure` (no pyplot state); pass ``ax`` to draw into existing axes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import xarray as xr
+
+__all__ = ["envelope_plot", "fig3_plot", "fig4_plot"]
+
+
+def _axes(ax: Any, n: int, figsize: tuple[float, float]):
+    if ax is not None:
+        axes = list(ax) if isinstance(ax, Sequence) else [ax]
+        if len(axes) != n:
+            raise ValueError(f"Parameter ax needs {n} axes; got {len(axes)}.")
+        return axes[0].figure, axes
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize, layout="constrained")
+    axes = [fig.add_subplot(n, 1, i + 1) for i in range(n)]
+    for a in axes[1:]:
+        a.sharex(axes[0])
+    return fig, axes
+
+
+def _accel_names(ds: xr.Dataset) -> list[str]:
+    names = [str(v) for v in ds.data_vars if str(v).endswith("_ddot")]
+    # The paper shows the pin's horizontal and the disc's vertical acceleration (x1'', y2'').
+    if "x1_ddot" in names and "y2_ddot" in names:
+        return ["x1_ddot", "y2_ddot"]
+    return names[:2]
+
+
+def _title(ds: xr.Dataset) -> str:
+    return f"mu = {ds.attrs.get('mu')}, v = {ds.attrs.get('speed')} m/s, {ds.attrs.get('profile')}"
+
+
+def fig3_plot(ds: xr.Dataset, ax: Any = None):
+    """Accelerations against time on a smooth disc (paper Fig. 3).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Result of :func:`~squealkit.transient.simulate`.
+    ax : sequence of 2 matplotlib Axes, optional
+        Where to draw; a new figure if omitted.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    names = _accel_names(ds)
+    fig, axes = _axes(ax, len(names), (7.0, 5.0))
+    t = ds.time.values
+    for a, name in zip(axes, names, strict=True):
+        a.plot(t, ds[name].values, lw=0.6)
+        a.set_ylabel(f"{name} [m/s²]")
+        a.grid(True, alpha=0.3)
+    axes[-1].set_xlabel("time [s]")
+    axes[0].set_title(_title(ds), fontsize=9)
+    return fig
+
+
+def fig4_plot(ds: xr.Dataset, ax: Any = None, *, smooth: xr.Dataset | None = None):
+    """Accelerations with the surface run-out q drawn alongside (paper Fig. 4).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Run with run-out.
+    ax : sequence of 2 matplotlib Axes, optional
+        Where to draw.
+    smooth : xarray.Dataset, optional
+        The same run on a smooth disc, drawn in grey behind for comparison.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    names = _accel_names(ds)
+    fig, axes = _axes(ax, len(names), (7.0, 5.0))
+    t = ds.time.values
+    for a, name in zip(axes, names, strict=True):
+        if smooth is not None and name in smooth:
+            a.plot(smooth.time.values, smooth[name].values, lw=0.5, color="0.6", label="smooth disc")
+        a.plot(t, ds[name].values, lw=0.6, color="C0", label="with SRO")
+        a.set_ylabel(f"{name} [m/s²]")
+        a.grid(True, alpha=0.3)
+        tw = a.twinx()
+        tw.plot(t, ds.q.values * 1e3, color="C3", lw=1.0, label="SRO q")
+        tw.set_ylabel("q [mm]", color="C3")
+    axes[0].legend(loc="upper left", fontsize=8)
+    axes[-1].set_xlabel("time [s]")
+    axes[0].set_title(_title(ds), fontsize=9)
+    return fig
+
+
+def envelope_plot(ds: xr.Dataset, ax: Any = None, *, var: str = "x1_ddot", freq_lower: float = 1000.0):
+    """Vibration envelope (log scale) against the frozen-time growth rate sigma(t).
+
+    Where sigma > 0 the envelope should rise with slope sigma on the log scale, where sigma < 0
+    it should fall (paper section 4).
+    """
+    import numpy as np
+
+    from ..transient.simulate import response_envelope
+
+    env = response_envelope(ds, var, freq_lower=freq_lower)
+    fig, axes = _axes(ax, 1, (7.0, 3.5))
+    a = axes[0]
+    t = ds.time.values
+    a.semilogy(t, np.maximum(env.values, 1e-300), lw=0.8, color="C0")
+    a.set_ylabel(f"envelope of {var} [{env.attrs.get('units', '')}]", color="C0")
+    a.set_xlabel("time [s]")
+    a.grid(True, alpha=0.3)
+    tw = a.twinx()
+    tw.plot(t, ds.growth_rate.values, color="C1", lw=1.0)
+    tw.axhline(0.0, color="C1", lw=0.5, ls="--")
+    tw.set_ylabel("sigma(t) [1/s]", color="C1")
+    a.set_title(_title(ds), fontsize=9)
+    return fig

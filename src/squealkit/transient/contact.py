@@ -1,0 +1,136 @@
+"""Contact laws of the transient solver: the paper's linear law and the effects that bound squeal.
+
+The paper (eqs. 1-4) keeps the pin pressed on the disc whatever the motion and the friction
+force equal to ``mu N`` in a fixed direction: the equations are linear and an unstable run grows
+without bound. A real rig is bounded by
+
+- loss of contact: the normal force cannot pull, ``N >= 0``;
+- friction that follows the sign of the relative sliding velocity ``w`` of disc and pin,
+  regularised as ``mu tanh(w / v_reg)`` (``v_reg`` [m/s] sets the width of the
+  stick band; smaller is closer to Coulomb's law but stiffer to integrate);
+- friction that depends on speed (Stribeck): ``mu(w) = mu + (mu_static - mu) exp(-|w| / v_stribeck)``
+  with ``mu`` the kinetic value; falling friction with speed adds negative damping.
+
+With them an unstable run settles on a limit cycle.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validation import InputError, validate_positive
+
+__all__ = ["Contact", "contact_geometry"]
+
+
+@dataclass(frozen=True)
+class Contact:
+    """Which nonlinear contact effects the transient solver includes.
+
+    Parameters
+    ----------
+    separation : bool
+        Loss of contact: the normal force is clamped at ``N >= 0``.
+    sign_friction : bool
+        Friction follows the sign of the sliding velocity, ``mu tanh(w / v_reg)``.
+    v_reg : float
+        Regularisation speed [m/s] of the sign law (default 1e-3 m/s, 5 % of the paper's v).
+    mu_static : float or None
+        Static friction coefficient of the Stribeck law; ``None`` for speed-independent friction.
+    v_stribeck : float
+        Stribeck speed [m/s].
+
+    Examples
+    --------
+    >>> Contact().is_linear, Contact.nonlinear().is_linear
+    (True, False)
+    """
+
+    separation: bool = False
+    sign_friction: bool = False
+    v_reg: float = 1e-3
+    mu_static: float | None = None
+    v_stribeck: float = 1e-2
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "v_reg", validate_positive("v_reg", self.v_reg))
+        object.__setattr__(self, "v_stribeck", validate_positive("v_stribeck", self.v_stribeck))
+        if self.mu_static is not None:
+            object.__setattr__(self, "mu_static", validate_positive("mu_static", self.mu_static, allow_zero=True))
+
+    @classmethod
+    def linear(cls) -> Contact:
+        """The paper's law: permanent contact, friction mu N in a fixed direction (eqs. 2-3)."""
+        return cls()
+
+    @classmethod
+    def nonlinear(cls, *, v_reg: float = 1e-3, mu_static: float | None = None, v_stribeck: float = 1e-2) -> Contact:
+        """Loss of contact and velocity-sign friction (and Stribeck friction if ``mu_static`` is given)."""
+        return cls(True, True, v_reg, mu_static, v_stribeck)
+
+    @property
+    def is_linear(self) -> bool:
+        return not (self.separation or self.sign_friction or self.mu_static is not None)
+
+    def describe(self) -> str:
+        if self.is_linear:
+            return "linear (paper eqs. 1-4)"
+        parts = []
+        if self.separation:
+            parts.append("loss of contact N>=0")
+        if self.sign_friction:
+            parts.append(f"friction mu tanh(w/v_reg), v_reg={self.v_reg:g} m/s")
+        if self.mu_static is not None:
+            parts.append(f"Stribeck mu_static={self.mu_static:g}, v_stribeck={self.v_stribeck:g} m/s")
+        return "; ".join(parts)
+
+    def options(self) -> np.ndarray:
+        """The kernel's flag vector (see :mod:`squealkit.transient._kernels`)."""
+        return np.array(
+            [
+                0.0 if self.is_linear else 1.0,
+                float(self.separation),
+                float(self.sign_friction),
+                float(self.mu_static is not None),
+                self.v_reg,
+                0.0 if self.mu_static is None else self.mu_static,
+                self.v_stribeck,
+            ]
+        )
+
+
+def as_contact(contact: Contact | str) -> Contact:
+    """Accept a :class:`Contact` or the names ``"linear"`` / ``"nonlinear"``."""
+    if isinstance(contact, Contact):
+        return contact
+    if contact == "linear":
+        return Contact.linear()
+    if contact == "nonlinear":
+        return Contact.nonlinear()
+    raise InputError(f"Parameter contact={contact!r} must be 'linear', 'nonlinear' or a Contact.")
+
+
+def contact_geometry(model) -> tuple[bool, float, np.ndarray, np.ndarray]:
+    """Single point contact of a model: ``(ok, kc, b, f)`` with Kn = kc b b^T, Kf = kc f b^T.
+
+    ``b`` maps the state to the contact approach (``b.x - q`` < 0 in compression) and ``f``
+    is the direction of the friction force; fn = kc b and ff = kc f (paper eq. 4 has
+    b = [0, 1, -1], f = [-1, 0, 0]). ``ok`` is False when the model's contact terms do not
+    have this structure (then only the linear law is available).
+    """
+    _, Kn, Kf = (np.asarray(a, float) for a in model.stiffness_parts())
+    _, fn, ff = (np.asarray(a, float) for a in model.load_parts())
+    n = fn.shape[0]
+    tr = float(np.trace(Kn))
+    if tr <= 0 or not np.any(fn):
+        return False, 0.0, np.zeros(n), np.zeros(n)
+    kc = float(fn @ fn) / tr
+    b, f = fn / kc, ff / kc
+    scale = max(np.abs(Kn).max(), np.abs(Kf).max(), 1e-300)
+    ok = bool(
+        np.allclose(Kn, kc * np.outer(b, b), rtol=0, atol=1e-9 * scale)
+        and np.allclose(Kf, kc * np.outer(f, b), rtol=0, atol=1e-9 * scale)
+    )
+    return ok, kc, b, f

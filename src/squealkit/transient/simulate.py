@@ -1,0 +1,513 @@
+"""Transient time simulation of a friction model sliding over a disc surface profile.
+
+Solves the paper's equations of motion (eqs. 1-4) with time-varying run-out q(t) and slope
+tan(theta(t)) = dq/dx at x = x_start + v t (eqs. 9-11) by fixed-step classical RK4 in
+compiled code, and returns an :class:`xarray.Dataset` sampled at ``fs``.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+from numpy.typing import ArrayLike
+
+from .._validation import InputError, validate_finite, validate_fs, validate_positive
+from ..models import FrictionModel
+from ..stability.eigen import eigenvalues
+from . import _kernels
+from .contact import Contact, as_contact, contact_geometry
+from .profiles import Smooth, SurfaceProfile
+
+__all__ = ["response_envelope", "simulate", "simulate_batch", "transient_summary"]
+
+#: RK4 step as a fraction of the period of the fastest mode: dt <= STEP_FACTOR / omega_max.
+STEP_FACTOR = 0.25
+#: Steps per compiled call (progress and divergence are checked between calls).
+_CHUNK_STEPS = 1 << 17
+
+Progress = Callable[[int, int], None]
+
+
+@dataclass(frozen=True)
+class _Run:
+    model: FrictionModel
+    mu: float
+    profile: SurfaceProfile
+    speed: float
+
+
+def _validate_model(model: object) -> FrictionModel:
+    if not isinstance(model, FrictionModel):
+        raise InputError(f"Parameter model must be a squealkit FrictionModel; got {type(model).__name__}.")
+    return model
+
+
+def _step_size(runs: Sequence[_Run], fs: float, dt: float | None) -> tuple[float, int]:
+    """RK4 step dt [s] and the number of steps per output sample (1/fs = stride * dt)."""
+    if dt is None:
+        wmax = 0.0
+        by_model: dict[int, tuple[FrictionModel, list[float]]] = {}
+        for run in runs:
+            by_model.setdefault(id(run.model), (run.model, []))[1].append(run.mu)
+        for model, mus in by_model.values():
+            lam = eigenvalues(model, np.unique(mus), 0.0, damped=True)
+            wmax = max(wmax, float(np.abs(lam).max()))
+        dt_max = STEP_FACTOR / wmax if wmax > 0 else 1.0 / fs
+    else:
+        dt_max = validate_positive("dt", dt)
+    stride = max(1, math.ceil((1.0 / fs) / dt_max * (1 - 1e-12)))
+    return 1.0 / (fs * stride), stride
+
+
+def _initial_state(run: _Run, x0, v0, perturbation: float, rng, x_start: float) -> tuple[np.ndarray, np.ndarray]:
+    n = run.model.n_dof
+    q0, t0 = (float(a[0]) for a in run.profile.evaluate(np.array([x_start])))
+    if x0 is None:
+        # At rest in the static equilibrium of t = 0: K(0) x = F(0) (paper eq. 4).
+        x = run.model.static_equilibrium(run.mu, t0, q0)
+    else:
+        x = np.array(x0, dtype=float).reshape(-1)
+        if x.shape != (n,) or not np.all(np.isfinite(x)):
+            raise InputError(f"Parameter x0 must be {n} finite displacements {run.model.dof_names} [m].")
+    v = np.zeros(n) if v0 is None else np.array(v0, dtype=float).reshape(-1)
+    if v.shape != (n,) or not np.all(np.isfinite(v)):
+        raise InputError(f"Parameter v0 must be {n} finite velocities [m/s].")
+    if perturbation:
+        if not isinstance(rng, np.random.Generator):
+            raise InputError("A perturbation needs rng, a numpy.random.Generator (numpy.random.default_rng(seed)).")
+        x = x + perturbation * rng.standard_normal(n)
+    return x, v
+
+
+def _integrate(
+    runs: Sequence[_Run],
+    *,
+    duration: float,
+    fs: float,
+    contact: Contact,
+    x0,
+    v0,
+    perturbation: float,
+    rng,
+    x_start: float,
+    dt: float | None,
+    limit: float,
+    progress: Progress | None,
+):
+    duration = validate_positive("duration", duration)
+    fs = validate_fs(fs)
+    limit = validate_positive("limit", limit)
+    perturbation = validate_positive("perturbation", perturbation, allow_zero=True)
+    x_start = validate_finite("x_start", x_start)
+    n_out = math.floor(duration * fs * (1 + 1e-12)) + 1
+    if n_out < 2:
+        raise InputError(f"Parameter duration={duration!r} s is shorter than one sample at fs={fs!r} Hz.")
+    n = runs[0].model.n_dof
+    if any(r.model.n_dof != n for r in runs):
+        raise InputError("All models of a batch must have the same number of degrees of freedom.")
+    dt, stride = _step_size(runs, fs, dt)
+    n_steps = (n_out - 1) * stride
+    t_end = n_steps * dt
+    for run in runs:
+        run.profile.check_range(min(x_start, x_start + run.speed * t_end), max(x_start, x_start + run.speed * t_end))
+
+    R = len(runs)
+    geo = [contact_geometry(r.model) for r in runs]
+    if not contact.is_linear and not all(g[0] for g in geo):
+        raise InputError(
+            "Nonlinear contact needs a model with one point contact (Kn = kc b b^T, Kf = kc f b^T); "
+            "use contact='linear' for this model."
+        )
+    Minv = [np.linalg.inv(r.model.mass_matrix()) for r in runs]
+
+    def stack(fn):
+        """Per-run arrays premultiplied by M^-1 (the kernel works with accelerations)."""
+        return np.ascontiguousarray(np.stack([Minv[i] @ fn(r) for i, r in enumerate(runs)]), dtype=float)
+
+    C = stack(lambda r: r.model.damping_matrix())
+    K0 = stack(lambda r: r.model.stiffness_parts()[0])
+    Kn = stack(lambda r: r.model.stiffness_parts()[1])
+    Kf = stack(lambda r: r.model.stiffness_parts()[2])
+    F0 = stack(lambda r: r.model.load_parts()[0])
+    fn = stack(lambda r: r.model.load_parts()[1])
+    ff = stack(lambda r: r.model.load_parts()[2])
+    kc = np.array([g[1] for g in geo])
+    b = np.ascontiguousarray(np.stack([g[2] for g in geo]))
+    f = np.ascontiguousarray(np.stack([g[3] for g in geo]))
+    fhat = np.ascontiguousarray(f / np.maximum(np.linalg.norm(f, axis=1, keepdims=True), 1e-300))
+    bM = np.ascontiguousarray(np.einsum("rij,rj->ri", np.stack(Minv), b))
+    fM = np.ascontiguousarray(np.einsum("rij,rj->ri", np.stack(Minv), f))
+    s = np.array([float(r.model.sliding_direction) for r in runs])
+    mu = np.array([r.mu for r in runs])
+    v = np.array([r.speed for r in runs])
+    opts = contact.options()
+
+    X = np.empty((R, n))
+    V = np.empty((R, n))
+    for i, run in enumerate(runs):
+        X[i], V[i] = _initial_state(run, x0, v0, perturbation, rng, x_start)
+    out_x = np.full((R, n_out, n), np.nan)
+    out_v = np.full((R, n_out, n), np.nan)
+    out_a = np.full((R, n_out, n), np.nan)
+    out_nc = np.full((R, n_out), np.nan)
+    out_me = np.full((R, n_out), np.nan)
+    status = np.zeros(R, dtype=np.int64)
+    n_valid = np.zeros(R, dtype=np.int64)
+
+    chunk = max(stride, (_CHUNK_STEPS // stride) * stride)
+    done = 0
+    while True:
+        m = min(chunk, n_steps - done)  # m == 0: record the final state only
+        th_t = (done + 0.5 * np.arange(2 * m + 1)) * dt
+        qh = np.empty((R, 2 * m + 1))
+        th = np.empty((R, 2 * m + 1))
+        seen: dict[tuple[int, float], int] = {}
+        for i, run in enumerate(runs):
+            j = seen.setdefault((id(run.profile), run.speed), i)  # runs sharing a profile and speed
+            if j == i:
+                qh[i], th[i] = run.profile.evaluate(x_start + run.speed * th_t)
+            else:
+                qh[i], th[i] = qh[j], th[j]
+        _kernels.integrate_chunk(
+            X, V, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+            qh, th, dt, m, stride, out_x, out_v, out_a, out_nc, out_me, done // stride, limit, status, n_valid,
+        )
+        done += m
+        if progress is not None:
+            progress(done, n_steps)
+        if m == 0 or np.all(status != 0):
+            break
+    time = np.arange(n_out) / fs
+    return dict(
+        time=time, x=out_x, v=out_v, a=out_a, nc=out_nc, me=out_me, status=status, n_valid=n_valid,
+        dt=dt, stride=stride, x_start=x_start, limit=limit, contact=contact,
+    )
+
+
+def _run_dataset(run: _Run, raw: dict, i: int, n_keep: int) -> xr.Dataset:
+    """Labelled result of run i, first ``n_keep`` samples."""
+    model = run.model
+    time = raw["time"][:n_keep]
+    pos = raw["x_start"] + run.speed * time
+    q, tan_theta = run.profile.evaluate(pos)
+    nc = raw["nc"][i, :n_keep]
+    me = raw["me"][i, :n_keep]
+    structured, kc, b, _ = contact_geometry(model)
+    if raw["contact"].is_linear:
+        # N cos(theta) = -kc (b.x - q) (eq. 2), also for output of the linear law.
+        nc = -kc * (raw["x"][i, :n_keep] @ b - q) if structured else np.full(n_keep, np.nan)
+    normal = nc * np.sqrt(1.0 + tan_theta**2)  # eq. (2): N = -kc (y1 - y2 - q) / cos(theta)
+    # sigma depends on tan(theta) only (mu fixed): solve once per distinct slope (to 1e-12).
+    slopes, inverse = np.unique(np.round(tan_theta, 12), return_inverse=True)
+    sigma = eigenvalues(model, run.mu, slopes, damped=True).real.max(axis=-1)[inverse.reshape(-1)]
+    data: dict[str, tuple] = {}
+    for j, name in enumerate(model.dof_names):
+        data[name] = ("time", raw["x"][i, :n_keep, j], {"units": "m", "long_name": f"displacement {name}"})
+        data[f"{name}_dot"] = ("time", raw["v"][i, :n_keep, j], {"units": "m/s", "long_name": f"velocity {name}"})
+        data[f"{name}_ddot"] = (
+            "time", raw["a"][i, :n_keep, j], {"units": "m/s^2", "long_name": f"acceleration {name}"},
+        )
+    data["normal_force"] = ("time", normal, {"units": "N", "long_name": "normal contact force N (eq. 2)"})
+    data["friction_force"] = ("time", me * normal, {"units": "N", "long_name": "friction force F_f = mu N (eq. 3)"})
+    data["q"] = ("time", q, {"units": "m", "long_name": "surface run-out q (eq. 10)"})
+    data["tan_theta"] = ("time", tan_theta, {"units": "1", "long_name": "run-out slope tan(theta) (eq. 11)"})
+    data["mu_e"] = ("time", me + tan_theta, {"units": "1", "long_name": "equivalent friction mu + tan(theta) (eq. 6)"})
+    data["growth_rate"] = (
+        "time", sigma,
+        {"units": "1/s", "long_name": "frozen-time growth rate sigma(t) = max Re(lambda) (eq. 8, damped)"},
+    )
+    return xr.Dataset(
+        data,
+        coords={
+            "time": ("time", time, {"units": "s", "long_name": "time"}),
+            "position": ("time", pos, {"units": "m", "long_name": "sliding position x = x_start + v t"}),
+        },
+    )
+
+
+def _attrs(run: _Run, raw: dict, status: str, t_stop: float, fs: float) -> dict:
+    return {
+        "title": "squealkit transient simulation",
+        "reference": "Lv, Zhang & Yu, J. Vibroeng. 15(2) 2013, eqs. 1-4 and 9-11",
+        "model": run.model.to_json(),
+        "model_kind": run.model.kind,
+        "mu": run.mu,
+        "speed": run.speed,
+        "speed_units": "m/s",
+        "profile": run.profile.describe(),
+        "profile_kind": run.profile.kind,
+        "contact": raw["contact"].describe(),
+        "fs": fs,
+        "integrator": "classical RK4, fixed step (numba)",
+        "dt": raw["dt"],
+        "steps_per_sample": raw["stride"],
+        "status": status,
+        "t_stop": t_stop,
+        "divergence_limit": raw["limit"],
+    }
+
+
+def _as_runs(models, mus, profiles, speeds) -> list[_Run]:
+    R = max(len(models), len(mus), len(profiles), len(speeds))
+    out = []
+    for seq, name in ((models, "model"), (mus, "mu"), (profiles, "profile"), (speeds, "speed")):
+        if len(seq) not in (1, R):
+            raise InputError(f"Batch parameter {name} has {len(seq)} entries; expected 1 or {R}.")
+    def pick(seq, i):
+        return seq[i if len(seq) > 1 else 0]
+
+    for i in range(R):
+        profile = pick(profiles, i)
+        if profile is None:
+            profile = Smooth()
+        if not isinstance(profile, SurfaceProfile):
+            raise InputError(f"Parameter profile must be a SurfaceProfile; got {type(profile).__name__}.")
+        out.append(
+            _Run(
+                _validate_model(pick(models, i)),
+                validate_finite("mu", pick(mus, i)),
+                profile,
+                validate_positive("speed", pick(speeds, i), allow_zero=True),
+            )
+        )
+    return out
+
+
+def simulate(
+    model: FrictionModel,
+    *,
+    mu: float,
+    profile: SurfaceProfile | None = None,
+    speed: float = 0.02,
+    duration: float,
+    fs: float = 40_000.0,
+    contact: Contact | str = "linear",
+    x0: ArrayLike | None = None,
+    v0: ArrayLike | None = None,
+    perturbation: float = 0.0,
+    rng: np.random.Generator | None = None,
+    x_start: float = 0.0,
+    dt: float | None = None,
+    limit: float = 1.0,
+    progress: Progress | None = None,
+) -> xr.Dataset:
+    """Time response of a model sliding over a disc surface profile (paper section 4).
+
+    Integrates ``M x'' + C x' + K(mu, tan_theta(t)) x = F(mu, tan_theta(t), q(t))`` (eq. 4)
+    with q and tan(theta) from the profile at ``x = x_start + speed * t`` (eqs. 9-11), by
+    classical RK4 with a fixed step ``dt <= 0.25 / omega_max`` (fastest mode), output every
+    ``1/fs``.
+
+    Parameters
+    ----------
+    model : FrictionModel
+        The system, e.g. ``get_preset("lv2013")``.
+    mu : float
+        Friction coefficient (kinetic value for the Stribeck law).
+    profile : SurfaceProfile, optional
+        Disc surface; default :class:`~squealkit.transient.profiles.Smooth`.
+    speed : float
+        Sliding speed v [m/s] (paper: 0.02 m/s).
+    duration : float
+        Simulated time [s].
+    fs : float
+        Output sample rate [Hz] (default 40 kHz, the paper's rig).
+    contact : Contact or {"linear", "nonlinear"}
+        Contact law; ``"linear"`` is the paper's (eqs. 2-3). See :class:`Contact`.
+    x0, v0 : array_like, shape (n,), optional
+        Initial displacements [m] and velocities [m/s]. Default: at rest in the static
+        equilibrium of t = 0, ``K(0) x = F(0)``.
+    perturbation : float
+        Standard deviation [m] of a random displacement added to the initial state (needs
+        ``rng``); a flat disc in exact equilibrium never leaves it.
+    rng : numpy.random.Generator, optional
+        Source of the perturbation.
+    x_start : float
+        Position on the profile at t = 0 [m].
+    dt : float, optional
+        Largest RK4 step [s] (rounded down so that ``1/fs`` is a whole number of steps).
+    limit : float
+        A run whose displacement exceeds ``limit`` [m] stops with status ``"diverged"``.
+    progress : callable, optional
+        Called as ``progress(steps_done, steps_total)``.
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``time`` [s] (coordinate ``position`` [m]): each DOF's displacement (``x1``,
+        ``y1``, ``y2`` for the paper's model), velocity (``x1_dot``...) and acceleration
+        (``x1_ddot``...), ``normal_force`` and ``friction_force`` [N], ``q`` [m],
+        ``tan_theta``, ``mu_e`` and the frozen-time ``growth_rate`` sigma(t) [1/s] of the
+        damped linear model at (mu, tan_theta(t)). Attribute ``status`` is ``"completed"``
+        or ``"diverged"``; a diverged run is cut at its last finite sample (``t_stop``).
+
+    Examples
+    --------
+    >>> from squealkit.models import get_preset
+    >>> from squealkit.transient import SineRunOut, simulate
+    >>> ds = simulate(get_preset("lv2013"), mu=0.4, profile=SineRunOut(0.08e-3, 1e-3),
+    ...               speed=0.02, duration=0.01, fs=40_000)
+    >>> ds.attrs["status"], ds.sizes["time"]
+    ('completed', 401)
+    """
+    runs = _as_runs([model], [mu], [profile], [speed])
+    raw = _integrate(
+        runs, duration=duration, fs=fs, contact=as_contact(contact), x0=x0, v0=v0, perturbation=perturbation,
+        rng=rng, x_start=x_start, dt=dt, limit=limit, progress=progress,
+    )
+    n_keep = int(raw["n_valid"][0])
+    status = "diverged" if raw["status"][0] else "completed"
+    ds = _run_dataset(runs[0], raw, 0, n_keep)
+    ds.attrs.update(_attrs(runs[0], raw, status, float(raw["time"][n_keep - 1]), validate_fs(fs)))
+    return ds
+
+
+def simulate_batch(
+    models: FrictionModel | Sequence[FrictionModel],
+    *,
+    mu: float | ArrayLike,
+    profiles: SurfaceProfile | Sequence[SurfaceProfile | None] | None = None,
+    speed: float | ArrayLike = 0.02,
+    duration: float,
+    fs: float = 40_000.0,
+    contact: Contact | str = "linear",
+    x0: ArrayLike | None = None,
+    perturbation: float = 0.0,
+    rng: np.random.Generator | None = None,
+    x_start: float = 0.0,
+    dt: float | None = None,
+    limit: float = 1.0,
+    progress: Progress | None = None,
+) -> xr.Dataset:
+    """Many runs at once, in parallel over runs (numba ``prange``, all cores).
+
+    Each of ``models``, ``mu``, ``profiles`` and ``speed`` is one value for all runs or one
+    per run; the runs are their broadcast. All models need the same DOFs. The step ``dt``
+    is the smallest any run needs. Returns the variables of :func:`simulate` with a leading
+    ``run`` dimension and per-run ``status`` (``"completed"``/``"diverged"``), ``mu`` and
+    ``speed``; samples after a divergence are NaN.
+
+    Examples
+    --------
+    >>> from squealkit.models import get_preset
+    >>> ds = simulate_batch(get_preset("lv2013"), mu=[0.2, 0.4], duration=0.002)
+    >>> ds.sizes["run"], ds.status.values.tolist()
+    (2, ['completed', 'completed'])
+    """
+    models_l = list(models) if isinstance(models, Sequence) else [models]
+    mus = np.atleast_1d(np.asarray(mu, dtype=float)).tolist()
+    profs = list(profiles) if isinstance(profiles, Sequence) else [profiles]
+    speeds = np.atleast_1d(np.asarray(speed, dtype=float)).tolist()
+    runs = _as_runs(models_l, mus, profs, speeds)
+    raw = _integrate(
+        runs, duration=duration, fs=fs, contact=as_contact(contact), x0=x0, v0=None, perturbation=perturbation,
+        rng=rng, x_start=x_start, dt=dt, limit=limit, progress=progress,
+    )
+    n_out = raw["time"].size
+    parts = [_run_dataset(run, raw, i, n_out) for i, run in enumerate(runs)]
+    ds = xr.concat(parts, dim="run", coords="different", compat="equals", join="exact")
+    ds = ds.assign_coords(run=np.arange(len(runs)))
+    ds["status"] = ("run", np.array(["diverged" if s else "completed" for s in raw["status"]]))
+    ds["mu"] = ("run", np.array([r.mu for r in runs]), {"units": "1"})
+    ds["speed"] = ("run", np.array([r.speed for r in runs]), {"units": "m/s"})
+    ds.attrs.update(
+        {"title": "squealkit transient simulation (batch)", "fs": float(fs), "dt": raw["dt"],
+         "integrator": "classical RK4, fixed step (numba, parallel over runs)", "contact": raw["contact"].describe()}
+    )
+    return ds
+
+
+def response_envelope(ds: xr.Dataset, var: str, *, freq_lower: float = 1000.0) -> xr.DataArray:
+    """Envelope of the vibration of ``var``: high-pass above ``freq_lower`` [Hz], then |Hilbert|.
+
+    The high-pass (4th-order Butterworth, zero phase) removes the quasi-static response to the
+    run-out so that what remains is the self-excited vibration (paper section 5 does the same
+    with the rig's displacement).
+    """
+    from scipy.signal import butter, hilbert, sosfiltfilt
+
+    if var not in ds:
+        raise InputError(f"Variable {var!r} is not in the dataset; have {sorted(ds.data_vars)}.")
+    fs = float(ds.attrs["fs"])
+    y = np.asarray(ds[var].values, dtype=float)
+    if not 0 < freq_lower < fs / 2:
+        raise InputError(f"Parameter freq_lower={freq_lower!r} Hz must lie between 0 and fs/2 = {fs / 2:g} Hz.")
+    if y.shape[-1] > 27:
+        sos = butter(4, freq_lower, btype="highpass", fs=fs, output="sos")
+        y = sosfiltfilt(sos, y - y[..., :1], axis=-1)
+    env = np.abs(hilbert(y, axis=-1))
+    out = xr.DataArray(env, dims=ds[var].dims, coords=ds[var].coords, name=f"{var}_envelope")
+    out.attrs = {
+        "units": ds[var].attrs.get("units", ""),
+        "long_name": f"vibration envelope of {var} (> {freq_lower:g} Hz)",
+    }
+    return out
+
+
+def _stages(tan_theta: np.ndarray) -> list[tuple[int, int, str]]:
+    """Contiguous index ranges where the run-out rises, falls or is flat."""
+    label = np.where(tan_theta > 1e-12, 1, np.where(tan_theta < -1e-12, -1, 0))
+    edges = np.flatnonzero(np.diff(label)) + 1
+    bounds = np.concatenate([[0], edges, [label.size]])
+    names = {1: "rising", -1: "falling", 0: "flat"}
+    return [(int(a), int(b), names[int(label[a])]) for a, b in itertools.pairwise(bounds)]
+
+
+def transient_summary(ds: xr.Dataset, *, max_stages: int = 50) -> dict[str, object]:
+    """Peak amplitudes, and growth or decay rate of the vibration per run-out stage.
+
+    The growth rate of a stage [1/s] is the least-squares slope of the log of the envelope
+    (see :func:`response_envelope`, first DOF's acceleration) over the stage, leaving out the
+    first and last 5 ms of the record (filter end effects); it is positive
+    where the vibration grows (paper Fig. 4: rising SRO) and negative where it decays.
+    """
+    model_dofs = [v[: -len("_ddot")] for v in ds.data_vars if str(v).endswith("_ddot")]
+    fs = float(ds.attrs["fs"])
+    time = ds.time.values
+    out: dict[str, object] = {
+        "status": ds.attrs.get("status"),
+        "t_stop": ds.attrs.get("t_stop"),
+        "duration": float(time[-1]) if time.size else 0.0,
+        "fs": fs,
+        "mu": ds.attrs.get("mu"),
+        "speed": ds.attrs.get("speed"),
+        "profile": ds.attrs.get("profile"),
+        "contact": ds.attrs.get("contact"),
+        "dt": ds.attrs.get("dt"),
+        "peak": {},
+    }
+    for d in model_dofs:
+        dev = ds[d].values - ds[d].values[0]
+        out["peak"][d] = {  # type: ignore[index]
+            "displacement_change_m": float(np.max(np.abs(dev))),
+            "velocity_m_s": float(np.max(np.abs(ds[f"{d}_dot"].values))),
+            "acceleration_m_s2": float(np.max(np.abs(ds[f"{d}_ddot"].values))),
+        }
+    out["growth_rate_max"] = float(ds.growth_rate.max())
+    stages = []
+    if time.size > 32 and fs > 2500.0:
+        env = response_envelope(ds, f"{model_dofs[0]}_ddot").values
+        # The zero-phase filter and the Hilbert transform ring for a few ms at both ends of
+        # the record: those samples take no part in the rate fits.
+        edge = np.zeros(time.size, dtype=bool)
+        n_edge = min(int(0.005 * fs), time.size // 4)
+        edge[:n_edge] = edge[time.size - n_edge :] = True
+        for a, b, kind in _stages(ds.tan_theta.values):
+            if b - a < 16:
+                continue
+            seg = env[a:b]
+            ok = (seg > 0) & ~edge[a:b]
+            rate = float(np.polyfit(time[a:b][ok], np.log(seg[ok]), 1)[0]) if ok.sum() > 8 else math.nan
+            stages.append({
+                "stage": kind, "t_start": float(time[a]), "t_end": float(time[b - 1]), "rate_per_s": rate,
+                "sigma_mean_per_s": float(ds.growth_rate.values[a:b].mean()),
+                "partial": a == 0 or b == time.size,  # cut by the record: rate less reliable
+            })
+    out["stages"] = stages[:max_stages]
+    out["stages_truncated"] = len(stages) > max_stages
+    return out
