@@ -57,12 +57,14 @@ def _paper_steps(
     model: FrictionModel, rig: PinOnDiscRig | None, published: bool, quick: bool
 ) -> list[tuple[str, Step]]:
     from .steps_stability import critical_step, fig2_step, parameters_step
+    from .steps_transient import transient_step
 
     n = 41 if quick else 161
     return [
         ("parameters", lambda fig, dat: parameters_step(model, rig, fig, dat)),
         ("Fig. 2 eigenvalues", lambda fig, dat: fig2_step(model, fig, dat, n_mu=n, n_theta=n, published=published)),
         ("critical friction", lambda fig, dat: critical_step(model, fig, dat)),
+        ("Figs. 3-4 transients", lambda fig, dat: transient_step(model, fig, dat, quick=quick)),
     ]
 
 
