@@ -21,6 +21,8 @@ COMMANDS: dict[str, str] = {
     "stability": "squealkit.cli.stability:stability",
     "critical": "squealkit.cli.critical:critical",
     "presets": "squealkit.cli.presets:presets",
+    "analyze": "squealkit.cli.analyze:analyze",
+    "synth": "squealkit.cli.synth:synth",
 }
 
 
