@@ -265,10 +265,12 @@ def analyze_recording(
         src: Any = _DatasetSource(recording, fs)
         attrs = dict(recording.attrs)
     elif isinstance(recording, RecordingSource):
-        src, attrs = recording, {"source": str(recording.path)}
+        src, attrs = recording, {"source": str(recording.path), "synthetic": recording.synthetic}
+    elif hasattr(recording, "iter_blocks"):  # e.g. a SyntheticSource
+        src, attrs = recording, {"source": str(recording.path), "synthetic": recording.fmt == "synthetic"}
     else:
         src = open_recording(recording, fs=fs)
-        attrs = {"source": str(src.path)}
+        attrs = {"source": str(src.path), "synthetic": src.synthetic}
     try:
         s = AnalysisSettings(rpm=rpm, radius=radius, band=tuple(band), threshold_dba=threshold_dba,
                              min_duration=min_duration, **options)

@@ -71,6 +71,11 @@ class RecordingSource:
     _extra: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
+    def synthetic(self) -> bool:
+        """Whether the file says it is a synthetic recording (attribute ``synthetic``)."""
+        return bool(self._extra.get("synthetic", False))
+
+    @property
     def duration(self) -> float:
         """Length of the recording [s]."""
         return self.n_samples / self.fs
@@ -305,7 +310,8 @@ def _open_netcdf(p: Path, fs: float | None) -> RecordingSource:
             else:
                 raise InputError(f"Recording {str(p)!r} has no 'fs' attribute or time coordinate; give fs.")
         units = {n: str(ds[n].attrs.get("units", "")) for n in names}
-        return RecordingSource(p, "netcdf", float(fs), int(ds.sizes[dim]), tuple(names), units, {}, {"dim": dim})
+        extra = {"dim": dim, "synthetic": bool(ds.attrs.get("synthetic", 0))}
+        return RecordingSource(p, "netcdf", float(fs), int(ds.sizes[dim]), tuple(names), units, {}, extra)
 
 
 def _open_tdms(p: Path, fs: float | None) -> RecordingSource:

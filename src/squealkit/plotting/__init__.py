@@ -1,0 +1,1 @@
+"""Figures (matplotlib imported lazily; computation never imports this package)."""
