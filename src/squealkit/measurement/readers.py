@@ -126,7 +126,7 @@ class RecordingSource:
                 data = {}
                 for n in names:
                     col = df[cols[n]]
-                    if not np.issubdtype(col.dtype, np.number):
+                    if not pd.api.types.is_numeric_dtype(col.dtype) or pd.api.types.is_bool_dtype(col.dtype):
                         vals = pd.to_numeric(col, errors="coerce")
                         i = int(np.argmax(vals.isna().to_numpy()))
                         raise InputError(
