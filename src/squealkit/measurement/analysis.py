@@ -137,7 +137,7 @@ class MeasurementResult:
 
     def to_dataset(self) -> xr.Dataset:
         """All labelled results in one Dataset (saves to netCDF with :func:`squealkit.io.save_dataset`)."""
-        ds = xr.merge([self.frames, self.revolutions, self.polar, self.spectrum], combine_attrs="drop")
+        ds = xr.merge([self.frames, self.revolutions, self.polar, self.spectrum], combine_attrs="override")
         ev = self.events
         ds = ds.assign(
             event_start=("event", np.array([e.start_s for e in ev]), {"units": "s"}),
