@@ -106,7 +106,7 @@ def test_simultaneous_frequencies_kept_apart():
 
 
 def test_min_duration_and_threshold_settings(rising):
-    rec, res = rising
+    rec, _ = rising
     assert analyze_recording(rec, threshold_dba=95.0, **KW).events == ()
     assert analyze_recording(rec, min_duration=0.1, **KW).events == ()
 

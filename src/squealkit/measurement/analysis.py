@@ -145,7 +145,8 @@ class MeasurementResult:
             event_frequency=("event", np.array([e.frequency_hz for e in ev]), {"units": "Hz"}),
             event_peak=("event", np.array([e.peak_dba for e in ev]), {"units": "dB(A)"}),
         )
-        ds.attrs = {k: v for k, v in self.to_dict().items() if isinstance(v, int | float | str)}
+        ds.attrs = {k: int(v) if isinstance(v, bool) else v for k, v in self.to_dict().items()
+                    if isinstance(v, int | float | str)}
         ds.attrs.update(squealkit_version=__version__, synthetic=int(bool(self.attrs.get("synthetic", False))))
         return ds
 
