@@ -22,9 +22,9 @@ from numpy.typing import NDArray
 from .. import __version__
 from .._validation import InputError, validate_finite, validate_fs, validate_positive
 from .events import SquealEvent, link_components, tonal_components
-from .filters import bandpass
+from .filters import lowpass
 from .readers import DEFAULT_BLOCK, RecordingSource, open_recording
-from .runout import incline, revolution_frequency, split_runout, surface_speed
+from .runout import revolution_frequency, surface_speed
 from .spectral import P_REF, a_weighting_db, frame_power, refine_peak
 
 __all__ = ["AnalysisSettings", "MeasurementResult", "analyze_recording"]
@@ -297,6 +297,13 @@ def analyze_recording(
     margin = max(n, int(0.25 * fs_), int(4 * fs_ / ((s.macro_orders + 0.5) * f_rev)))
     n_frames = (total - n) // hop + 1
     half = (n - hop) // 2  # frame "interval" [start + half, start + half + hop) for energy sums
+    # run-out is analysed at fs / dec, dec a divisor of hop with fs / dec >= 4 lowpass_freq
+    dec = max(d for d in range(1, hop + 1) if hop % d == 0 and fs_ / d >= 4 * s.lowpass_freq)
+    fs_d = fs_ / dec
+    f_macro = (s.macro_orders + 0.5) * f_rev
+    if f_macro >= s.lowpass_freq:
+        raise InputError(f"macro_orders={s.macro_orders} at {s.rpm:g} rpm puts the macro corner ({f_macro:g} Hz) "
+                         f"above lowpass_freq={s.lowpass_freq:g} Hz.")
 
     level = np.empty(n_frames)
     ridge_f = np.empty(n_frames)
@@ -305,7 +312,6 @@ def analyze_recording(
     slope_f = np.empty(n_frames)
     comp_frame, comp_freq, comp_level, comp_pow = [], [], [], []
     mic_spec_sum = np.zeros(freq.size)
-    disp_spec_sum = np.zeros(freq.size)
     rev_max: dict[str, dict[int, float]] = {k: {} for k in ("sro", "macro", "micro")}
     rev_min: dict[str, dict[int, float]] = {k: {} for k in ("sro", "macro", "micro")}
     nb = s.n_angle_bins
@@ -336,32 +342,33 @@ def analyze_recording(
             comp_pow.append(P_REF**2 * 10 ** (fl / 10))
             loud = lev >= P_REF**2 * 10 ** (s.threshold_dba / 10)
             mic_spec_sum += power[loud].sum(axis=0)
-            _, pq = frame_power(q[f0 * hop - w0: (f1 - 1) * hop + n - w0], n, hop)
-            disp_spec_sum += pq.sum(axis=0)
-        # band energy of the sound and the run-out slope, per sample
-        pb = bandpass(p, s.band[0], s.band[1], fs_)
-        sro, macro, micro = split_runout(q, fs_, s.rpm, lowpass_freq=s.lowpass_freq, macro_orders=s.macro_orders)
-        tan_t = incline(sro, fs_, s.rpm, s.radius)
-        e = pb * pb
-        cs_e = np.concatenate([[0.0], np.cumsum(e)])
-        cs_r = np.concatenate([[0.0], np.cumsum(e * (tan_t > 0))])
+            # band mean square per frame (Hann frames at 50 % overlap sum to the signal energy)
+            e_tot[f0:f1] = power[:, lo:hi].sum(axis=1)
+        # run-out: low-pass at full rate, then work on every D-th sample (fs / D >= 4 lowpass_freq)
+        sro_full = lowpass(q, s.lowpass_freq, fs_)
+        o = (-w0) % dec
+        sro = sro_full[o::dec]
+        g0 = w0 + o  # global index of sro[0]
+        macro = lowpass(sro, f_macro, fs_d, order=2)
+        micro = sro - macro
+        tan_t = np.gradient(sro) * fs_d / v
+        cs_r = np.concatenate([[0.0], np.cumsum(tan_t > 0)])
         cs_t = np.concatenate([[0.0], np.cumsum(tan_t)])
         if f1 > f0:
-            a = np.arange(f0, f1) * hop + half - w0
-            b = a + hop
-            e_tot[f0:f1] = (cs_e[b] - cs_e[a]) / hop
-            e_rise[f0:f1] = (cs_r[b] - cs_r[a]) / hop
-            slope_f[f0:f1] = (cs_t[b] - cs_t[a]) / hop
-        ci = slice(c0 - w0, c1 - w0)
-        idx = np.arange(c0, c1)
+            a = -(-(np.arange(f0, f1) * hop + half - g0) // dec)
+            b = a + hop // dec
+            share = (cs_r[b] - cs_r[a]) / (b - a)
+            e_rise[f0:f1] = e_tot[f0:f1] * share
+            slope_f[f0:f1] = (cs_t[b] - cs_t[a]) / (b - a)
+        ci = slice(-(-(c0 - g0) // dec), -(-(c1 - g0) // dec))
+        idx = g0 + np.arange(ci.start, ci.stop) * dec
         turns = idx * (f_rev / fs_)
         rev = np.floor(turns).astype(np.int64)
-        bounds = np.flatnonzero(np.diff(rev)) + 1
-        starts = np.concatenate([[0], bounds])
+        starts = np.concatenate([[0], np.flatnonzero(np.diff(rev)) + 1])
         for key, sig in (("sro", sro[ci]), ("macro", macro[ci]), ("micro", micro[ci])):
             mx = np.maximum.reduceat(sig, starts)
             mn = np.minimum.reduceat(sig, starts)
-            for r, a_, b_ in zip(rev[starts], mx, mn, strict=True):
+            for r, a_, b_ in zip(rev[starts].tolist(), mx.tolist(), mn.tolist(), strict=True):
                 rev_max[key][r] = max(rev_max[key].get(r, -np.inf), a_)
                 rev_min[key][r] = min(rev_min[key].get(r, np.inf), b_)
         abin = ((turns % 1.0) * nb).astype(np.int64) % nb
@@ -420,8 +427,8 @@ def analyze_recording(
             "level_dba": ("time", level, {"units": "dB(A)",
                                           "long_name": f"A-weighted level {s.band[0]:g}-{s.band[1]:g} Hz"}),
             "ridge_freq": ("time", ridge_f, {"units": "Hz", "long_name": "strongest line in the band"}),
-            "band_power": ("time", e_tot, {"units": "Pa^2", "long_name": "mean square of band-passed pressure"}),
-            "rising_power": ("time", e_rise, {"units": "Pa^2", "long_name": "band_power on rising run-out"}),
+            "band_power": ("time", e_tot, {"units": "Pa^2", "long_name": "mean square in the band (Hann frame)"}),
+            "rising_power": ("time", e_rise, {"units": "Pa^2", "long_name": "band_power x share on rising run-out"}),
             "tan_theta": ("time", slope_f, {"units": "1", "long_name": "mean SRO slope tan(theta)"}),
         },
         coords={"time": ("time", t_frames, {"units": "s", "long_name": "frame centre"})},
@@ -447,7 +454,6 @@ def analyze_recording(
     spectrum = xr.Dataset(
         {
             "mic_power_squeal": ("freq", mic_spec_sum / n_loud, {"units": "Pa^2", "long_name": "mean during squeal"}),
-            "displacement_power": ("freq", disp_spec_sum / n_frames, {"units": "m^2"}),
         },
         coords={"freq": ("freq", freq, {"units": "Hz"})},
     )
