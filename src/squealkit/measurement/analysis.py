@@ -18,6 +18,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
+from scipy import fft as sp_fft
+from scipy import signal
 
 from .. import __version__
 from .._validation import InputError, validate_finite, validate_fs, validate_positive
@@ -25,7 +27,7 @@ from .events import SquealEvent, link_components, tonal_components
 from .filters import lowpass
 from .readers import DEFAULT_BLOCK, RecordingSource, open_recording
 from .runout import revolution_frequency, surface_speed
-from .spectral import P_REF, a_weighting_db, frame_power, refine_peak
+from .spectral import P_REF, a_weighting_db, refine_peak
 
 __all__ = ["AnalysisSettings", "MeasurementResult", "analyze_recording"]
 
@@ -149,6 +151,13 @@ class MeasurementResult:
                     if isinstance(v, int | float | str)}
         ds.attrs.update(squealkit_version=__version__, synthetic=int(bool(self.attrs.get("synthetic", False))))
         return ds
+
+
+def _refine_rows(power: NDArray[np.float64], k: NDArray[np.intp]) -> NDArray[np.float64]:
+    """Refined bin of the peak at ``k`` in each row of a power spectrum (Hann two-bin ratio)."""
+    kk = np.clip(k, 1, power.shape[1] - 2)
+    mag3 = np.sqrt(np.take_along_axis(power, kk[:, None] + np.array([-1, 0, 1]), axis=1))
+    return np.atleast_1d(refine_peak(mag3, np.ones(kk.size, np.intp))) - 1 + kk
 
 
 class _DatasetSource:
@@ -293,6 +302,9 @@ def analyze_recording(
     if hi - lo < 5:
         raise InputError(f"Band {s.band} Hz holds fewer than 5 bins of {fs_ / n:g} Hz; widen it or raise nperseg.")
     w_a = 10 ** (a_weighting_db(freq[lo:hi]) / 10)
+    win = signal.windows.hann(s.nperseg, sym=False)
+    pscale = 2.0 / (s.nperseg * float(np.sum(win**2)))
+    thr_power = P_REF**2 * 10 ** (s.threshold_dba / 10)
     core = max(hop, round(s.chunk_s * fs_ / hop) * hop)
     margin = max(n, int(0.25 * fs_), int(4 * fs_ / ((s.macro_orders + 0.5) * f_rev)))
     n_frames = (total - n) // hop + 1
@@ -310,8 +322,11 @@ def analyze_recording(
     e_tot = np.empty(n_frames)
     e_rise = np.empty(n_frames)
     slope_f = np.empty(n_frames)
-    comp_frame, comp_freq, comp_level, comp_pow = [], [], [], []
-    mic_spec_sum = np.zeros(freq.size)
+    comp_frame: list[NDArray] = [np.empty(0, np.intp)]
+    comp_freq: list[NDArray] = [np.empty(0)]
+    comp_level: list[NDArray] = [np.empty(0)]
+    comp_pow: list[NDArray] = [np.empty(0)]
+    mic_spec_sum = np.zeros(freq.size)  # summed over loud frames, band bins only
     rev_max: dict[str, dict[int, float]] = {k: {} for k in ("sro", "macro", "micro")}
     rev_min: dict[str, dict[int, float]] = {k: {} for k in ("sro", "macro", "micro")}
     nb = s.n_angle_bins
@@ -329,21 +344,23 @@ def analyze_recording(
         # frames [f0, f1) start inside the core; their samples lie in the window
         if f1 > f0:
             seg = p[f0 * hop - w0: (f1 - 1) * hop + n - w0]
-            spec, power = frame_power(seg, n, hop)
-            pa = power[:, lo:hi] * w_a
+            frames_ = np.lib.stride_tricks.sliding_window_view(seg, n)[::hop]
+            spec = sp_fft.rfft(frames_ * win, axis=-1, workers=-1)[:, lo:hi]
+            pb = (spec.real**2 + spec.imag**2) * pscale  # power per band bin [Pa^2]
+            pa = pb * w_a
             lev = pa.sum(axis=1)
             level[f0:f1] = 10 * np.log10(np.maximum(lev, 1e-300) / P_REF**2)
-            k = np.argmax(pa, axis=1)
-            ridge_f[f0:f1] = (np.atleast_1d(refine_peak(np.abs(spec[:, lo:hi]), k)) + lo) * fs_ / n
-            fr, ff, fl = tonal_components(spec[:, lo:hi], pa, lo, fs_, n, s.threshold_dba)
-            comp_frame.append(fr + f0)
-            comp_freq.append(ff)
-            comp_level.append(fl)
-            comp_pow.append(P_REF**2 * 10 ** (fl / 10))
-            loud = lev >= P_REF**2 * 10 ** (s.threshold_dba / 10)
-            mic_spec_sum += power[loud].sum(axis=0)
+            ridge_f[f0:f1] = (_refine_rows(pb, np.argmax(pa, axis=1)) + lo) * fs_ / n
+            loud = np.flatnonzero(lev >= thr_power)  # a component cannot exceed its frame's level
+            if loud.size:
+                fr, ff, fl = tonal_components(pb[loud], pa[loud], lo, fs_, n, s.threshold_dba)
+                comp_frame.append(loud[fr] + f0)
+                comp_freq.append(ff)
+                comp_level.append(fl)
+                comp_pow.append(P_REF**2 * 10 ** (fl / 10))
+                mic_spec_sum[lo:hi] += pb[loud].sum(axis=0)
             # band mean square per frame (Hann frames at 50 % overlap sum to the signal energy)
-            e_tot[f0:f1] = power[:, lo:hi].sum(axis=1)
+            e_tot[f0:f1] = pb.sum(axis=1)
         # run-out: low-pass at full rate, then work on every D-th sample (fs / D >= 4 lowpass_freq)
         sro_full = lowpass(q, s.lowpass_freq, fs_)
         o = (-w0) % dec
@@ -384,7 +401,7 @@ def analyze_recording(
         if progress is not None:
             progress(c1, total)
 
-    cf = np.concatenate(comp_frame) if comp_frame else np.empty(0, np.intp)
+    cf = np.concatenate(comp_frame)
     frame_start = np.arange(n_frames) * hop / fs_
     events, ev_frames = link_components(
         cf, np.concatenate(comp_freq), np.concatenate(comp_level), np.concatenate(comp_pow),
@@ -407,7 +424,7 @@ def analyze_recording(
         squeal_f = float(refine_peak(mag, k0)) * fs_ / n
         for h in range(2, 6):
             kh = round(h * squeal_f * n / fs_)
-            if kh + 3 >= freq.size:
+            if kh + 3 >= hi:
                 break
             kk = kh - 2 + int(np.argmax(mic_spec_sum[kh - 2:kh + 3]))
             p_h = mic_spec_sum[kk - 2:kk + 3].sum() / max(int(in_ev.sum()), 1)

@@ -54,15 +54,15 @@ class SquealEvent:
 
 
 def tonal_components(
-    spec: NDArray[np.complex128], power_a: NDArray[np.float64], lo: int, fs: float, nperseg: int,
+    power: NDArray[np.float64], power_a: NDArray[np.float64], lo: int, fs: float, nperseg: int,
     threshold_dba: float,
 ) -> tuple[NDArray[np.intp], NDArray[np.float64], NDArray[np.float64]]:
     """Tonal components above the threshold in framed spectra.
 
     Parameters
     ----------
-    spec : ndarray, shape (n_frames, n_band)
-        Complex spectra of the band bins (for frequency refinement).
+    power : ndarray, shape (n_frames, n_band)
+        Power per bin of the band bins [Pa^2] (Hann frames; for frequency refinement).
     power_a : ndarray, shape (n_frames, n_band)
         A-weighted power per bin [Pa^2] of the same bins.
     lo : int
@@ -82,8 +82,12 @@ def tonal_components(
     is_max &= power_a >= power_a.max(axis=1, keepdims=True) * 10 ** (-_DYNAMIC_RANGE_DB / 10)
     is_max[:, [0, -1]] = False
     frame, k = np.nonzero(is_max)
-    mag = np.abs(spec[frame])
-    freq = (np.atleast_1d(refine_peak(mag, k)) + lo) * fs / nperseg if frame.size else np.empty(0)
+    if frame.size:
+        kk = np.clip(k, 1, power.shape[1] - 2)
+        mag3 = np.sqrt(power[frame[:, None], kk[:, None] + np.array([-1, 0, 1])])
+        freq = (np.atleast_1d(refine_peak(mag3, np.ones(kk.size, np.intp))) - 1 + kk + lo) * fs / nperseg
+    else:
+        freq = np.empty(0)
     level = 10 * np.log10(lobe[frame, k] / P_REF**2)
     return frame, freq, level
 
