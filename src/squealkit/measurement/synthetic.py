@@ -83,7 +83,9 @@ class SyntheticSource:
         t = idx / self.fs
         turns = t * self.rpm / 60.0
         env = self.envelope(turns)
-        q, _ = self.surface(turns)
+        grid = np.arange(_N_ANGLE + 1) / _N_ANGLE
+        q_grid, _ = self.surface(grid)  # periodic surface, interpolated (error < 1e-3 of the micro part)
+        q = np.interp(turns % 1.0, grid, q_grid)
         ph = 2 * np.pi * self.freq * t
         tone = np.sin(ph)
         for h, a in enumerate(self.harmonics, start=2):
