@@ -303,6 +303,7 @@ def analyze_recording(
         raise InputError(f"Band {s.band} Hz holds fewer than 5 bins of {fs_ / n:g} Hz; widen it or raise nperseg.")
     w_a = 10 ** (a_weighting_db(freq[lo:hi]) / 10)
     win = signal.windows.hann(s.nperseg, sym=False)
+    win32 = win.astype(np.float32)
     pscale = 2.0 / (s.nperseg * float(np.sum(win**2)))
     thr_power = P_REF**2 * 10 ** (s.threshold_dba / 10)
     core = max(hop, round(s.chunk_s * fs_ / hop) * hop)
@@ -344,9 +345,9 @@ def analyze_recording(
         # frames [f0, f1) start inside the core; their samples lie in the window
         if f1 > f0:
             seg = p[f0 * hop - w0: (f1 - 1) * hop + n - w0]
-            frames_ = np.lib.stride_tricks.sliding_window_view(seg, n)[::hop]
-            spec = sp_fft.rfft(frames_ * win, axis=-1, workers=-1)[:, lo:hi]
-            pb = (spec.real**2 + spec.imag**2) * pscale  # power per band bin [Pa^2]
+            frames_ = np.lib.stride_tricks.sliding_window_view(seg.astype(np.float32), n)[::hop]
+            spec = sp_fft.rfft(frames_ * win32, axis=-1, workers=-1)[:, lo:hi]  # single precision: levels
+            pb = (spec.real.astype(np.float64)**2 + spec.imag.astype(np.float64)**2) * pscale  # [Pa^2] per bin
             pa = pb * w_a
             lev = pa.sum(axis=1)
             level[f0:f1] = 10 * np.log10(np.maximum(lev, 1e-300) / P_REF**2)
