@@ -5,6 +5,8 @@ main frequency) growing on the rising run-out. Truth comes from the generator it
 (``SyntheticSource.truth``), computed from the noise-free envelope.
 """
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -135,3 +137,22 @@ def test_nan_sample_rejected():
     mic[100] = np.nan
     with pytest.raises(InputError, match="non-finite"):
         analyze_recording(rec.assign(mic=("time", mic)), **KW)
+
+
+def test_progress_callback_reaches_total():
+    rec = synthetic_recording(duration=1.0, seed=1)
+    calls = []
+    analyze_recording(rec, chunk_s=0.25, progress=lambda done, total: calls.append((done, total)), **KW)
+    assert len(calls) >= 4 and calls[-1] == (40000, 40000)  # chunks are whole hops long
+    assert all(a[0] < b[0] for a, b in itertools.pairwise(calls))
+
+
+def test_campaign_summary_occurrence_and_frequencies(rising, falling):
+    from squealkit.measurement.campaign import summarize_campaign
+
+    quiet = analyze_recording(synthetic_recording(duration=0.5, seed=9, squeal_on="none"), **KW)
+    summ = summarize_campaign([rising[1], falling[1], quiet], ["a", "b", "c"])
+    assert summ.occurrence_percent == pytest.approx(200 / 3)
+    assert len(summ.frequencies) == 1 and summ.frequencies[0]["n_recordings"] == 2
+    assert summ.frequencies[0]["frequency_hz"] == pytest.approx(2388.0, abs=2.0)
+    assert summ.to_csv().count("\n") == 2 + 1 + 3  # two comment lines, header, three rows
