@@ -129,3 +129,22 @@ def test_bad_files_exit_2(tmp_path, name, content, match):
     res = invoke(["analyze", str(f), *ARGS])
     assert res.exit_code == 2
     assert match in res.output and len(res.output.strip().splitlines()) == 1
+
+
+def test_wav_with_scale_and_unit_and_out(tmp_path):
+    from scipy.io import wavfile
+
+    from squealkit.io import load_dataset
+    from squealkit.measurement import synthetic_recording
+
+    rec = synthetic_recording(duration=0.5, seed=1)
+    f = tmp_path / "rec.wav"
+    # float WAV: full scale 1.0 = 20 Pa on ch0 and 100 um on ch1
+    data = np.column_stack([rec["mic"].values / 20.0, rec["displacement"].values / 1e-4]).astype(np.float32)
+    wavfile.write(f, 40000, data)
+    out = tmp_path / "res.nc"
+    res = invoke(["analyze", str(f), "--mic", "ch0", "--displacement", "1", "--rpm", "900", "--radius", "0.05",
+                  "--scale", "ch0=20", "--scale", "ch1=1e-4", "--unit", "ch0=Pa", "--out", str(out), "--json"])
+    assert res.exit_code == 0, res.output
+    assert abs(json.loads(res.output)["squeal_frequency_hz"] - 2388.0) < 3.0
+    assert load_dataset(out)["event_start"].size == len(json.loads(res.output)["events"])
