@@ -51,6 +51,9 @@ def synth(out: Path, seed: int, duration: float, fs: float, rpm: float, radius: 
     if as_json:
         emit_json({"out": str(out), "synthetic": True, "truth": truth})
     else:
-        click.echo(f"wrote {out} (SYNTHETIC, {duration:g} s at {fs:g} Hz; truth: squeal "
-                   f"{truth['frequency_hz']:.1f} Hz, {len(truth['event_starts_s'])} events, "
-                   f"rising fraction {truth['rising_fraction']:.3f})")
+        if len(truth["event_starts_s"]) == 0:
+            what = "no squeal"
+        else:
+            what = (f"squeal {truth['frequency_hz']:.1f} Hz, {len(truth['event_starts_s'])} events, "
+                    f"rising fraction {truth['rising_fraction']:.3f}")
+        click.echo(f"wrote {out} (SYNTHETIC, {duration:g} s at {fs:g} Hz; truth: {what})")
