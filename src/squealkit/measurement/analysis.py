@@ -313,6 +313,7 @@ def analyze_recording(
     # run-out is analysed at fs / dec, dec a divisor of hop with fs / dec >= 4 lowpass_freq
     dec = max(d for d in range(1, hop + 1) if hop % d == 0 and fs_ / d >= 4 * s.lowpass_freq)
     fs_d = fs_ / dec
+    sos_hp = signal.butter(2, s.band[0], "highpass", fs=fs_, output="sos")
     f_macro = (s.macro_orders + 0.5) * f_rev
     if f_macro >= s.lowpass_freq:
         raise InputError(f"macro_orders={s.macro_orders} at {s.rpm:g} rpm puts the macro corner ({f_macro:g} Hz) "
@@ -370,12 +371,20 @@ def analyze_recording(
         macro = lowpass(sro, f_macro, fs_d, order=2)
         micro = sro - macro
         tan_t = np.gradient(sro) * fs_d / v
-        cs_r = np.concatenate([[0.0], np.cumsum(tan_t > 0)])
+        # sound energy above the band's lower edge per sample (causal 2nd-order high-pass: its delay of
+        # a fraction of a millisecond is negligible against a revolution), summed on the run-out grid
+        hp = signal.sosfilt(sos_hp, p[o:o + (p.size - o) // dec * dec])
+        hp *= hp
+        e_d = np.zeros(sro.size)
+        e_d[:hp.size // dec] = hp.reshape(-1, dec).sum(axis=1)
+        cs_e = np.concatenate([[0.0], np.cumsum(e_d)])
+        cs_r = np.concatenate([[0.0], np.cumsum(e_d * (tan_t > 0))])
         cs_t = np.concatenate([[0.0], np.cumsum(tan_t)])
         if f1 > f0:
             a = -(-(np.arange(f0, f1) * hop + half - g0) // dec)
             b = a + hop // dec
-            share = (cs_r[b] - cs_r[a]) / (b - a)
+            e_int = cs_e[b] - cs_e[a]
+            share = np.divide(cs_r[b] - cs_r[a], e_int, out=np.full(e_int.shape, 0.5), where=e_int > 0)
             e_rise[f0:f1] = e_tot[f0:f1] * share
             slope_f[f0:f1] = (cs_t[b] - cs_t[a]) / (b - a)
         ci = slice(-(-(c0 - g0) // dec), -(-(c1 - g0) // dec))
