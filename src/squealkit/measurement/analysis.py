@@ -79,8 +79,8 @@ class MeasurementResult:
         ``order``, ``frequency_hz``, ``level_db`` of harmonics 2-5 of the squeal.
     events : tuple of SquealEvent
     rising_fraction : float or None
-        Share of the squeal-band sound energy during events that falls on rising run-out
-        (``tan(theta) > 0``); 0.5 means no preference. None without squeal.
+        Share of the sound energy (above the band's lower edge) during events that falls on
+        rising run-out (``tan(theta) > 0``); 0.5 means no preference. None without squeal.
     growth_slope_correlation : float or None
         Pearson correlation of the squeal envelope's growth rate with the SRO slope.
     frames, revolutions, polar, spectrum : xarray.Dataset
