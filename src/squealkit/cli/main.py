@@ -23,6 +23,8 @@ COMMANDS: dict[str, str] = {
     "presets": "squealkit.cli.presets:presets",
     "tolerance": "squealkit.cli.tolerance:tolerance",
     "simulate": "squealkit.cli.simulate:simulate",
+    "analyze": "squealkit.cli.analyze:analyze",
+    "synth": "squealkit.cli.synth:synth",
 }
 
 
@@ -86,6 +88,8 @@ def cli() -> None:
       squealkit critical --theta 0 --json      # critical friction
       squealkit tolerance --mu 0.3 --wavelength 1e-3   # allowed run-out
       squealkit simulate --sro sine --plot fig4.png    # paper Fig. 4
+      squealkit synth rec.nc && squealkit analyze rec.nc --mic mic \
+          --displacement displacement --rpm 900 --radius 0.05   # paper §5
       squealkit presets                        # built-in models
 
     Every subcommand takes --help with an example. Units are SI; angles are
