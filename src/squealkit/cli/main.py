@@ -88,8 +88,8 @@ def cli() -> None:
       squealkit critical --theta 0 --json      # critical friction
       squealkit tolerance --mu 0.3 --wavelength 1e-3   # allowed run-out
       squealkit simulate --sro sine --plot fig4.png    # paper Fig. 4
-      squealkit synth rec.nc && squealkit analyze rec.nc --mic mic \
-          --displacement displacement --rpm 900 --radius 0.05   # paper §5
+      squealkit synth rec.nc                           # a SYNTHETIC rig recording
+      squealkit analyze rec.nc --mic mic --displacement displacement --rpm 900 --radius 0.05
       squealkit presets                        # built-in models
 
     Every subcommand takes --help with an example. Units are SI; angles are
