@@ -25,6 +25,8 @@ COMMANDS: dict[str, str] = {
     "reproduce": "squealkit.cli.reproduce:reproduce",
     "tolerance": "squealkit.cli.tolerance:tolerance",
     "simulate": "squealkit.cli.simulate:simulate",
+    "analyze": "squealkit.cli.analyze:analyze",
+    "synth": "squealkit.cli.synth:synth",
 }
 
 
@@ -88,6 +90,8 @@ def cli() -> None:
       squealkit critical --theta 0 --json      # critical friction
       squealkit tolerance --mu 0.3 --wavelength 1e-3   # allowed run-out
       squealkit simulate --sro sine --plot fig4.png    # paper Fig. 4
+      squealkit synth rec.nc                           # a SYNTHETIC rig recording
+      squealkit analyze rec.nc --mic mic --displacement displacement --rpm 900 --radius 0.05
       squealkit presets                        # built-in models
 
     Every subcommand takes --help with an example. Units are SI; angles are

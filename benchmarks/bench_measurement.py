@@ -1,0 +1,117 @@
+"""Speed and memory of squealkit's rig measurement analysis (not part of the tests).
+
+Usage::
+
+    python benchmarks/bench_measurement.py                 # 60 s recording + 1 h streamed
+    python benchmarks/bench_measurement.py --long 600      # shorter long run
+    python benchmarks/bench_measurement.py --short 0 --from-file   # 1 h written to netCDF, then analysed
+
+1. A 60 s two-channel 40 kHz SYNTHETIC recording: end-to-end time of
+   ``analyze_recording`` from memory and from a netCDF file (read + analyse), as a
+   real-time factor (recording length / wall time). Target: >= 300x.
+2. A long SYNTHETIC recording (default one hour) streamed block by block through the
+   chunked analysis in a fresh subprocess; prints wall time (including generating the
+   samples) and the subprocess's peak resident memory (``resource.getrusage``).
+   Target: < 2 GiB.
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+
+KW = dict(mic="mic", displacement="displacement", rpm=900.0, radius=0.05)
+
+
+def _best(fn, repeat: int = 3) -> float:
+    best = float("inf")
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def short(duration: float) -> None:
+    from squealkit.io import save_dataset
+    from squealkit.measurement import analyze_recording, synthetic_recording
+
+    rec = synthetic_recording(duration=duration, seed=1)
+    analyze_recording(rec, **KW)  # warm-up
+    t_mem = _best(lambda: analyze_recording(rec, **KW))
+    print(f"in memory : {duration:g} s SYNTHETIC 2 ch @ 40 kHz analysed in {t_mem:.3f} s "
+          f"-> {duration / t_mem:.0f}x real time")
+    with tempfile.TemporaryDirectory() as d:
+        path = save_dataset(rec, Path(d) / "rec.nc")
+        t_file = _best(lambda: analyze_recording(path, **KW))
+    print(f"from .nc  : {duration:g} s read + analysed in {t_file:.3f} s -> {duration / t_file:.0f}x real time")
+
+
+def write_long_file(path: Path, duration: float) -> None:
+    """Write a long SYNTHETIC recording to netCDF-4 block by block (float32, bounded memory)."""
+    import h5netcdf
+
+    from squealkit.measurement import synthetic_source
+
+    src = synthetic_source(duration=duration, seed=1)
+    with h5netcdf.File(path, "w") as f:
+        f.dimensions["time"] = src.n_samples
+        f.attrs["fs"] = src.fs
+        f.attrs["synthetic"] = 1
+        var = {}
+        for name, unit in (("mic", "Pa"), ("displacement", "m")):
+            var[name] = f.create_variable(name, ("time",), "f4", chunks=(1 << 18,))
+            var[name].attrs["units"] = unit
+        for start, block in src.iter_blocks(["mic", "displacement"], block=1 << 20):
+            for name, v in block.items():
+                var[name][start:start + v.size] = v.astype("f4")
+
+
+def long_child(duration: float, path: str | None) -> None:
+    from squealkit.measurement import analyze_recording, synthetic_source
+
+    rec = path if path else synthetic_source(duration=duration, seed=1)
+    what = f"read from {Path(path).name} ({Path(path).stat().st_size / 1024**3:.2f} GiB)" if path else \
+        "generated and streamed"
+    t0 = time.perf_counter()
+    res = analyze_recording(rec, **KW)
+    dt = time.perf_counter() - t0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024**2  # KiB -> GiB (Linux)
+    print(f"long      : {duration:g} s SYNTHETIC {what} in chunks: {dt:.1f} s wall "
+          f"({duration / dt:.0f}x real time), {len(res.events)} events, rising_fraction "
+          f"{res.rising_fraction:.3f}, peak memory {peak:.2f} GiB")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--short", type=float, default=60.0, help="length of the timed recording [s]")
+    ap.add_argument("--long", type=float, default=3600.0, help="length of the streamed recording [s] (0: skip)")
+    ap.add_argument("--from-file", action="store_true",
+                    help="write the long recording to a temporary netCDF file first and analyse the file")
+    ap.add_argument("--child-long", type=float, default=None, help=argparse.SUPPRESS)
+    ap.add_argument("--child-path", default=None, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.child_long is not None:
+        long_child(args.child_long, args.child_path)
+        return
+    if args.short > 0:
+        short(args.short)
+    if args.long > 0:
+        cmd = [sys.executable, __file__, "--child-long", str(args.long)]
+        with tempfile.TemporaryDirectory() as d:
+            if args.from_file:
+                path = Path(d) / "long.nc"
+                write_long_file(path, args.long)
+                cmd += ["--child-path", str(path)]
+            subprocess.run(cmd, check=True)
+
+
+if __name__ == "__main__":
+    main()

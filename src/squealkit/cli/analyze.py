@@ -1,0 +1,170 @@
+"""``squealkit analyze``: squeal events, frequency and run-out relation of rig recordings."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from .._validation import InputError, validate_finite
+from ._options import check_output_suffix, emit_json
+
+#: Show a progress bar for recordings longer than this [s].
+_PROGRESS_ABOVE_S = 60.0
+
+
+def _pairs(option: str, items: tuple[str, ...]) -> dict[str, str]:
+    out = {}
+    for it in items:
+        name, sep, value = it.partition("=")
+        if not sep or not name.strip() or not value.strip():
+            raise InputError(f"{option} {it!r} must look like CHANNEL=VALUE.")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def _band(text: str) -> tuple[float, float]:
+    lo, sep, hi = text.partition(":")
+    if not sep:
+        raise InputError(f"--band {text!r} must look like LOWER:UPPER in Hz, e.g. 1000:16000.")
+    return validate_finite("--band lower", lo), validate_finite("--band upper", hi)
+
+
+@click.command()
+@click.argument("files", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option("--mic", required=True, help="Microphone channel [Pa]: name or 0-based index.")
+@click.option("--displacement", required=True, help="Eddy-current probe channel [m]: name or index.")
+@click.option("--rpm", type=float, required=True, help="Disc speed [rpm].")
+@click.option("--radius", type=float, required=True, help="Probe radius on the disc [m].")
+@click.option("--band", default="1000:16000", show_default=True, help="Criteria band LOWER:UPPER [Hz].")
+@click.option("--threshold-dba", type=float, default=70.0, show_default=True,
+              help="Squeal threshold [dB(A)] (SAE J2521: 70).")
+@click.option("--min-duration", type=float, default=0.01, show_default=True, help="Shortest event [s].")
+@click.option("--fs", type=float, default=None, help="Sample rate [Hz] for a CSV without time column.")
+@click.option("--scale", "scales", multiple=True, metavar="CHANNEL=FACTOR",
+              help="File value -> physical unit factor per channel (e.g. WAV full scale in Pa). Repeatable.")
+@click.option("--unit", "units", multiple=True, metavar="CHANNEL=UNIT", help="Unit of a channel. Repeatable.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result (or the campaign) as JSON.")
+@click.option("--plot", "plot_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Write the figures (paper Figs. 6-13 equivalents, polar plot) into this folder.")
+@click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Write the labelled result of one file as netCDF (.nc).")
+@click.option("--summary", "summary_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Write the campaign summary (one row per recording) as CSV.")
+def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float, radius: float, band: str,
+            threshold_dba: float, min_duration: float, fs: float | None, scales: tuple[str, ...],
+            units: tuple[str, ...], as_json: bool, plot_dir: Path | None, out_path: Path | None,
+            summary_path: Path | None) -> None:
+    """Find squeal in rig recordings and relate it to the disc run-out (paper §5).
+
+    Each FILE is .csv, .wav, .nc/.h5 or .tdms with a microphone and a displacement
+    channel. Squeal events follow SAE J2521 (A-weighted level in the band above the
+    threshold); rising_fraction is the share of squeal energy on rising run-out.
+
+    \b
+    Example:
+      squealkit synth rec.nc --seed 1
+      squealkit analyze rec.nc --mic mic --displacement displacement --rpm 900 --radius 0.05
+      squealkit analyze a.tdms b.tdms --mic Mic --displacement Probe --rpm 900 --radius 0.05 \\
+          --summary campaign.csv
+    """
+    from ..io import save_dataset, write_text
+    from ..measurement import analyze_recording, open_recording
+    from ..measurement.campaign import summarize_campaign
+
+    band_ = _band(band)
+    check_output_suffix(out_path, (".nc",), "--out")
+    check_output_suffix(summary_path, (".csv",), "--summary")
+    if out_path is not None and len(files) > 1:
+        raise InputError("--out takes one FILE; use --summary for several.")
+    if plot_dir is not None and not plot_dir.is_dir():
+        plot_dir.mkdir(parents=True, exist_ok=True)
+    scale_map = {k: validate_finite(f"--scale {k}", v) for k, v in _pairs("--scale", scales).items()}
+    unit_map = _pairs("--unit", units)
+    sources = [open_recording(f, fs=fs, scale=scale_map or None, units=unit_map or None) for f in files]
+    results = []
+    for f, src in zip(files, sources, strict=True):
+        kwargs = dict(mic=mic, displacement=displacement, rpm=rpm, radius=radius, band=band_,
+                      threshold_dba=threshold_dba, min_duration=min_duration)
+        if src.duration > _PROGRESS_ABOVE_S:
+            from rich.progress import Progress
+
+            with Progress(transient=True, console=_stderr_console()) as bar:
+                task = bar.add_task(f"analysing {f.name}", total=src.n_samples)
+                def report(done: int, total: int, bar=bar, task=task) -> None:
+                    bar.update(task, completed=done)
+
+                res = analyze_recording(src, progress=report, **kwargs)
+        else:
+            res = analyze_recording(src, **kwargs)
+        results.append(res)
+        if plot_dir is not None:
+            _write_plots(src, res, mic, displacement, plot_dir / f.stem)
+    if out_path is not None:
+        save_dataset(results[0].to_dataset(), out_path)
+    campaign = summarize_campaign(results, [str(f) for f in files]) if len(files) > 1 or summary_path else None
+    if summary_path is not None and campaign is not None:
+        write_text(summary_path, campaign.to_csv())
+    if as_json:
+        emit_json(results[0].to_dict() if campaign is None else campaign.to_dict())
+        return
+    for f, r in zip(files, results, strict=True):
+        _print_text(f, r)
+    if campaign is not None:
+        click.echo(f"campaign: {campaign.occurrence_percent:.1f}% of {len(results)} recordings squeal, "
+                   f"{campaign.n_events} events; frequencies: "
+                   + (", ".join(f"{g['frequency_hz']:.0f} Hz ({g['n_events']})" for g in campaign.frequencies)
+                      or "none"))
+
+
+def _stderr_console():
+    from rich.console import Console
+
+    return Console(stderr=True)
+
+
+def _print_text(f: Path, r) -> None:
+    tag = " [SYNTHETIC]" if r.attrs.get("synthetic") else ""
+    click.echo(f"{f}{tag}: {r.duration_s:.3f} s at {r.fs:g} Hz")
+    if not r.squeal:
+        click.echo(f"  no squeal above {r.settings.threshold_dba:g} dB(A) in {r.settings.band[0]:g}-"
+                   f"{r.settings.band[1]:g} Hz")
+    else:
+        click.echo(f"  squeal {r.squeal_frequency_hz:.1f} Hz, peak {r.peak_dba:.1f} dB(A), {len(r.events)} events")
+        click.echo(f"  rising_fraction {r.rising_fraction:.3f} (share of squeal energy on rising run-out), "
+                   f"growth/slope correlation {r.growth_slope_correlation:.2f}")
+        for e in r.events[:10]:
+            click.echo(f"    {e.start_s:8.4f}-{e.end_s:8.4f} s  {e.frequency_hz:8.1f} Hz  {e.peak_dba:6.1f} dB(A)")
+        if len(r.events) > 10:
+            click.echo(f"    ... {len(r.events) - 10} more (see --json)")
+    ro = r.to_dict()["runout"]
+    if ro["sro_p2p_m"] is not None:
+        click.echo(f"  run-out per revolution (median p-p): {ro['sro_p2p_m'] * 1e6:.2f} um "
+                   f"(macro {ro['macro_p2p_m'] * 1e6:.2f}, micro {ro['micro_p2p_m'] * 1e6:.2f}); "
+                   f"max tan(theta) {ro['max_tan_theta']:.2e}")
+
+
+def _write_plots(src, res, mic: str, displacement: str, stem: Path, max_seconds: float = 10.0) -> None:
+    """Figures from the first ``max_seconds`` of the recording plus the whole-recording results."""
+    import numpy as np
+
+    from ..io import save_figure
+    from ..measurement import recording_dataset
+    from ..plotting import measurement as mp
+
+    names = [src.resolve(mic), src.resolve(displacement)]
+    n_max = int(min(src.n_samples, max_seconds * src.fs))
+    parts: dict[str, list] = {n: [] for n in names}
+    got = 0
+    for _, block in src.iter_blocks(names):
+        for n in names:
+            parts[n].append(block[n][: n_max - got])
+        got += len(block[names[0]])
+        if got >= n_max:
+            break
+    rec = recording_dataset({n: np.concatenate(v) for n, v in parts.items()}, src.fs,
+                            {n: src.units.get(n, "") for n in names},
+                            {"synthetic": int(bool(res.attrs.get("synthetic")))})
+    figs = mp.measurement_figures(rec, res, mic=names[0], displacement=names[1])
+    for key, fig in figs.items():
+        save_figure(fig, stem.parent / f"{stem.name}_{key}.png")

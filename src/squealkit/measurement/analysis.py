@@ -1,0 +1,493 @@
+"""End-to-end analysis of a rig recording: squeal, its frequency and level, and the run-out.
+
+:func:`analyze_recording` answers the rig user's questions (paper §5.2): is there squeal,
+at what frequency and level, when, and does it grow on the rising run-out? It reads the
+recording in blocks (bounded memory for hour-long files), filters each block with a margin
+so the zero-phase filters see no artificial edge, and keeps only compact per-frame,
+per-revolution and per-angle features.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+from numpy.typing import NDArray
+from scipy import fft as sp_fft
+from scipy import signal
+
+from .. import __version__
+from .._validation import InputError, validate_finite, validate_fs, validate_positive
+from .events import SquealEvent, link_components, tonal_components
+from .filters import lowpass
+from .readers import DEFAULT_BLOCK, RecordingSource, open_recording
+from .runout import revolution_frequency, surface_speed
+from .spectral import P_REF, a_weighting_db, refine_peak
+
+__all__ = ["AnalysisSettings", "MeasurementResult", "analyze_recording"]
+
+
+@dataclass(frozen=True)
+class AnalysisSettings:
+    """Criteria and processing settings of :func:`analyze_recording` (all SI / Hz / s)."""
+
+    rpm: float
+    radius: float
+    band: tuple[float, float] = (1000.0, 16000.0)
+    threshold_dba: float = 70.0
+    min_duration: float = 0.01
+    lowpass_freq: float = 1000.0
+    macro_orders: int = 10
+    nperseg: int = 512
+    hop: int = 256
+    freq_tol: float = 100.0
+    n_angle_bins: int = 72
+    chunk_s: float = 10.0
+
+    def validated(self, fs: float) -> AnalysisSettings:
+        validate_positive("rpm", self.rpm)
+        validate_positive("radius", self.radius)
+        validate_finite("threshold_dba", self.threshold_dba)
+        validate_positive("min_duration", self.min_duration, allow_zero=True)
+        validate_positive("chunk_s", self.chunk_s)
+        lo, hi = (validate_positive("band lower", self.band[0]), validate_positive("band upper", self.band[1]))
+        if not lo < hi:
+            raise InputError(f"Parameter band={self.band!r} must satisfy lower < upper.")
+        if hi >= fs / 2:
+            raise InputError(f"Parameter band={self.band!r}: upper edge must lie below fs/2 = {fs / 2:g} Hz.")
+        if not (isinstance(self.nperseg, int) and self.nperseg >= 16):
+            raise InputError(f"Parameter nperseg={self.nperseg!r} must be a whole number >= 16.")
+        if not (isinstance(self.hop, int) and 1 <= self.hop <= self.nperseg):
+            raise InputError(f"Parameter hop={self.hop!r} must be a whole number in [1, nperseg].")
+        return self
+
+
+@dataclass(frozen=True)
+class MeasurementResult:
+    """What a recording says about squeal and run-out.
+
+    Attributes
+    ----------
+    squeal_frequency_hz : float or None
+        Dominant squeal frequency, refined beyond the bin spacing; None without squeal.
+    harmonics : tuple of dict
+        ``order``, ``frequency_hz``, ``level_db`` of harmonics 2-5 of the squeal.
+    events : tuple of SquealEvent
+    rising_fraction : float or None
+        Share of the sound energy (above the band's lower edge) during events that falls on
+        rising run-out (``tan(theta) > 0``); 0.5 means no preference. None without squeal.
+    growth_slope_correlation : float or None
+        Pearson correlation of the squeal envelope's growth rate with the SRO slope.
+    frames, revolutions, polar, spectrum : xarray.Dataset
+        Per-frame level, ridge and slope; per-revolution run-out peak-to-peak; squeal level
+        and run-out against disc angle; mean spectra.
+    """
+
+    squeal_frequency_hz: float | None
+    harmonics: tuple[dict[str, float], ...]
+    events: tuple[SquealEvent, ...]
+    rising_fraction: float | None
+    growth_slope_correlation: float | None
+    peak_dba: float | None
+    duration_s: float
+    fs: float
+    settings: AnalysisSettings
+    frames: xr.Dataset = field(repr=False)
+    revolutions: xr.Dataset = field(repr=False)
+    polar: xr.Dataset = field(repr=False)
+    spectrum: xr.Dataset = field(repr=False)
+    attrs: dict[str, Any] = field(default_factory=dict, repr=False)
+
+    @property
+    def squeal(self) -> bool:
+        """Whether any event met the criteria."""
+        return bool(self.events)
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready summary (stable keys; see the CLI's ``--json``)."""
+        rev = self.revolutions
+        return {
+            "source": self.attrs.get("source"),
+            "synthetic": bool(self.attrs.get("synthetic", False)),
+            "duration_s": self.duration_s,
+            "fs": self.fs,
+            "squeal": self.squeal,
+            "squeal_frequency_hz": self.squeal_frequency_hz,
+            "harmonics": list(self.harmonics),
+            "peak_dba": self.peak_dba,
+            "n_events": len(self.events),
+            "events": [e.to_dict() for e in self.events],
+            "rising_fraction": self.rising_fraction,
+            "growth_slope_correlation": self.growth_slope_correlation,
+            "runout": {
+                "n_revolutions": int(rev.sizes["revolution"]),
+                "sro_p2p_m": float(rev["sro_p2p"].median()) if rev.sizes["revolution"] else None,
+                "macro_p2p_m": float(rev["macro_p2p"].median()) if rev.sizes["revolution"] else None,
+                "micro_p2p_m": float(rev["micro_p2p"].median()) if rev.sizes["revolution"] else None,
+                "max_tan_theta": float(self.attrs.get("max_tan_theta", float("nan"))),
+            },
+            "settings": {
+                "rpm": self.settings.rpm, "radius_m": self.settings.radius, "band_hz": list(self.settings.band),
+                "threshold_dba": self.settings.threshold_dba, "min_duration_s": self.settings.min_duration,
+            },
+        }
+
+    def to_dataset(self) -> xr.Dataset:
+        """All labelled results in one Dataset (saves to netCDF with :func:`squealkit.io.save_dataset`)."""
+        ds = xr.merge([self.frames, self.revolutions, self.polar, self.spectrum], combine_attrs="override")
+        ev = self.events
+        ds = ds.assign(
+            event_start=("event", np.array([e.start_s for e in ev]), {"units": "s"}),
+            event_end=("event", np.array([e.end_s for e in ev]), {"units": "s"}),
+            event_frequency=("event", np.array([e.frequency_hz for e in ev]), {"units": "Hz"}),
+            event_peak=("event", np.array([e.peak_dba for e in ev]), {"units": "dB(A)"}),
+        )
+        ds.attrs = {k: int(v) if isinstance(v, bool) else v for k, v in self.to_dict().items()
+                    if isinstance(v, int | float | str)}
+        ds.attrs.update(squealkit_version=__version__, synthetic=int(bool(self.attrs.get("synthetic", False))))
+        return ds
+
+
+def _refine_rows(power: NDArray[np.float64], k: NDArray[np.intp]) -> NDArray[np.float64]:
+    """Refined bin of the peak at ``k`` in each row of a power spectrum (Hann two-bin ratio)."""
+    kk = np.clip(k, 1, power.shape[1] - 2)
+    mag3 = np.sqrt(np.take_along_axis(power, kk[:, None] + np.array([-1, 0, 1]), axis=1))
+    return np.atleast_1d(refine_peak(mag3, np.ones(kk.size, np.intp))) - 1 + kk
+
+
+class _DatasetSource:
+    """Block iteration over an in-memory Dataset (same interface as RecordingSource)."""
+
+    def __init__(self, ds: xr.Dataset, fs: float | None):
+        self.ds = ds
+        if fs is None:
+            if "fs" in ds.attrs:
+                fs = ds.attrs["fs"]
+            elif "time" in ds.coords and ds.sizes["time"] > 1:
+                fs = 1.0 / float(np.median(np.diff(ds["time"].values[:64])))
+            else:
+                raise InputError("The recording has no 'fs' attribute or time coordinate; give fs.")
+        self.fs = validate_fs(fs)
+        self.channels = tuple(str(n) for n in ds.data_vars if ds[n].ndim == 1)
+        self.n_samples = int(ds.sizes[ds[self.channels[0]].dims[0]]) if self.channels else 0
+        self.units = {n: str(ds[n].attrs.get("units", "")) for n in self.channels}
+        self.path = Path(str(ds.attrs.get("source", "<dataset>")))
+        self.fmt = "dataset"
+
+    resolve = RecordingSource.resolve
+
+    def iter_blocks(self, channels, *, block=DEFAULT_BLOCK):
+        names = [self.resolve(c) for c in channels]
+        for start in range(0, self.n_samples, block):
+            out = {}
+            for n in names:
+                v = np.asarray(self.ds[n].values[start:start + block], dtype=np.float64)
+                if not np.all(np.isfinite(v)):
+                    i = int(np.argmax(~np.isfinite(v)))
+                    raise InputError(f"Channel {n!r} has a non-finite sample ({v[i]!r}) at sample {start + i}.")
+                out[n] = v
+            yield start, out
+
+
+def _windows(src, names, core: int, margin: int) -> Iterator[tuple[int, int, int, dict[str, NDArray]]]:
+    """Yield ``(core_start, core_stop, window_start, {name: samples})`` with margins both sides."""
+    total = src.n_samples
+    buf = {n: np.empty(0) for n in names}
+    buf_start = 0
+    next_core = 0
+    for _, block in src.iter_blocks(names, block=max(core, DEFAULT_BLOCK)):
+        for n in names:
+            buf[n] = np.concatenate([buf[n], block[n]])
+        buf_end = buf_start + len(buf[names[0]])
+        while next_core < total and buf_end >= min(total, next_core + core + margin):
+            w0 = max(0, next_core - margin)
+            w1 = min(buf_end, next_core + core + margin)
+            c1 = min(total, next_core + core)
+            yield next_core, c1, w0, {n: buf[n][w0 - buf_start:w1 - buf_start] for n in names}
+            next_core = c1
+            drop = max(0, next_core - margin) - buf_start
+            if drop > 0:
+                buf = {n: v[drop:] for n, v in buf.items()}
+                buf_start += drop
+    if next_core < total:
+        raise InputError(f"Recording ended after {buf_start + len(buf[names[0]])} of {total} samples.")
+
+
+def analyze_recording(
+    recording: str | Path | xr.Dataset | RecordingSource,
+    *,
+    mic: str | int,
+    displacement: str | int,
+    rpm: float,
+    radius: float,
+    band: tuple[float, float] = (1000.0, 16000.0),
+    threshold_dba: float = 70.0,
+    min_duration: float = 0.01,
+    fs: float | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    **options: Any,
+) -> MeasurementResult:
+    """Analyse a microphone + displacement recording for squeal and its tie to run-out.
+
+    Parameters
+    ----------
+    recording : path, xarray.Dataset or RecordingSource
+        The recording (see :func:`squealkit.measurement.open_recording` for formats).
+    mic, displacement : str or int
+        Channel name or index of the calibrated microphone [Pa] and the eddy-current
+        probe [m].
+    rpm : float
+        Disc speed [rpm] (paper: 900).
+    radius : float
+        Probe (and pin) radius on the disc [m].
+    band : (float, float)
+        Criteria band [Hz] for the A-weighted level (default 1-16 kHz).
+    threshold_dba : float
+        Squeal threshold [dB(A)] (SAE J2521: 70).
+    min_duration : float
+        Shortest event [s] (no standard fixes it).
+    fs : float, optional
+        Sample rate [Hz] where the recording does not carry one.
+    progress : callable, optional
+        Called as ``progress(samples_done, samples_total)``.
+    **options
+        Further :class:`AnalysisSettings` fields (``lowpass_freq``, ``macro_orders``,
+        ``nperseg``, ``hop``, ``freq_tol``, ``n_angle_bins``, ``chunk_s``).
+
+    Returns
+    -------
+    MeasurementResult
+
+    Examples
+    --------
+    >>> from squealkit.measurement import synthetic_recording
+    >>> rec = synthetic_recording(duration=1.0, seed=1)
+    >>> res = analyze_recording(rec, mic="mic", displacement="displacement", rpm=900, radius=0.05)
+    >>> abs(res.squeal_frequency_hz - 2388.0) < 5 and res.rising_fraction > 0.8
+    True
+    """
+    if isinstance(recording, xr.Dataset):
+        src: Any = _DatasetSource(recording, fs)
+        attrs = dict(recording.attrs)
+    elif isinstance(recording, RecordingSource):
+        src, attrs = recording, {"source": str(recording.path), "synthetic": recording.synthetic}
+    elif hasattr(recording, "iter_blocks"):  # e.g. a SyntheticSource
+        src, attrs = recording, {"source": str(recording.path), "synthetic": recording.fmt == "synthetic"}
+    else:
+        src = open_recording(recording, fs=fs)
+        attrs = {"source": str(src.path), "synthetic": src.synthetic}
+    try:
+        s = AnalysisSettings(rpm=rpm, radius=radius, band=tuple(band), threshold_dba=threshold_dba,
+                             min_duration=min_duration, **options)
+    except TypeError as e:
+        raise InputError(f"Unknown analysis option: {e}") from e
+    fs_ = float(src.fs)
+    s = s.validated(fs_)
+    mic_n, disp_n = src.resolve(mic), src.resolve(displacement)
+    if mic_n == disp_n:
+        raise InputError(f"The microphone and displacement channels are the same ({mic_n!r}).")
+    total = src.n_samples
+    if total < s.nperseg:
+        raise InputError(f"Recording has {total} samples, fewer than one analysis frame ({s.nperseg}).")
+    f_rev = revolution_frequency(s.rpm)
+    v = surface_speed(s.rpm, s.radius)
+    n, hop = s.nperseg, s.hop
+    freq = np.fft.rfftfreq(n, 1 / fs_)
+    lo, hi = int(np.searchsorted(freq, s.band[0])), int(np.searchsorted(freq, s.band[1], side="right"))
+    if hi - lo < 5:
+        raise InputError(f"Band {s.band} Hz holds fewer than 5 bins of {fs_ / n:g} Hz; widen it or raise nperseg.")
+    w_a = 10 ** (a_weighting_db(freq[lo:hi]) / 10)
+    win = signal.windows.hann(s.nperseg, sym=False)
+    win32 = win.astype(np.float32)
+    pscale = 2.0 / (s.nperseg * float(np.sum(win**2)))
+    thr_power = P_REF**2 * 10 ** (s.threshold_dba / 10)
+    core = max(hop, round(s.chunk_s * fs_ / hop) * hop)
+    margin = max(n, int(0.25 * fs_), int(4 * fs_ / ((s.macro_orders + 0.5) * f_rev)))
+    n_frames = (total - n) // hop + 1
+    half = (n - hop) // 2  # frame "interval" [start + half, start + half + hop) for energy sums
+    # run-out is analysed at fs / dec, dec a divisor of hop with fs / dec >= 4 lowpass_freq
+    dec = max(d for d in range(1, hop + 1) if hop % d == 0 and fs_ / d >= 4 * s.lowpass_freq)
+    fs_d = fs_ / dec
+    sos_hp = signal.butter(2, s.band[0], "highpass", fs=fs_, output="sos")
+    f_macro = (s.macro_orders + 0.5) * f_rev
+    if f_macro >= s.lowpass_freq:
+        raise InputError(f"macro_orders={s.macro_orders} at {s.rpm:g} rpm puts the macro corner ({f_macro:g} Hz) "
+                         f"above lowpass_freq={s.lowpass_freq:g} Hz.")
+
+    level = np.empty(n_frames)
+    ridge_f = np.empty(n_frames)
+    e_tot = np.empty(n_frames)
+    e_rise = np.empty(n_frames)
+    slope_f = np.empty(n_frames)
+    comp_frame: list[NDArray] = [np.empty(0, np.intp)]
+    comp_freq: list[NDArray] = [np.empty(0)]
+    comp_level: list[NDArray] = [np.empty(0)]
+    comp_pow: list[NDArray] = [np.empty(0)]
+    mic_spec_sum = np.zeros(freq.size)  # summed over loud frames, band bins only
+    rev_max: dict[str, dict[int, float]] = {k: {} for k in ("sro", "macro", "micro")}
+    rev_min: dict[str, dict[int, float]] = {k: {} for k in ("sro", "macro", "micro")}
+    nb = s.n_angle_bins
+    ang_q = np.zeros(nb)
+    ang_macro = np.zeros(nb)
+    ang_cnt = np.zeros(nb)
+    ang_e = np.zeros(nb)
+    ang_ecnt = np.zeros(nb)
+    max_tan = 0.0
+
+    for c0, c1, w0, data in _windows(src, [mic_n, disp_n], core, margin):
+        p, q = data[mic_n], data[disp_n]
+        f0 = -(-c0 // hop)
+        f1 = min(n_frames, (c1 - 1) // hop + 1)
+        # frames [f0, f1) start inside the core; their samples lie in the window
+        if f1 > f0:
+            seg = p[f0 * hop - w0: (f1 - 1) * hop + n - w0]
+            frames_ = np.lib.stride_tricks.sliding_window_view(seg.astype(np.float32), n)[::hop]
+            spec = sp_fft.rfft(frames_ * win32, axis=-1, workers=-1)[:, lo:hi]  # single precision: levels
+            pb = (spec.real.astype(np.float64)**2 + spec.imag.astype(np.float64)**2) * pscale  # [Pa^2] per bin
+            pa = pb * w_a
+            lev = pa.sum(axis=1)
+            level[f0:f1] = 10 * np.log10(np.maximum(lev, 1e-300) / P_REF**2)
+            ridge_f[f0:f1] = (_refine_rows(pb, np.argmax(pa, axis=1)) + lo) * fs_ / n
+            loud = np.flatnonzero(lev >= thr_power)  # a component cannot exceed its frame's level
+            if loud.size:
+                fr, ff, fl = tonal_components(pb[loud], pa[loud], lo, fs_, n, s.threshold_dba)
+                comp_frame.append(loud[fr] + f0)
+                comp_freq.append(ff)
+                comp_level.append(fl)
+                comp_pow.append(P_REF**2 * 10 ** (fl / 10))
+                mic_spec_sum[lo:hi] += pb[loud].sum(axis=0)
+            # band mean square per frame (Hann frames at 50 % overlap sum to the signal energy)
+            e_tot[f0:f1] = pb.sum(axis=1)
+        # run-out: low-pass at full rate, then work on every D-th sample (fs / D >= 4 lowpass_freq)
+        sro_full = lowpass(q, s.lowpass_freq, fs_)
+        o = (-w0) % dec
+        sro = sro_full[o::dec]
+        g0 = w0 + o  # global index of sro[0]
+        macro = lowpass(sro, f_macro, fs_d, order=2)
+        micro = sro - macro
+        tan_t = np.gradient(sro) * fs_d / v
+        # sound energy above the band's lower edge per sample (causal 2nd-order high-pass: its delay of
+        # a fraction of a millisecond is negligible against a revolution), summed on the run-out grid
+        hp = signal.sosfilt(sos_hp, p[o:o + (p.size - o) // dec * dec])
+        hp *= hp
+        e_d = np.zeros(sro.size)
+        e_d[:hp.size // dec] = hp.reshape(-1, dec).sum(axis=1)
+        cs_e = np.concatenate([[0.0], np.cumsum(e_d)])
+        cs_r = np.concatenate([[0.0], np.cumsum(e_d * (tan_t > 0))])
+        cs_t = np.concatenate([[0.0], np.cumsum(tan_t)])
+        if f1 > f0:
+            a = -(-(np.arange(f0, f1) * hop + half - g0) // dec)
+            b = a + hop // dec
+            e_int = cs_e[b] - cs_e[a]
+            share = np.divide(cs_r[b] - cs_r[a], e_int, out=np.full(e_int.shape, 0.5), where=e_int > 0)
+            e_rise[f0:f1] = e_tot[f0:f1] * share
+            slope_f[f0:f1] = (cs_t[b] - cs_t[a]) / (b - a)
+        ci = slice(-(-(c0 - g0) // dec), -(-(c1 - g0) // dec))
+        idx = g0 + np.arange(ci.start, ci.stop) * dec
+        turns = idx * (f_rev / fs_)
+        rev = np.floor(turns).astype(np.int64)
+        starts = np.concatenate([[0], np.flatnonzero(np.diff(rev)) + 1])
+        for key, sig in (("sro", sro[ci]), ("macro", macro[ci]), ("micro", micro[ci])):
+            mx = np.maximum.reduceat(sig, starts)
+            mn = np.minimum.reduceat(sig, starts)
+            for r, a_, b_ in zip(rev[starts].tolist(), mx.tolist(), mn.tolist(), strict=True):
+                rev_max[key][r] = max(rev_max[key].get(r, -np.inf), a_)
+                rev_min[key][r] = min(rev_min[key].get(r, np.inf), b_)
+        abin = ((turns % 1.0) * nb).astype(np.int64) % nb
+        ang_q += np.bincount(abin, sro[ci], nb)
+        ang_macro += np.bincount(abin, macro[ci], nb)
+        ang_cnt += np.bincount(abin, minlength=nb)
+        max_tan = max(max_tan, float(np.max(np.abs(tan_t[ci]))))
+        if f1 > f0:
+            centre = (np.arange(f0, f1) * hop + n / 2) * (f_rev / fs_)
+            fb = ((centre % 1.0) * nb).astype(np.int64) % nb
+            ang_e += np.bincount(fb, e_tot[f0:f1], nb)
+            ang_ecnt += np.bincount(fb, minlength=nb)
+        if progress is not None:
+            progress(c1, total)
+
+    cf = np.concatenate(comp_frame)
+    frame_start = np.arange(n_frames) * hop / fs_
+    events, ev_frames = link_components(
+        cf, np.concatenate(comp_freq), np.concatenate(comp_level), np.concatenate(comp_pow),
+        frame_start + half / fs_, hop / fs_, freq_tol=s.freq_tol, min_duration=s.min_duration,
+    )
+    squeal_f: float | None = None
+    harmonics: list[dict[str, float]] = []
+    rising: float | None = None
+    corr: float | None = None
+    peak: float | None = None
+    if events:
+        in_ev = np.zeros(n_frames, bool)
+        for fr in ev_frames:
+            in_ev[np.arange(fr.min(), fr.max() + 1)] = True
+        tot = float(e_tot[in_ev].sum())
+        rising = float(e_rise[in_ev].sum() / tot) if tot > 0 else None
+        peak = max(ev.peak_dba for ev in events)
+        mag = np.sqrt(mic_spec_sum)
+        k0 = lo + int(np.argmax(mic_spec_sum[lo:hi] * w_a))
+        squeal_f = float(refine_peak(mag, k0)) * fs_ / n
+        for h in range(2, 6):
+            kh = round(h * squeal_f * n / fs_)
+            if kh + 3 >= hi:
+                break
+            kk = kh - 2 + int(np.argmax(mic_spec_sum[kh - 2:kh + 3]))
+            p_h = mic_spec_sum[kk - 2:kk + 3].sum() / max(int(in_ev.sum()), 1)
+            harmonics.append({"order": h, "frequency_hz": float(refine_peak(mag, kk)) * fs_ / n,
+                              "level_db": float(10 * np.log10(max(p_h, 1e-300) / P_REF**2))})
+        # growth rate of the squeal envelope against the SRO slope, over the frames near squeal
+        with np.errstate(divide="ignore"):
+            ln_e = np.log(np.maximum(e_tot, 1e-300))
+        growth = np.gradient(ln_e) * 0.5 * fs_ / hop
+        sel = level >= s.threshold_dba - 20
+        if sel.sum() > 3 and np.std(growth[sel]) > 0 and np.std(slope_f[sel]) > 0:
+            corr = float(np.corrcoef(growth[sel], slope_f[sel])[0, 1])
+
+    t_frames = frame_start + n / 2 / fs_
+    frames = xr.Dataset(
+        {
+            "level_dba": ("time", level, {"units": "dB(A)",
+                                          "long_name": f"A-weighted level {s.band[0]:g}-{s.band[1]:g} Hz"}),
+            "ridge_freq": ("time", ridge_f, {"units": "Hz", "long_name": "strongest line in the band"}),
+            "band_power": ("time", e_tot, {"units": "Pa^2", "long_name": "mean square in the band (Hann frame)"}),
+            "rising_power": ("time", e_rise, {"units": "Pa^2", "long_name": "band_power x share on rising run-out"}),
+            "tan_theta": ("time", slope_f, {"units": "1", "long_name": "mean SRO slope tan(theta)"}),
+        },
+        coords={"time": ("time", t_frames, {"units": "s", "long_name": "frame centre"})},
+    )
+    revs = sorted(rev_max["sro"])
+    revolutions = xr.Dataset(
+        {f"{k}_p2p": ("revolution", np.array([rev_max[k][r] - rev_min[k][r] for r in revs]), {"units": "m"})
+         for k in ("sro", "macro", "micro")},
+        coords={"revolution": ("revolution", np.array(revs, dtype=np.int64))},
+    )
+    angle = (np.arange(nb) + 0.5) * 2 * math.pi / nb
+    with np.errstate(divide="ignore", invalid="ignore"):
+        polar = xr.Dataset(
+            {
+                "angle_sro": ("angle", ang_q / ang_cnt, {"units": "m", "long_name": "mean SRO at angle"}),
+                "angle_macro": ("angle", ang_macro / ang_cnt, {"units": "m"}),
+                "angle_level_db": ("angle", 10 * np.log10(ang_e / ang_ecnt / P_REF**2),
+                                   {"units": "dB", "long_name": "mean squeal-band level at angle"}),
+            },
+            coords={"angle": ("angle", angle, {"units": "rad", "long_name": "disc angle from recording start"})},
+        )
+    n_loud = max(1, int((level >= s.threshold_dba).sum()))
+    spectrum = xr.Dataset(
+        {
+            "mic_power_squeal": ("freq", mic_spec_sum / n_loud, {"units": "Pa^2", "long_name": "mean during squeal"}),
+        },
+        coords={"freq": ("freq", freq, {"units": "Hz"})},
+    )
+    attrs = {"source": str(attrs.get("source", src.path)), "synthetic": bool(attrs.get("synthetic", False)),
+             "max_tan_theta": max_tan, "surface_speed": v}
+    return MeasurementResult(
+        squeal_frequency_hz=squeal_f, harmonics=tuple(harmonics), events=tuple(events), rising_fraction=rising,
+        growth_slope_correlation=corr, peak_dba=peak, duration_s=total / fs_, fs=fs_, settings=s,
+        frames=frames, revolutions=revolutions, polar=polar, spectrum=spectrum, attrs=attrs,
+    )

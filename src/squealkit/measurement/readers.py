@@ -1,0 +1,382 @@
+"""Reading rig recordings: CSV, multi-channel WAV, netCDF/HDF5 (xarray) and NI TDMS.
+
+A recording is a set of equally sampled channels (e.g. a microphone in Pa and an
+eddy-current probe in m, paper §5.1). :func:`open_recording` inspects a file without
+loading its samples and returns a :class:`RecordingSource` that yields blocks of samples
+in order, so recordings of an hour or more are processed with bounded memory;
+:func:`read_recording` loads everything into a labelled :class:`xarray.Dataset`.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+from numpy.typing import NDArray
+
+from .._validation import InputError, validate_fs, validate_positive
+
+__all__ = ["RecordingSource", "open_recording", "read_recording", "recording_dataset"]
+
+_TIME_NAMES = {"t", "time", "time_s", "times", "zeit"}
+_UNIT_RE = re.compile(r"^\s*(.*?)\s*[\[(]\s*([^\])]*)\s*[\])]\s*$")
+#: Samples per block read from disk by default (about 6.5 s at 40 kHz).
+DEFAULT_BLOCK = 1 << 18
+
+
+def _split_unit(label: str) -> tuple[str, str]:
+    m = _UNIT_RE.match(label)
+    if m:
+        return m.group(1), m.group(2)
+    return label.strip(), ""
+
+
+def _check_finite(name: str, values: NDArray[np.float64], offset: int) -> None:
+    bad = ~np.isfinite(values)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise InputError(f"Channel {name!r} has a non-finite sample ({values[i]!r}) at sample {offset + i}.")
+
+
+@dataclass(frozen=True)
+class RecordingSource:
+    """A recording on disk: channel names, units, sample rate, and a block reader.
+
+    Attributes
+    ----------
+    path : Path
+    fmt : str
+        ``"csv"``, ``"wav"``, ``"netcdf"`` or ``"tdms"``.
+    fs : float
+        Sample rate [Hz].
+    n_samples : int
+    channels : tuple of str
+        Channel names in file order.
+    units : dict
+        Unit of each channel (``""`` when the file does not say).
+    """
+
+    path: Path
+    fmt: str
+    fs: float
+    n_samples: int
+    channels: tuple[str, ...]
+    units: dict[str, str]
+    scales: dict[str, float] = field(default_factory=dict)
+    _extra: dict[str, Any] = field(default_factory=dict, repr=False)
+
+    @property
+    def synthetic(self) -> bool:
+        """Whether the file says it is a synthetic recording (attribute ``synthetic``)."""
+        return bool(self._extra.get("synthetic", False))
+
+    @property
+    def duration(self) -> float:
+        """Length of the recording [s]."""
+        return self.n_samples / self.fs
+
+    def resolve(self, channel: str | int) -> str:
+        """Channel name for a name or a 0-based index (also given as a digit string)."""
+        if isinstance(channel, str) and channel in self.channels:
+            return channel
+        if isinstance(channel, str) and self.fmt == "tdms":
+            matches = [c for c in self.channels if c.split("/")[-1] == channel]
+            if len(matches) == 1:
+                return matches[0]
+        idx: int | None = None
+        if isinstance(channel, int | np.integer) and not isinstance(channel, bool):
+            idx = int(channel)
+        elif isinstance(channel, str) and channel.strip().lstrip("-").isdigit():
+            idx = int(channel)
+        if idx is not None and 0 <= idx < len(self.channels):
+            return self.channels[idx]
+        raise InputError(
+            f"Channel {channel!r} is not in {str(self.path)!r}; available: "
+            f"{', '.join(repr(c) for c in self.channels)} (or an index 0-{len(self.channels) - 1})."
+        )
+
+    def iter_blocks(
+        self, channels: Sequence[str | int], *, block: int = DEFAULT_BLOCK
+    ) -> Iterator[tuple[int, dict[str, NDArray[np.float64]]]]:
+        """Yield ``(start_sample, {name: samples})`` in order, in physical units, checked finite."""
+        names = [self.resolve(c) for c in channels]
+        reader = getattr(self, f"_blocks_{self.fmt}")
+        for start, data in reader(names, block):
+            out = {}
+            for n in names:
+                v = np.asarray(data[n], dtype=np.float64) * self.scales.get(n, 1.0)
+                _check_finite(n, v, start)
+                out[n] = v
+            yield start, out
+
+    # -- per-format block readers ------------------------------------------------------
+    def _blocks_csv(self, names: list[str], block: int):
+        import pandas as pd
+
+        cols = self._extra["columns"]
+        usecols = [cols[n] for n in names]
+        start = 0
+        try:
+            for df in pd.read_csv(self.path, usecols=usecols, chunksize=block, skipinitialspace=True):
+                data = {}
+                for n in names:
+                    col = df[cols[n]]
+                    if not pd.api.types.is_numeric_dtype(col.dtype) or pd.api.types.is_bool_dtype(col.dtype):
+                        vals = pd.to_numeric(col, errors="coerce")
+                        i = int(np.argmax(vals.isna().to_numpy()))
+                        raise InputError(
+                            f"Channel {n!r} has a non-numeric sample {col.iloc[i]!r} at sample {start + i}."
+                        )
+                    data[n] = col.to_numpy(dtype=np.float64)
+                yield start, data
+                start += len(df)
+        except (pd.errors.ParserError, UnicodeDecodeError) as e:
+            raise InputError(f"File {str(self.path)!r} is not a readable CSV: {e}") from e
+
+    def _blocks_wav(self, names: list[str], block: int):
+        from scipy.io import wavfile
+
+        _, raw = wavfile.read(self.path, mmap=True)
+        raw = raw.reshape(raw.shape[0], -1)
+        full = self._extra["full_scale"]
+        idx = [self.channels.index(n) for n in names]
+        for start in range(0, self.n_samples, block):
+            chunk = np.asarray(raw[start:start + block])
+            yield start, {n: chunk[:, i].astype(np.float64) / full for n, i in zip(names, idx, strict=True)}
+
+    def _blocks_netcdf(self, names: list[str], block: int):
+        import h5py
+
+        try:  # netCDF-4 files are HDF5: read slices straight from h5py (much less overhead)
+            with h5py.File(self.path, "r") as f:
+                dsets = {n: f[n] for n in names}
+                if all(d.ndim == 1 and d.shape[0] == self.n_samples and not d.attrs.get("scale_factor")
+                       for d in dsets.values()):
+                    for start in range(0, self.n_samples, block):
+                        yield start, {n: d[start:start + block] for n, d in dsets.items()}
+                    return
+        except (OSError, KeyError):
+            pass
+        dim = self._extra["dim"]
+        with xr.open_dataset(self.path, engine="h5netcdf") as ds:
+            for start in range(0, self.n_samples, block):
+                sub = ds[names].isel({dim: slice(start, start + block)}).load()
+                yield start, {n: sub[n].values for n in names}
+
+    def _blocks_tdms(self, names: list[str], block: int):
+        from nptdms import TdmsFile
+
+        with TdmsFile.open(self.path) as f:
+            chans = {n: f[n.split("/")[0]][n.split("/", 1)[1]] for n in names}
+            for start in range(0, self.n_samples, block):
+                yield start, {n: c[start:start + block] for n, c in chans.items()}
+
+
+def _scales_for(channels: Sequence[str], scale: Mapping[str, float] | Sequence[float] | float | None) -> dict:
+    if scale is None:
+        return {}
+    if isinstance(scale, int | float):
+        return {c: validate_positive("scale", scale) for c in channels}
+    if isinstance(scale, Mapping):
+        return {str(k): float(v) for k, v in scale.items()}
+    vals = list(scale)
+    if len(vals) != len(channels):
+        raise InputError(f"Parameter scale has {len(vals)} values for {len(channels)} channels.")
+    return {c: float(v) for c, v in zip(channels, vals, strict=True)}
+
+
+def open_recording(
+    path: str | Path,
+    *,
+    fs: float | None = None,
+    scale: Mapping[str, float] | Sequence[float] | float | None = None,
+    units: Mapping[str, str] | None = None,
+) -> RecordingSource:
+    """Inspect a recording file and return a lazy :class:`RecordingSource`.
+
+    Parameters
+    ----------
+    path : path-like
+        ``.csv``/``.txt`` (header row; a time column named ``time``/``t``, or give ``fs``),
+        ``.wav`` (multi-channel PCM or float), ``.nc``/``.h5``/``.hdf5`` (written by
+        xarray; a 1-D time dimension) or ``.tdms`` (NI; ``group/channel`` names).
+    fs : float, optional
+        Sample rate [Hz]; required for a CSV without a time column, otherwise overrides.
+    scale : float, sequence or mapping, optional
+        Factor per channel from file values to physical units (e.g. Pa per full scale of
+        a WAV channel). Keys of a mapping are channel names (resolved like channels).
+    units : mapping, optional
+        Unit per channel, overriding the file's own (e.g. ``{"ch0": "Pa"}``).
+
+    Examples
+    --------
+    >>> src = open_recording("rig.wav", scale={"ch0": 20.0}, units={"ch0": "Pa"})  # doctest: +SKIP
+    >>> src.channels, src.fs  # doctest: +SKIP
+    (('ch0', 'ch1'), 40000.0)
+    """
+    p = Path(path)
+    if not p.exists():
+        raise InputError(f"Recording {str(p)!r} does not exist.")
+    if p.is_dir():
+        raise InputError(f"Recording {str(p)!r} is a folder, not a file.")
+    if fs is not None:
+        fs = validate_fs(fs)
+    suffix = p.suffix.lower()
+    try:
+        if suffix in (".csv", ".txt"):
+            src = _open_csv(p, fs)
+        elif suffix == ".wav":
+            src = _open_wav(p, fs)
+        elif suffix in (".nc", ".h5", ".hdf5", ".nc4"):
+            src = _open_netcdf(p, fs)
+        elif suffix == ".tdms":
+            src = _open_tdms(p, fs)
+        else:
+            raise InputError(f"Recording {str(p)!r} has an unknown format; use .csv, .wav, .nc/.h5 or .tdms.")
+    except InputError:
+        raise
+    except Exception as e:  # any parser failure is a user's unreadable file
+        raise InputError(f"Recording {str(p)!r} could not be read as {suffix}: {type(e).__name__}: {e}") from e
+    if src.n_samples < 2:
+        raise InputError(f"Recording {str(p)!r} has {src.n_samples} sample(s); at least 2 are needed.")
+    if not src.channels:
+        raise InputError(f"Recording {str(p)!r} has no data channel.")
+    unit_map = dict(src.units)
+    for k, v in (units or {}).items():
+        unit_map[src.resolve(k)] = str(v)
+    scales = {src.resolve(k): validate_positive(f"scale of {k}", v)
+              for k, v in _scales_for(src.channels, scale).items()}
+    return RecordingSource(src.path, src.fmt, src.fs, src.n_samples, src.channels, unit_map, scales, src._extra)
+
+
+def _open_csv(p: Path, fs: float | None) -> RecordingSource:
+    import pandas as pd
+
+    try:
+        head = pd.read_csv(p, nrows=64, skipinitialspace=True)
+    except pd.errors.EmptyDataError as e:
+        raise InputError(f"Recording {str(p)!r} is empty.") from e
+    if head.shape[0] < 2:
+        raise InputError(f"Recording {str(p)!r} has fewer than 2 data rows.")
+    labels = [str(c) for c in head.columns]
+    parsed = [_split_unit(c) for c in labels]
+    time_i = next((i for i, (n, _) in enumerate(parsed) if n.lower() in _TIME_NAMES), None)
+    if time_i is None and fs is None:
+        raise InputError(f"Recording {str(p)!r} has no time column (named 'time' or 't'); give the sample rate fs.")
+    if time_i is not None and fs is None:
+        t = pd.to_numeric(head.iloc[:, time_i], errors="coerce").to_numpy(dtype=float)
+        dt = np.diff(t)
+        if not np.all(np.isfinite(dt)) or np.median(dt) <= 0:
+            raise InputError(f"Time column {labels[time_i]!r} of {str(p)!r} is not numeric and increasing.")
+        fs = 1.0 / float(np.median(dt))
+    with open(p, "rb") as fh:
+        n_lines = sum(chunk.count(b"\n") for chunk in iter(lambda: fh.read(1 << 24), b""))
+        fh.seek(-1, 2)
+        last = fh.read(1)
+    n_samples = n_lines - 1 + (0 if last == b"\n" else 1)
+    channels, units, columns = [], {}, {}
+    for i, (name, unit) in enumerate(parsed):
+        if i == time_i:
+            continue
+        channels.append(name)
+        units[name] = unit
+        columns[name] = labels[i]
+    if not channels:
+        raise InputError(f"Recording {str(p)!r} has only a time column and no data channel.")
+    return RecordingSource(p, "csv", float(fs), n_samples, tuple(channels), units, {}, {"columns": columns})
+
+
+def _open_wav(p: Path, fs: float | None) -> RecordingSource:
+    from scipy.io import wavfile
+
+    rate, raw = wavfile.read(p, mmap=True)
+    n_ch = 1 if raw.ndim == 1 else raw.shape[1]
+    if np.issubdtype(raw.dtype, np.integer):
+        info = np.iinfo(raw.dtype)
+        full = float(-info.min) if info.min < 0 else float(info.max)
+    else:
+        full = 1.0
+    chans = tuple(f"ch{i}" for i in range(n_ch))
+    return RecordingSource(p, "wav", float(fs or rate), raw.shape[0], chans, dict.fromkeys(chans, ""), {},
+                           {"full_scale": full})
+
+
+def _open_netcdf(p: Path, fs: float | None) -> RecordingSource:
+    with xr.open_dataset(p, engine="h5netcdf") as ds:
+        names = [str(n) for n, v in ds.data_vars.items() if v.ndim == 1 and np.issubdtype(v.dtype, np.number)]
+        if not names:
+            raise InputError(f"Recording {str(p)!r} has no 1-D numeric variable.")
+        dim = str(ds[names[0]].dims[0])
+        names = [n for n in names if ds[n].dims == (dim,)]
+        if fs is None:
+            if "fs" in ds.attrs:
+                fs = validate_fs(ds.attrs["fs"], "fs attribute")
+            elif dim in ds.coords and ds.sizes[dim] > 1:
+                t = ds[dim].values[:64].astype(float)
+                fs = 1.0 / float(np.median(np.diff(t)))
+            else:
+                raise InputError(f"Recording {str(p)!r} has no 'fs' attribute or time coordinate; give fs.")
+        units = {n: str(ds[n].attrs.get("units", "")) for n in names}
+        extra = {"dim": dim, "synthetic": bool(ds.attrs.get("synthetic", 0))}
+        return RecordingSource(p, "netcdf", float(fs), int(ds.sizes[dim]), tuple(names), units, {}, extra)
+
+
+def _open_tdms(p: Path, fs: float | None) -> RecordingSource:
+    from nptdms import TdmsFile
+
+    with TdmsFile.open(p) as f:
+        chans, units, lengths, incs = [], {}, [], []
+        for g in f.groups():
+            for c in g.channels():
+                name = f"{g.name}/{c.name}"
+                chans.append(name)
+                units[name] = str(c.properties.get("unit_string", ""))
+                lengths.append(len(c))
+                if "wf_increment" in c.properties:
+                    incs.append(float(c.properties["wf_increment"]))
+    if not chans:
+        raise InputError(f"Recording {str(p)!r} has no channel.")
+    if len(set(lengths)) != 1:
+        raise InputError(f"Channels of {str(p)!r} have different lengths {sorted(set(lengths))}.")
+    if fs is None:
+        if not incs:
+            raise InputError(f"Recording {str(p)!r} has no wf_increment property; give fs.")
+        fs = 1.0 / validate_positive("wf_increment", incs[0])
+    return RecordingSource(p, "tdms", float(fs), lengths[0], tuple(chans), units)
+
+
+def recording_dataset(
+    channels: Mapping[str, NDArray[np.float64]], fs: float, units: Mapping[str, str] | None = None,
+    attrs: Mapping[str, Any] | None = None,
+) -> xr.Dataset:
+    """Label equally sampled channels as a Dataset with a ``time`` coordinate [s]."""
+    fs = validate_fs(fs)
+    n = len(next(iter(channels.values())))
+    ds = xr.Dataset(
+        {k: ("time", np.asarray(v, dtype=np.float64), {"units": (units or {}).get(k, "")})
+         for k, v in channels.items()},
+        coords={"time": ("time", np.arange(n) / fs, {"units": "s"})},
+        attrs={"fs": fs, **(attrs or {})},
+    )
+    return ds
+
+
+def read_recording(path: str | Path, channels: Sequence[str | int] | None = None, **kwargs: Any) -> xr.Dataset:
+    """Load (some channels of) a recording into memory as a labelled Dataset.
+
+    Keyword arguments are those of :func:`open_recording`. Use :func:`open_recording` and
+    :meth:`RecordingSource.iter_blocks` for recordings too long to hold in memory.
+    """
+    src = open_recording(path, **kwargs)
+    names = [src.resolve(c) for c in (channels if channels is not None else src.channels)]
+    parts: dict[str, list] = {n: [] for n in names}
+    for _, block in src.iter_blocks(names):
+        for n in names:
+            parts[n].append(block[n])
+    data = {n: np.concatenate(v) for n, v in parts.items()}
+    return recording_dataset(data, src.fs, {n: src.units.get(n, "") for n in names}, {"source": str(src.path)})

@@ -1,0 +1,168 @@
+"""Figures of a rig measurement: paper Figs. 6-13 equivalents and the polar plot.
+
+Every function returns a :class:`matplotlib.figure.Figure` (no pyplot state) and imports
+matplotlib only when called. Synthetic recordings say so in the title.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+__all__ = [
+    "band_vs_pressure_plot",
+    "level_plot",
+    "measurement_figures",
+    "polar_plot",
+    "runout_plot",
+    "spectrogram_plot",
+    "time_history_plot",
+]
+
+
+def _figure(**kw: Any):
+    from matplotlib.figure import Figure
+
+    return Figure(layout="constrained", **kw)
+
+
+def _tag(rec_or_res: Any) -> str:
+    attrs = getattr(rec_or_res, "attrs", {})
+    return " [SYNTHETIC]" if attrs.get("synthetic") else ""
+
+
+def _window(rec: xr.Dataset, t_range: tuple[float, float] | None) -> xr.Dataset:
+    return rec if t_range is None else rec.sel(time=slice(*t_range))
+
+
+def time_history_plot(rec: xr.Dataset, *, mic: str = "mic", displacement: str = "displacement",
+                      t_range: tuple[float, float] | None = None):
+    """Sound pressure and disc displacement against time (paper Figs. 6-7; zoom: Figs. 10-11)."""
+    r = _window(rec, t_range)
+    fig = _figure(figsize=(8, 5))
+    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    ax1.plot(r["time"], r[mic], lw=0.5)
+    ax1.set_ylabel(f"sound pressure [{r[mic].attrs.get('units', '')}]")
+    ax2.plot(r["time"], r[displacement] * 1e6, lw=0.5, color="C1")
+    ax2.set_ylabel("disc displacement [um]")
+    ax2.set_xlabel("time [s]")
+    ax1.set_title("Time histories" + (f" {t_range[0]:g}-{t_range[1]:g} s" if t_range else "") + _tag(rec))
+    return fig
+
+
+def spectrogram_plot(rec: xr.Dataset, result: Any = None, *, mic: str = "mic", displacement: str = "displacement",
+                     nperseg: int = 1024, freq_max: float = 10000.0):
+    """Spectrograms of both channels in dB (paper Figs. 8-9), with the squeal ridge if given."""
+    from ..measurement.spectral import P_REF, spectrogram
+
+    fs = float(rec.attrs["fs"])
+    fig = _figure(figsize=(8, 6))
+    axes = fig.subplots(2, 1, sharex=True)
+    for ax, name, ref, unit in ((axes[0], mic, P_REF, "dB re 20 uPa"), (axes[1], displacement, 1e-12, "dB re 1 pm")):
+        sg = spectrogram(rec[name].values, fs, nperseg=nperseg, name=name).sel(freq=slice(0, freq_max))
+        db = 10 * np.log10(np.maximum(sg.values.T, 1e-30) / ref**2)
+        m = ax.pcolormesh(sg["time"], sg["freq"], db, shading="auto", vmin=np.percentile(db, 5))
+        fig.colorbar(m, ax=ax, label=unit)
+        ax.set_ylabel(f"{name}\nfrequency [Hz]")
+    if result is not None and result.squeal:
+        fr = result.frames
+        loud = fr["level_dba"] >= result.settings.threshold_dba
+        axes[0].plot(fr["time"][loud], fr["ridge_freq"][loud], ".", ms=1.5, color="w", label="ridge")
+    axes[1].set_xlabel("time [s]")
+    axes[0].set_title("Spectrograms" + _tag(rec))
+    return fig
+
+
+def runout_plot(rec: xr.Dataset, *, displacement: str = "displacement", rpm: float, lowpass_freq: float = 1000.0,
+                macro_orders: int = 10, t_range: tuple[float, float] | None = None):
+    """Low-passed displacement with its macro and micro run-out (paper Fig. 12)."""
+    from ..measurement.runout import split_runout
+
+    fs = float(rec.attrs["fs"])
+    sro, macro, micro = split_runout(rec[displacement].values, fs, rpm, lowpass_freq=lowpass_freq,
+                                     macro_orders=macro_orders)
+    t = rec["time"].values
+    sel = slice(None) if t_range is None else (t >= t_range[0]) & (t <= t_range[1])
+    fig = _figure(figsize=(8, 4))
+    ax = fig.subplots()
+    ax.plot(t[sel], sro[sel] * 1e6, lw=0.8, label=f"low-pass {lowpass_freq:g} Hz")
+    ax.plot(t[sel], macro[sel] * 1e6, lw=1.2, label=f"macro (orders <= {macro_orders})")
+    ax.plot(t[sel], micro[sel] * 1e6, lw=0.8, label="micro")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("run-out [um]")
+    ax.legend(loc="upper right")
+    ax.set_title("Disc surface run-out" + _tag(rec))
+    return fig
+
+
+def band_vs_pressure_plot(rec: xr.Dataset, *, mic: str = "mic", displacement: str = "displacement",
+                          band: tuple[float, float] = (1000.0, 2500.0), t_range: tuple[float, float] | None = None):
+    """Band-passed displacement (1000-2500 Hz) against the sound pressure (paper Fig. 13)."""
+    from ..measurement.filters import bandpass
+
+    fs = float(rec.attrs["fs"])
+    qb = bandpass(rec[displacement].values, band[0], band[1], fs)
+    t = rec["time"].values
+    sel = slice(None) if t_range is None else (t >= t_range[0]) & (t <= t_range[1])
+    fig = _figure(figsize=(8, 5))
+    ax1, ax2 = fig.subplots(2, 1, sharex=True)
+    ax1.plot(t[sel], rec[mic].values[sel], lw=0.5)
+    ax1.set_ylabel("sound pressure [Pa]")
+    ax2.plot(t[sel], qb[sel] * 1e6, lw=0.5, color="C1")
+    ax2.set_ylabel(f"displacement {band[0]:g}-{band[1]:g} Hz [um]")
+    ax2.set_xlabel("time [s]")
+    ax1.set_title("Vibration band against sound pressure" + _tag(rec))
+    return fig
+
+
+def level_plot(result: Any):
+    """A-weighted level against time with the threshold and the events."""
+    fig = _figure(figsize=(8, 3.5))
+    ax = fig.subplots()
+    fr = result.frames
+    ax.plot(fr["time"], fr["level_dba"], lw=0.6)
+    ax.axhline(result.settings.threshold_dba, color="k", ls="--", lw=0.8, label="threshold")
+    for e in result.events:
+        ax.axvspan(e.start_s, e.end_s, color="C3", alpha=0.2, lw=0)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("level [dB(A)]")
+    ax.legend(loc="lower right")
+    ax.set_title(f"Squeal level and events ({len(result.events)})" + _tag(result))
+    return fig
+
+
+def polar_plot(result: Any):
+    """Squeal level and run-out against disc angle over all revolutions (polar)."""
+    fig = _figure(figsize=(5.5, 5.5))
+    ax = fig.add_subplot(projection="polar")
+    pol = result.polar
+    ang = np.append(pol["angle"].values, pol["angle"].values[0])
+    lev = np.append(pol["angle_level_db"].values, pol["angle_level_db"].values[0])
+    ax.plot(ang, lev, label="squeal-band level [dB]")
+    sro = np.append(pol["angle_sro"].values, pol["angle_sro"].values[0])
+    span = np.nanmax(sro) - np.nanmin(sro)
+    if span > 0 and np.all(np.isfinite(lev)):
+        lo, hi = np.nanmin(lev), np.nanmax(lev)
+        ax.plot(ang, lo + (sro - np.nanmin(sro)) / span * (hi - lo), "--", label="run-out (scaled)")
+    ax.legend(loc="lower left", fontsize="small")
+    ax.set_title("Level against disc angle" + _tag(result))
+    return fig
+
+
+def measurement_figures(rec: xr.Dataset, result: Any, *, mic: str = "mic", displacement: str = "displacement",
+                        zoom: tuple[float, float] = (0.1, 0.3)) -> dict[str, Any]:
+    """All figures of a measurement, keyed by a short name (for ``analyze --plot``)."""
+    rpm = result.settings.rpm
+    z = zoom if rec["time"].values[-1] >= zoom[1] else None
+    return {
+        "time": time_history_plot(rec, mic=mic, displacement=displacement),
+        "spectrogram": spectrogram_plot(rec, result, mic=mic, displacement=displacement),
+        "zoom": time_history_plot(rec, mic=mic, displacement=displacement, t_range=z),
+        "runout": runout_plot(rec, displacement=displacement, rpm=rpm, t_range=z,
+                              lowpass_freq=result.settings.lowpass_freq, macro_orders=result.settings.macro_orders),
+        "band": band_vs_pressure_plot(rec, mic=mic, displacement=displacement, t_range=z),
+        "level": level_plot(result),
+        "polar": polar_plot(result),
+    }

@@ -1,0 +1,150 @@
+"""``squealkit analyze`` and ``squealkit synth`` driven in-process with click's CliRunner."""
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from squealkit.cli.main import cli
+
+ARGS = ["--mic", "mic", "--displacement", "displacement", "--rpm", "900", "--radius", "0.05"]
+
+
+def invoke(args):
+    r = CliRunner()
+    return r.invoke(cli, args, prog_name="squealkit")
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("rec")
+    for name, mode in (("rising", "rising"), ("quiet", "none")):
+        res = invoke(["synth", str(d / f"{name}.nc"), "--seed", "1", "--duration", "1", "--squeal-on", mode])
+        assert res.exit_code == 0, res.output
+    return d
+
+
+def test_synth_reports_truth(tmp_path):
+    res = invoke(["synth", str(tmp_path / "r.nc"), "--duration", "0.5", "--json"])
+    assert res.exit_code == 0
+    out = json.loads(res.output)
+    assert out["synthetic"] is True and out["truth"]["frequency_hz"] == 2388.0
+
+
+def test_analyze_json_one_file(files):
+    res = invoke(["analyze", str(files / "rising.nc"), *ARGS, "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.output)
+    assert out["synthetic"] is True
+    assert abs(out["squeal_frequency_hz"] - 2388.0) < 2.0
+    assert out["rising_fraction"] > 0.8
+    assert len(out["events"]) >= 13
+    assert set(out["events"][0]) >= {"start_s", "end_s", "frequency_hz", "peak_dba"}
+
+
+def test_analyze_json_silence_has_nulls(files):
+    res = invoke(["analyze", str(files / "quiet.nc"), *ARGS, "--json"])
+    out = json.loads(res.output)
+    assert out["squeal_frequency_hz"] is None and out["rising_fraction"] is None and out["events"] == []
+
+
+def test_analyze_text_says_synthetic(files):
+    res = invoke(["analyze", str(files / "rising.nc"), *ARGS])
+    assert res.exit_code == 0 and "[SYNTHETIC]" in res.output and "rising_fraction" in res.output
+
+
+def test_campaign_summary_csv(files, tmp_path):
+    out = tmp_path / "campaign.csv"
+    res = invoke(["analyze", str(files / "rising.nc"), str(files / "quiet.nc"), *ARGS, "--summary", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "50.0% of 2 recordings" in res.output
+    text = out.read_text()
+    assert "occurrence_percent=50" in text
+    rows = [ln for ln in text.splitlines() if not ln.startswith("#")]
+    assert rows[0].startswith("recording,") and len(rows) == 3
+
+
+def test_plots_written(files, tmp_path):
+    res = invoke(["analyze", str(files / "rising.nc"), *ARGS, "--plot", str(tmp_path / "figs")])
+    assert res.exit_code == 0, res.output
+    names = sorted(p.name for p in (tmp_path / "figs").iterdir())
+    assert "rising_polar.png" in names and "rising_spectrogram.png" in names and len(names) == 7
+
+
+def test_csv_without_time_column_with_fs(tmp_path):
+    rng = np.random.default_rng(0)
+    f = tmp_path / "rec.csv"
+    rows = rng.standard_normal((2000, 2)) * [0.01, 1e-6]
+    f.write_text("p,q\n" + "\n".join(f"{a:.6g},{b:.6g}" for a, b in rows) + "\n")
+    res = invoke(["analyze", str(f), "--mic", "0", "--displacement", "q", "--rpm", "900", "--radius", "0.05",
+                  "--fs", "40000", "--json"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.output)["events"] == []
+
+
+def test_tdms_through_cli(tmp_path):
+    from nptdms import ChannelObject, TdmsWriter
+
+    from squealkit.measurement import synthetic_recording
+
+    rec = synthetic_recording(duration=0.5, seed=1)
+    f = tmp_path / "rec.tdms"
+    props = {"wf_increment": 1 / 40000.0}
+    with TdmsWriter(f) as w:
+        w.write_segment([ChannelObject("rig", "Mic", rec["mic"].values, properties=props),
+                         ChannelObject("rig", "Probe", rec["displacement"].values, properties=props)])
+    res = invoke(["analyze", str(f), "--mic", "Mic", "--displacement", "rig/Probe", "--rpm", "900",
+                  "--radius", "0.05", "--json"])
+    assert res.exit_code == 0, res.output
+    assert abs(json.loads(res.output)["squeal_frequency_hz"] - 2388.0) < 3.0
+
+
+@pytest.mark.parametrize(("extra", "match"), [
+    (["--rpm", "0"], "rpm"),
+    (["--radius", "-2"], "radius"),
+    (["--mic", "nope"], "'nope' is not in"),
+    (["--band", "2000"], "--band"),
+    (["--summary", "x.txt"], "--summary"),
+])
+def test_bad_options_exit_2_with_one_line(files, extra, match):
+    res = invoke(["analyze", str(files / "rising.nc"), *ARGS, *extra])
+    assert res.exit_code == 2
+    lines = [ln for ln in res.output.strip().splitlines() if ln]
+    assert len(lines) == 1 and match in lines[0] and "Traceback" not in res.output
+
+
+@pytest.mark.parametrize(("name", "content", "match"), [
+    ("missing.csv", None, "does not exist"),
+    ("empty.csv", "", "empty"),
+    ("nan.csv", "time,mic,displacement\n" + "".join(f"{i / 40000},{'nan' if i == 700 else 0.1},0\n"
+                                                      for i in range(2000)), "non-finite"),
+    ("junk.wav", "garbage", "could not be read"),
+    ("one.csv", "time\n0\n1\n", "no data channel"),
+])
+def test_bad_files_exit_2(tmp_path, name, content, match):
+    f = tmp_path / name
+    if content is not None:
+        f.write_text(content)
+    res = invoke(["analyze", str(f), *ARGS])
+    assert res.exit_code == 2
+    assert match in res.output and len(res.output.strip().splitlines()) == 1
+
+
+def test_wav_with_scale_and_unit_and_out(tmp_path):
+    from scipy.io import wavfile
+
+    from squealkit.io import load_dataset
+    from squealkit.measurement import synthetic_recording
+
+    rec = synthetic_recording(duration=0.5, seed=1)
+    f = tmp_path / "rec.wav"
+    # float WAV: full scale 1.0 = 20 Pa on ch0 and 100 um on ch1
+    data = np.column_stack([rec["mic"].values / 20.0, rec["displacement"].values / 1e-4]).astype(np.float32)
+    wavfile.write(f, 40000, data)
+    out = tmp_path / "res.nc"
+    res = invoke(["analyze", str(f), "--mic", "ch0", "--displacement", "1", "--rpm", "900", "--radius", "0.05",
+                  "--scale", "ch0=20", "--scale", "ch1=1e-4", "--unit", "ch0=Pa", "--out", str(out), "--json"])
+    assert res.exit_code == 0, res.output
+    assert abs(json.loads(res.output)["squeal_frequency_hz"] - 2388.0) < 3.0
+    assert load_dataset(out)["event_start"].size == len(json.loads(res.output)["events"])

@@ -1,0 +1,47 @@
+"""A-weighting, peak refinement and spectrogram of squealkit.measurement.spectral."""
+
+import numpy as np
+import pytest
+
+from squealkit.measurement import a_weighting_db, refine_peak, spectrogram
+from squealkit.measurement.spectral import frame_power
+
+# IEC 61672-1:2013 Table 3, A-weighting rounded to 0.1 dB. The table is computed at the exact
+# base-10 frequencies 10**(n/10) Hz whose nominal names are 31.5, 2000, 4000, 8000, 16000 Hz.
+IEC_TABLE = [(10**1.5, -39.4), (100.0, -19.1), (1000.0, 0.0), (10**3.3, 1.2), (10**3.6, 1.0), (10**3.9, -1.1),
+             (10000.0, -2.5), (10**4.2, -6.6)]
+
+
+@pytest.mark.parametrize(("freq", "expected"), IEC_TABLE)
+def test_a_weighting_matches_iec_61672_table(freq, expected):
+    assert a_weighting_db(freq) == pytest.approx(expected, abs=0.06)
+
+
+def test_a_weighting_is_zero_at_1khz_to_rounding():
+    assert abs(float(a_weighting_db(1000.0))) < 1e-3
+
+
+@pytest.mark.parametrize("freq", [2388.0, 2391.3, 2402.7, 2437.9])
+def test_refine_peak_beats_bin_spacing(freq):
+    fs, n = 40000.0, 512  # bins of 78 Hz
+    t = np.arange(n) / fs
+    spec, power = frame_power(np.sin(2 * np.pi * freq * t + 0.7), n, n)
+    k = int(np.argmax(power[0]))
+    est = float(refine_peak(np.abs(spec[0]), k)) * fs / n
+    assert abs(est - freq) < 0.5  # < 1 % of a bin
+
+
+def test_frame_power_sums_to_mean_square():
+    # Parseval: a sine of amplitude 2 Pa has a mean square of 2 Pa^2.
+    fs, n = 40000.0, 1024
+    t = np.arange(4 * n) / fs
+    _, p = frame_power(2.0 * np.sin(2 * np.pi * 2388.0 * t), n, n // 2)
+    assert np.allclose(p.sum(axis=1), 2.0, rtol=2e-3)
+
+
+def test_spectrogram_is_labelled():
+    fs = 40000.0
+    sg = spectrogram(np.sin(2 * np.pi * 2388.0 * np.arange(8000) / fs), fs, nperseg=1024)
+    assert sg.dims == ("time", "freq")
+    assert sg["freq"].attrs["units"] == "Hz"
+    assert abs(float(sg["freq"][int(np.argmax(sg.mean("time").values))]) - 2388.0) < fs / 1024
