@@ -45,8 +45,18 @@ def test_reproduce_numbers_match_the_paper(paper):
     assert n["fig2"]["band_high"] == pytest.approx(15317.0, abs=10.0)
     # eqs. 5-6: mu + tan(theta) at onset is nearly constant over theta
     assert n["critical"]["mu_e_spread"] < 0.01
+    # §4 Fig. 4: growth on rising SRO, decay on falling SRO
+    assert n["transient"]["rise_rate"] > 0 > n["transient"]["fall_rate"]
+    # §5 (synthetic): squeal at the model's onset frequency, close to the measured 2388 Hz, on rising run-out
+    assert n["measurement"]["squeal_frequency_hz"] == pytest.approx(2388.0, rel=0.01)
+    assert n["measurement"]["rising_fraction"] == pytest.approx(n["measurement"]["truth_rising_fraction"], abs=0.05)
     html = paper.report.read_text()
     assert "14997" in html and "15317" in html  # published beside computed
+    assert "SYNTHETIC" in html
+    verdicts = [c.agrees for s in paper.sections for c in s.comparisons]
+    assert verdicts and all(verdicts)
+    assert [s.key for s in paper.sections] == ["parameters", "fig2", "critical", "transient", "measurement",
+                                               "conclusions"]
 
 
 @pytest.mark.skipif(CHROMIUM is None and not os.environ.get("CI"), reason="Debian's chromium is not installed")

@@ -24,7 +24,7 @@ table { border-collapse: collapse; margin: 0.8em 0 1.2em; font-size: 0.92em; }
 th, td { border: 1px solid #ccc; padding: 0.3em 0.6em; text-align: right; }
 th { background: #f2f2f2; } td:first-child, th:first-child { text-align: left; }
 caption { caption-side: top; text-align: left; font-weight: 600; padding-bottom: 0.3em; }
-td.ok { background: #e7f6e7; } td.off { background: #fbe9e7; }
+td.txt { text-align: left; } td.ok { background: #e7f6e7; } td.off { background: #fbe9e7; }
 figure { margin: 1em 0 1.6em; } figure img { max-width: 100%; border: 1px solid #ddd; }
 figcaption { color: #444; font-size: 0.92em; margin-top: 0.3em; }
 .synthetic { background: #fff4ce; border-left: 4px solid #e0a800; padding: 0.4em 0.8em; }
@@ -69,7 +69,10 @@ def _comparisons(items: Sequence[Comparison]) -> str:
 
 def _table(t: Table) -> str:
     head = "".join(f"<th>{html.escape(h)}</th>" for h in t.header)
-    body = "".join("<tr>" + "".join(f"<td>{_fmt(v)}</td>" for v in row) + "</tr>" for row in t.rows)
+    def cell(v: object) -> str:
+        return f"<td class='txt'>{_fmt(v)}</td>" if isinstance(v, str) else f"<td>{_fmt(v)}</td>"
+
+    body = "".join("<tr>" + "".join(cell(v) for v in row) + "</tr>" for row in t.rows)
     return f"<table><caption>{html.escape(t.caption)}</caption><tr>{head}</tr>{body}</table>"
 
 

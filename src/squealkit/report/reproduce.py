@@ -56,6 +56,7 @@ class ReproduceResult:
 def _paper_steps(
     model: FrictionModel, rig: PinOnDiscRig | None, published: bool, quick: bool
 ) -> list[tuple[str, Step]]:
+    from .steps_measurement import measurement_step
     from .steps_stability import critical_step, fig2_step, parameters_step
     from .steps_transient import transient_step
 
@@ -65,6 +66,7 @@ def _paper_steps(
         ("Fig. 2 eigenvalues", lambda fig, dat: fig2_step(model, fig, dat, n_mu=n, n_theta=n, published=published)),
         ("critical friction", lambda fig, dat: critical_step(model, fig, dat)),
         ("Figs. 3-4 transients", lambda fig, dat: transient_step(model, fig, dat, quick=quick)),
+        ("Figs. 6-13 measurement", lambda fig, dat: measurement_step(model, fig, dat, quick=quick)),
     ]
 
 
@@ -133,6 +135,9 @@ def reproduce(
             if progress is not None:
                 progress(i, len(steps), name)
             sections.append(step(figures, data))
+        from .steps_conclusions import conclusions_step
+
+        sections.append(conclusions_step(sections))
         if progress is not None:
             progress(len(steps), len(steps), "report")
         title = title or ("Lv, Zhang & Yu (2013), reproduced by squealkit" if default else "squealkit report")
