@@ -55,7 +55,8 @@ def measurement_step(model: FrictionModel, figures: Path, data: Path, *, quick: 
                    f"paper: measured; squealkit: the model's onset frequency {f_model:.1f} Hz, recovered from a "
                    "synthetic recording (within 1 %)"),
         Comparison("share of squeal energy on rising run-out", None, rf, "1",
-                   rf is not None and rf > 0.5, f"paper: squeal on the rising SRO edge; synthetic truth {truth_rf:.3f}"),
+                   rf is not None and rf > 0.5,
+                   f"paper: squeal on the rising SRO edge; synthetic truth {truth_rf:.3f}"),
         Comparison("squeal events per disc revolution", None, len(res.events) / revs, "1/rev",
                    len(res.events) >= revs * 0.8, "paper: intermittent, about once per disc turn"),
     )
