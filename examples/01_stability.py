@@ -1,0 +1,40 @@
+"""Stability of the paper's rig: Fig. 2, the critical friction and a run-out tolerance.
+
+Run:  python examples/01_stability.py [OUTPUT_DIR]
+"""
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from squealkit.io import save_dataset, save_figure
+from squealkit.models import get_preset, load_model
+from squealkit.plotting.stability import fig2_plot, stability_map_plot
+from squealkit.stability import critical_friction_curve, runout_tolerance, stability_map, stability_summary
+
+out = Path(sys.argv[1] if len(sys.argv) > 1 else "examples-output")
+out.mkdir(parents=True, exist_ok=True)
+
+model = get_preset("lv2013")
+ds = stability_map(model, np.linspace(0, 0.8, 81), np.radians(np.linspace(-8, 8, 81)))
+lo, hi = stability_summary(ds)["unstable_omega_rad_s"]
+print(f"lock-in band {lo:.0f}-{hi:.0f} rad/s (paper: 14997-15317 rad/s)")
+save_dataset(ds, out / "fig2.nc")
+save_figure(fig2_plot(ds), out / "fig2.png")
+
+crit = critical_friction_curve(model, np.radians([-8.0, 0.0, 8.0]))
+for th, mu, mue in zip(crit.theta_deg.values, crit.mu_critical.values, crit.mu_e_critical.values, strict=True):
+    print(f"theta {th:+.0f} deg: mu_crit {mu:.4f}, mu_crit + tan(theta) {mue:.4f}")
+save_figure(stability_map_plot(ds, critical=critical_friction_curve(model, ds.theta.values)), out / "map.png")
+
+tol = runout_tolerance(model, 0.3, wavelength=1e-3)
+print(f"at mu = 0.3 keep tan(theta) <= {tol.tan_theta_max:.4f}: q0 <= {tol.q0_max * 1e6:.1f} um at 1 mm wavelength")
+
+# your own rig, from a TOML file
+mine = load_model(Path(__file__).with_name("myrig.toml"))
+c = critical_friction_curve(mine, [0.0])
+print(f"myrig.toml: mu_crit {float(c.mu_critical[0]):.4f} at {float(c.frequency_hz[0]):.1f} Hz "
+      f"(theta = 0, pin bending from Timoshenko theory)")
+assert math.isfinite(float(c.mu_critical[0]))

@@ -1,0 +1,22 @@
+"""Analyse a rig recording as the paper's §5 does (here a SYNTHETIC one with known truth).
+
+Run:  python examples/03_rig_recording.py [OUTPUT_DIR]
+"""
+
+import sys
+from pathlib import Path
+
+from squealkit.io import save_dataset, save_figure
+from squealkit.measurement import analyze_recording, synthetic_recording
+from squealkit.plotting.measurement import measurement_figures
+
+out = Path(sys.argv[1] if len(sys.argv) > 1 else "examples-output")
+out.mkdir(parents=True, exist_ok=True)
+
+rec = synthetic_recording(duration=1.0, seed=7)  # SYNTHETIC: 900 rpm, 40 kHz, squeal on rising run-out
+save_dataset(rec, out / "synthetic_recording.nc")
+res = analyze_recording(out / "synthetic_recording.nc", mic="mic", displacement="displacement", rpm=900, radius=0.05)
+print(f"[SYNTHETIC] squeal {res.squeal_frequency_hz:.1f} Hz, {len(res.events)} events, "
+      f"rising_fraction {res.rising_fraction:.3f} (truth {rec.attrs['truth_rising_fraction']:.3f})")
+for name, fig in measurement_figures(rec, res).items():
+    save_figure(fig, out / f"{name}.png")
