@@ -109,7 +109,12 @@ def test_main_returns_exit_code(capsys):
     assert main(["--help"]) == 0
 
 
-def test_help_has_examples(run):
-    for cmd in ("stability", "critical", "tolerance", "presets"):
+def test_every_subcommand_help_has_an_example(run):
+    from squealkit.cli.main import COMMANDS
+
+    assert {"stability", "critical", "tolerance", "simulate", "analyze", "synth", "reproduce", "report"} <= set(COMMANDS)
+    for cmd in COMMANDS:
         r = run(cmd, "--help")
-        assert r.exit_code == 0 and "Example" in r.output
+        assert r.exit_code == 0, cmd
+        assert "Example" in r.output or "example" in r.output, cmd
+        assert "squealkit " + cmd in r.output, cmd

@@ -137,3 +137,20 @@ def test_cli_report_bad_input(tmp_path):
 def test_comparison_difference():
     assert Comparison("k", 100.0, 101.0, "N/m").difference() == "+1.00 %"
     assert Comparison("band", (10.0, 20.0), (11.0, 19.0), "Hz").difference() == "+10.00 % / -5.00 %"
+
+
+def test_cli_report_with_own_recording(tmp_path):
+    from squealkit.io import save_dataset
+    from squealkit.measurement import synthetic_recording
+
+    rec = tmp_path / "run1.nc"
+    save_dataset(synthetic_recording(duration=0.5, seed=3), rec)
+    args = ["report", "--quick", "--recording", str(rec), "--rpm", "900", "--radius", "0.05",
+            "--out", str(tmp_path / "r"), "--json"]
+    r = CliRunner().invoke(cli, args)
+    assert r.exit_code == 0, r.output
+    out = json.loads(r.stdout)
+    assert out["numbers"]["measurement"]["squeal_frequency_hz"] == pytest.approx(2388.0, abs=3.0)
+    assert "analysis of run1.nc" in (tmp_path / "r" / "report.html").read_text()
+    r = CliRunner().invoke(cli, ["report", "--recording", str(rec)])
+    assert r.exit_code == 2 and "needs --rpm and --radius" in r.stderr

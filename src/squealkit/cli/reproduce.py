@@ -9,7 +9,7 @@ import click
 from ._options import emit_json, model_options
 
 
-def _run(out_dir: Path, *, model=None, rig=None, quick: bool = False, as_json: bool) -> None:
+def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = False, as_json: bool) -> None:
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -23,7 +23,7 @@ def _run(out_dir: Path, *, model=None, rig=None, quick: bool = False, as_json: b
         def update(done: int, total: int, name: str) -> None:
             progress.update(task, completed=done, total=total, description=name)
 
-        result = reproduce(out_dir, model=model, rig=rig, quick=quick, progress=update)
+        result = reproduce(out_dir, model=model, rig=rig, recording=recording, quick=quick, progress=update)
     if as_json:
         emit_json({"out_dir": str(result.out_dir), "report": str(result.report), "seconds": result.seconds,
                    "numbers": result.numbers()})
@@ -62,9 +62,18 @@ def reproduce(out_dir: Path, quick: bool, as_json: bool) -> None:
 @model_options
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=Path("squealkit-report"),
               show_default=True, help="Output folder (replaced as a whole when the run succeeds).")
+@click.option("--recording", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Your rig recording (CSV, WAV, netCDF, TDMS), analysed for §5 instead of a synthetic one.")
+@click.option("--mic", default="mic", show_default=True, help="Microphone channel (name or index) in --recording.")
+@click.option("--displacement", default="displacement", show_default=True,
+              help="Displacement channel (name or index) in --recording.")
+@click.option("--rpm", type=float, default=None, help="Disc speed [rpm] of --recording.")
+@click.option("--radius", type=float, default=None, help="Probe radius [m] of --recording.")
+@click.option("--fs", type=float, default=None, help="Sample rate [Hz] of a CSV --recording without a time column.")
 @click.option("--quick", is_flag=True, help="Coarser grids and shorter runs: a preview in seconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print the computed numbers as JSON on stdout.")
-def report(preset, config, sets, out_dir: Path, quick: bool, as_json: bool) -> None:
+def report(preset, config, sets, out_dir: Path, recording, mic, displacement, rpm, radius, fs, quick: bool,
+           as_json: bool) -> None:
     """The paper's analysis for your own rig or model, as one report.
 
     Takes the model from --config (a TOML model file; with a [rig] table the
@@ -76,10 +85,21 @@ def report(preset, config, sets, out_dir: Path, quick: bool, as_json: bool) -> N
     Example:
       squealkit report --config myrig.toml --out myrig-report
       squealkit report --set alpha_deg=3 --set kc=3e7 --out stiffer-pin
+      squealkit report --config myrig.toml --recording run1.tdms \
+          --mic mic --displacement probe --rpm 900 --radius 0.05
     """
+    from .._validation import InputError
     from ..models import load_rig
+    from ..report import RecordingSpec
     from ._options import build_model_from_options
 
     model = build_model_from_options(preset, config, sets)
     rig = load_rig(config) if config is not None else None
-    _run(out_dir, model=model, rig=rig, quick=quick, as_json=as_json)
+    spec = None
+    if recording is not None:
+        if rpm is None or radius is None:
+            raise InputError("--recording needs --rpm and --radius (disc speed and probe radius).")
+        if not recording.is_file():
+            raise InputError(f"Recording {str(recording)!r} does not exist.")
+        spec = RecordingSpec(recording, mic, displacement, rpm, radius, fs)
+    _run(out_dir, model=model, rig=rig, recording=spec, quick=quick, as_json=as_json)

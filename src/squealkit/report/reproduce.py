@@ -21,7 +21,7 @@ from ..models import FrictionModel, PinOnDiscRig, get_preset
 from .document import Section
 from .html import render_html
 
-__all__ = ["ReproduceResult", "reproduce"]
+__all__ = ["RecordingSpec", "ReproduceResult", "reproduce"]
 
 Step = Callable[[Path, Path], Section]
 
@@ -53,21 +53,40 @@ class ReproduceResult:
         return {s.key: dict(s.numbers) for s in self.sections}
 
 
+@dataclass(frozen=True)
+class RecordingSpec:
+    """A user's rig recording for the report's §5 (see :func:`squealkit.measurement.analyze_recording`)."""
+
+    path: Path
+    mic: str
+    displacement: str
+    rpm: float
+    radius: float
+    fs: float | None = None
+
+
 def _paper_steps(
-    model: FrictionModel, rig: PinOnDiscRig | None, published: bool, quick: bool
+    model: FrictionModel, rig: PinOnDiscRig | None, published: bool, quick: bool,
+    recording: RecordingSpec | None = None,
 ) -> list[tuple[str, Step]]:
-    from .steps_measurement import measurement_step
+    from .steps_measurement import measurement_step, recording_step
     from .steps_stability import critical_step, fig2_step, parameters_step
     from .steps_transient import transient_step
 
     n = 41 if quick else 161
-    return [
+    steps: list[tuple[str, Step]] = [
         ("parameters", lambda fig, dat: parameters_step(model, rig, fig, dat)),
         ("Fig. 2 eigenvalues", lambda fig, dat: fig2_step(model, fig, dat, n_mu=n, n_theta=n, published=published)),
         ("critical friction", lambda fig, dat: critical_step(model, fig, dat)),
         ("Figs. 3-4 transients", lambda fig, dat: transient_step(model, fig, dat, quick=quick)),
-        ("Figs. 6-13 measurement", lambda fig, dat: measurement_step(model, fig, dat, quick=quick)),
     ]
+    if recording is None:
+        steps.append(("Figs. 6-13 measurement", lambda fig, dat: measurement_step(model, fig, dat, quick=quick)))
+    else:
+        r = recording
+        steps.append(("Figs. 6-13 your recording", lambda fig, dat: recording_step(
+            r.path, fig, dat, mic=r.mic, displacement=r.displacement, rpm=r.rpm, radius=r.radius, fs=r.fs)))
+    return steps
 
 
 def _commit(stage: Path, out_dir: Path) -> None:
@@ -88,6 +107,7 @@ def reproduce(
     rig: PinOnDiscRig | None = None,
     title: str | None = None,
     quick: bool = False,
+    recording: RecordingSpec | None = None,
     progress: Callable[[int, int, str], None] | None = None,
 ) -> ReproduceResult:
     """Recompute the paper's figures and numbers and write a self-contained report.
@@ -106,6 +126,8 @@ def reproduce(
         Report title.
     quick : bool
         Coarser grids and shorter runs: a preview in seconds, not the published figures.
+    recording : RecordingSpec, optional
+        Your rig recording, analysed for §5 instead of the synthetic one.
     progress : callable, optional
         ``progress(done, total, step_name)`` before each step and at the end.
 
@@ -123,7 +145,7 @@ def reproduce(
     model = get_preset("lv2013") if model is None else model
     if rig is None and default:
         rig = PinOnDiscRig()
-    steps = _paper_steps(model, rig, published=True, quick=quick)
+    steps = _paper_steps(model, rig, published=True, quick=quick, recording=recording)
     start = time.perf_counter()
     stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".part", dir=parent))
     try:

@@ -49,13 +49,17 @@ def conclusions_step(sections: Sequence[Section]) -> Section:
         ))
     ms = n.get("measurement", {})
     if ms:
-        rows.append((
-            "In the rig, squeal recurs once per disc turn on the rising SRO, and its sound pressure follows the "
-            "disc vibration.",
-            f"SYNTHETIC: the analysis recovers squeal at {ms['squeal_frequency_hz']:.1f} Hz (paper: 2388 Hz), "
-            f"{ms['rising_fraction']:.1%} of its energy on rising run-out (truth {ms['truth_rising_fraction']:.1%}), "
-            f"{ms['events']:.0f} events over the recording.",
-        ))
+        claim = ("In the rig, squeal recurs once per disc turn on the rising SRO, and its sound pressure follows "
+                 "the disc vibration.")
+        f_txt = (f"squeal at {ms['squeal_frequency_hz']:.1f} Hz (paper: 2388 Hz)"
+                 if math.isfinite(ms["squeal_frequency_hz"]) else "no squeal found")
+        rf_txt = (f"{ms['rising_fraction']:.1%} of its energy on rising run-out"
+                  if math.isfinite(ms["rising_fraction"]) else "no rising-run-out share (no squeal)")
+        if "truth_rising_fraction" in ms:
+            rows.append((claim, f"SYNTHETIC: the analysis recovers {f_txt}, {rf_txt} "
+                                f"(truth {ms['truth_rising_fraction']:.1%}), {ms['events']:.0f} events."))
+        else:
+            rows.append((claim, f"Your recording: {f_txt}, {rf_txt}, {ms['events']:.0f} events."))
     return Section(
         "conclusions", "§6: the paper's conclusions with squealkit's numbers",
         ("Each conclusion of the paper beside the number squealkit computed for it in the sections above.",),
