@@ -30,8 +30,11 @@ _FASTMATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
 _TOL_ROUNDING = 1.0e-14
 #: a correction this small, after a superlinear step, leaves an error ~ its cube
 _TOL_FAST = 1.0e-6
-#: accepted roots must solve the scaled polynomial to this backward error
-_BACKWARD_TOL = 1.0e-11
+#: at acceptance the Newton step may exceed the Aberth step by at most this factor (plus
+#: _TOL_NEWTON): near a double root Newton's step is about half of the Aberth step, while a
+#: guess held off a root by the repulsion term alone has a Newton step many times larger
+_NEWTON_RATIO = 4.0
+_TOL_NEWTON = 1.0e-12
 
 
 def permutations_table(n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -94,28 +97,6 @@ def _companion_roots(b, roots):
 
 
 @nb.njit(cache=True, nogil=True, fastmath=_FASTMATH)
-def _backward_ok(b, z, count):
-    """True if each of the first ``count`` roots ``z`` has a rounding-level backward error.
-
-    ``|p(z)| / sum_d |b_d| |z|^d`` must not exceed ``_BACKWARD_TOL``. This catches the
-    iteration settling where its repulsion term, not a root, makes corrections small
-    (e.g. guesses trapped on the imaginary axis by an even polynomial's symmetry).
-    """
-    deg = b.shape[0] - 1
-    for k in range(count):
-        zk = z[k]
-        r = abs(zk)
-        p = complex(b[deg])
-        scale = abs(b[deg])
-        for d in range(deg - 1, -1, -1):
-            p = p * zk + b[d]
-            scale = scale * r + abs(b[d])
-        if abs(p) > _BACKWARD_TOL * scale:
-            return False
-    return True
-
-
-@nb.njit(cache=True, nogil=True, fastmath=_FASTMATH)
 def _aberth(b, z):
     """Refine all roots ``z`` of the monic polynomial ``b`` in place; True if converged.
 
@@ -128,6 +109,7 @@ def _aberth(b, z):
     prev = np.inf
     for _ in range(_MAX_ITER):
         worst = 0.0
+        newton = 0.0
         for k in range(deg):
             zk = z[k]
             # Horner for p and p'
@@ -151,11 +133,17 @@ def _aberth(b, z):
                 return False
             z[k] = zk - w
             mag = abs(z[k])
-            rel = abs(w) / (mag if mag > 1e-300 else 1.0)
+            mag = mag if mag > 1e-300 else 1.0
+            rel = abs(w) / mag
             if rel > worst:
                 worst = rel
+            rel_newton = abs(ratio) / mag
+            if rel_newton > newton:
+                newton = rel_newton
         if worst <= _TOL_ROUNDING or (worst <= _TOL_FAST and worst <= prev * prev):
-            return _backward_ok(b, z, deg)
+            # A root, even a multiple one, has Newton and Aberth steps of one size; where the
+            # Aberth repulsion alone keeps the step small (a trap, not a root), they differ.
+            return newton <= _NEWTON_RATIO * worst + _TOL_NEWTON
         prev = worst
     return False
 
@@ -173,6 +161,7 @@ def _aberth_conj(b, u):
     prev = np.inf
     for _ in range(_MAX_ITER):
         worst = 0.0
+        newton = 0.0
         for k in range(n):
             zk = u[k]
             p = complex(b[deg])
@@ -204,8 +193,11 @@ def _aberth_conj(b, u):
             rel = abs(w) / mag
             if rel > worst:
                 worst = rel
+            rel_newton = abs(ratio) / mag
+            if rel_newton > newton:
+                newton = rel_newton
         if worst <= _TOL_ROUNDING or (worst <= _TOL_FAST and worst <= prev * prev):
-            return _backward_ok(b, u, n)
+            return newton <= _NEWTON_RATIO * worst + _TOL_NEWTON
         prev = worst
     return False
 
