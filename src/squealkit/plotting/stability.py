@@ -20,6 +20,13 @@ def _figure(**kwargs: Any):
     return Figure(**kwargs)
 
 
+def _axes(ax, figsize: tuple[float, float]):
+    """The given axes and their figure, or a new single-axes figure."""
+    if ax is None:
+        ax = _figure(figsize=figsize).add_subplot(1, 1, 1)
+    return ax.figure, ax
+
+
 def coupled_modes(ds: xr.Dataset) -> list[int]:
     """Modes that become unstable anywhere on the grid, with the modes they lock in with.
 
@@ -95,10 +102,7 @@ def stability_map_plot(ds: xr.Dataset, *, critical: xr.Dataset | None = None, ax
     -------
     matplotlib.figure.Figure
     """
-    if ax is None:
-        fig = _figure(figsize=(7, 5))
-        ax = fig.add_subplot(1, 1, 1)
-    fig = ax.figure
+    fig, ax = _axes(ax, (7, 5))
     sig = ds["max_growth_rate"].values
     vmax = float(np.nanmax(np.abs(sig))) or 1.0
     mesh = ax.pcolormesh(ds.mu.values, ds.theta_deg.values, sig.T, cmap="RdBu_r", vmin=-vmax, vmax=vmax,
@@ -132,10 +136,7 @@ def root_locus_plot(ds: xr.Dataset, *, theta_index: int | None = None, ax=None):
     -------
     matplotlib.figure.Figure
     """
-    if ax is None:
-        fig = _figure(figsize=(7, 5))
-        ax = fig.add_subplot(1, 1, 1)
-    fig = ax.figure
+    fig, ax = _axes(ax, (7, 5))
     j = int(np.argmin(np.abs(ds.theta.values))) if theta_index is None else theta_index
     col = ds.isel(theta=j)
     mu_e = col["mu_e"].values

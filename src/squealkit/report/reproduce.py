@@ -7,16 +7,13 @@ file behind: either ``DIR`` holds a complete report or it is as it was.
 
 from __future__ import annotations
 
-import os
-import shutil
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 from .._validation import InputError
-from ..io import write_text
+from ..io import atomic_path
 from ..models import FrictionModel, PinOnDiscRig, get_preset
 from .document import Section
 from .html import render_html
@@ -89,17 +86,6 @@ def _paper_steps(
     return steps
 
 
-def _commit(stage: Path, out_dir: Path) -> None:
-    """Move the finished staging folder onto ``out_dir`` (replacing an older report)."""
-    backup = None
-    if out_dir.exists():
-        backup = out_dir.with_name(f".{out_dir.name}.old-{os.getpid()}")
-        out_dir.rename(backup)
-    stage.rename(out_dir)
-    if backup is not None:
-        shutil.rmtree(backup, ignore_errors=True)
-
-
 def reproduce(
     out_dir: str | Path,
     *,
@@ -136,9 +122,6 @@ def reproduce(
     ReproduceResult
     """
     out = Path(out_dir)
-    parent = out.parent if str(out.parent) else Path(".")
-    if not parent.is_dir():
-        raise InputError(f"Output folder's parent {str(parent)!r} does not exist.")
     if out.exists() and not out.is_dir():
         raise InputError(f"Output {str(out)!r} exists and is not a folder.")
     default = model is None
@@ -147,10 +130,10 @@ def reproduce(
         rig = PinOnDiscRig()
     steps = _paper_steps(model, rig, published=True, quick=quick, recording=recording)
     start = time.perf_counter()
-    stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".part", dir=parent))
-    try:
+    # staged beside out_dir and moved into place only when complete (io.atomic_path)
+    with atomic_path(out, directory=True) as stage:
         figures, data = stage / "figures", stage / "data"
-        figures.mkdir()
+        figures.mkdir(parents=True)
         data.mkdir()
         sections = []
         for i, (name, step) in enumerate(steps):
@@ -165,9 +148,6 @@ def reproduce(
         title = title or ("Lv, Zhang & Yu (2013), reproduced by squealkit" if default else "squealkit report")
         subtitle = ("Influence of surface run-out on disc brake squeal, J. Vibroeng. 15(2) 2013"
                     if default else f"model: {model.kind}")
-        write_text(stage / "report.html", render_html(sections, figures, title=title, subtitle=subtitle))
-        _commit(stage, out)
-    except BaseException:
-        shutil.rmtree(stage, ignore_errors=True)
-        raise
+        (stage / "report.html").write_text(render_html(sections, figures, title=title, subtitle=subtitle),
+                                           encoding="utf-8")
     return ReproduceResult(out, tuple(sections), time.perf_counter() - start)

@@ -96,6 +96,18 @@ def _companion_roots(b, roots):
         roots[i] = w[i]
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def _horner(b, z):
+    """p(z) and p'(z) of the polynomial with ascending real coefficients ``b``."""
+    deg = b.shape[0] - 1
+    p = complex(b[deg])
+    dp = 0j
+    for d in range(deg - 1, -1, -1):
+        dp = dp * z + p
+        p = p * z + b[d]
+    return p, dp
+
+
 @nb.njit(cache=True, nogil=True, fastmath=_FASTMATH)
 def _aberth(b, z):
     """Refine all roots ``z`` of the monic polynomial ``b`` in place; True if converged.
@@ -112,12 +124,7 @@ def _aberth(b, z):
         newton = 0.0
         for k in range(deg):
             zk = z[k]
-            # Horner for p and p'
-            p = complex(b[deg])
-            dp = 0j
-            for d in range(deg - 1, -1, -1):
-                dp = dp * zk + p
-                p = p * zk + b[d]
+            p, dp = _horner(b, zk)
             if p == 0j:
                 continue
             ratio = p / dp if dp != 0j else complex(np.inf)
@@ -156,7 +163,6 @@ def _aberth_conj(b, u):
     sweep; the conjugates enter the Aberth sum directly. Returns False (caller falls back
     to the general iteration) if a root approaches the real axis or anything goes wrong.
     """
-    deg = b.shape[0] - 1
     n = u.shape[0]
     prev = np.inf
     for _ in range(_MAX_ITER):
@@ -164,11 +170,7 @@ def _aberth_conj(b, u):
         newton = 0.0
         for k in range(n):
             zk = u[k]
-            p = complex(b[deg])
-            dp = 0j
-            for d in range(deg - 1, -1, -1):
-                dp = dp * zk + p
-                p = p * zk + b[d]
+            p, dp = _horner(b, zk)
             if p == 0j:
                 continue
             if dp == 0j:
