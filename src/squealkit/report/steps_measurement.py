@@ -17,11 +17,11 @@ from .steps_stability import _save_fig
 RPM, FS, RADIUS, F_PUBLISHED = 900.0, 40_000.0, 0.05, 2388.0
 
 _CAPTIONS = {
-    "fig06_07_time_histories": "Figs. 6-7: sound pressure and disc surface displacement",
-    "fig08_09_spectrograms": "Figs. 8-9: spectrograms of both channels, with the squeal ridge",
-    "fig10_11_zoom": "Figs. 10-11: the 0.1-0.3 s zoom over three revolutions",
-    "fig12_runout": "Fig. 12: low-pass (1000 Hz) run-out, split into macro and micro run-out",
-    "fig13_band_vs_pressure": "Fig. 13: 1000-2500 Hz band of the displacement against the sound pressure",
+    "time": "Figs. 6-7: sound pressure and disc surface displacement",
+    "spectrogram": "Figs. 8-9: spectrograms of both channels, with the squeal ridge",
+    "zoom": "Figs. 10-11: the 0.1-0.3 s zoom over three revolutions",
+    "runout": "Fig. 12: low-pass (1000 Hz) run-out, split into macro and micro run-out",
+    "band": "Fig. 13: 1000-2500 Hz band of the displacement against the sound pressure",
     "level": "A-weighted squeal level with the detected events (SAE J2521 threshold)",
     "polar": "Squeal level against disc angle with the run-out, over the revolutions",
 }
