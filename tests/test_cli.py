@@ -112,7 +112,8 @@ def test_main_returns_exit_code(capsys):
 def test_every_subcommand_help_has_an_example(run):
     from squealkit.cli.main import COMMANDS
 
-    assert {"stability", "critical", "tolerance", "simulate", "analyze", "synth", "reproduce", "report"} <= set(COMMANDS)
+    expected = {"stability", "critical", "tolerance", "simulate", "analyze", "synth", "reproduce", "report"}
+    assert expected <= set(COMMANDS)
     for cmd in COMMANDS:
         r = run(cmd, "--help")
         assert r.exit_code == 0, cmd
