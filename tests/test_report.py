@@ -132,6 +132,8 @@ def test_cli_report_bad_input(tmp_path):
     f.write_text("x")
     r = CliRunner().invoke(cli, ["reproduce", "--out", str(f)])
     assert r.exit_code == 2 and "is a file" in r.stderr
+    r = CliRunner().invoke(cli, ["reproduce", "--out", str(tmp_path / "no" / "such")])
+    assert r.exit_code == 2 and "does not exist" in r.stderr and len(r.stderr.strip().splitlines()) == 1
 
 
 def test_comparison_difference():

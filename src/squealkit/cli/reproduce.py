@@ -13,8 +13,12 @@ def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = F
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+    from .._validation import InputError
     from ..report import reproduce
 
+    parent = out_dir.parent if str(out_dir.parent) else Path(".")
+    if not parent.is_dir():  # before the progress bar starts: the error stays one line
+        raise InputError(f"Output folder {str(parent)!r} does not exist.")
     progress = Progress(TextColumn("{task.description:<28}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
                         TimeElapsedColumn(), console=Console(stderr=True), disable=as_json)
     with progress:
