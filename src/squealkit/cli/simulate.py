@@ -7,7 +7,14 @@ from pathlib import Path
 import click
 
 from .._validation import InputError
-from ._options import build_model_from_options, check_output_suffix, emit_json, model_options, output_options
+from ._options import (
+    build_model_from_options,
+    check_output_suffix,
+    emit_json,
+    model_options,
+    output_options,
+    progress_callback,
+)
 
 
 @click.command()
@@ -68,7 +75,7 @@ def simulate(preset, config, sets, mu, sro, sro_amplitude, sro_wavelength, sro_f
     else:
         profile = Smooth()
 
-    with _progress_bar(enabled=not as_json and duration * 1e6 > 2e5) as progress:
+    with progress_callback("simulating", enabled=not as_json and duration * 1e6 > 2e5) as progress:
         ds = run_simulation(
             model, mu=mu, profile=profile, speed=speed, duration=duration, fs=fs, contact=contact,
             perturbation=perturbation, rng=rng, progress=progress,
@@ -95,29 +102,3 @@ def simulate(preset, config, sets, mu, sro, sro_amplitude, sro_wavelength, sro_f
         click.echo(f"  {st['stage']:<8} {st['t_start']:.4f}-{st['t_end']:.4f} s: rate {st['rate_per_s']:+.1f} 1/s "
                    f"(mean sigma {st['sigma_mean_per_s']:+.1f} 1/s)")
 
-
-class _progress_bar:
-    """A rich progress bar fed by the library's ``progress(done, total)`` callback."""
-
-    def __init__(self, enabled: bool) -> None:
-        self.enabled = enabled
-        self._bar = None
-        self._task = None
-
-    def __enter__(self):
-        if not self.enabled:
-            return None
-        from rich.progress import Progress
-
-        self._bar = Progress(transient=True)
-        self._bar.__enter__()
-        self._task = self._bar.add_task("simulating", total=1.0)
-
-        def update(done: int, total: int) -> None:
-            self._bar.update(self._task, completed=done / max(total, 1))  # type: ignore[union-attr]
-
-        return update
-
-    def __exit__(self, *exc) -> None:
-        if self._bar is not None:
-            self._bar.__exit__(*exc)

@@ -27,6 +27,16 @@ _CAPTIONS = {
 }
 
 
+def _save_measurement_figures(figs: dict, figures: Path, prefix: str) -> tuple[FigureRef, ...]:
+    """Save the §5 figures (PNG and SVG) as ``sec5_NN_name`` and return their references."""
+    refs = []
+    for i, (name, fig) in enumerate(figs.items()):
+        stem = f"sec5_{i:02d}_{name}"
+        _save_fig(fig, figures, stem)
+        refs.append(FigureRef(stem, prefix + _CAPTIONS.get(name, name.replace("_", " "))))
+    return tuple(refs)
+
+
 def recording_step(recording: Path, figures: Path, data: Path, *, mic: str, displacement: str, rpm: float,
                    radius: float, fs: float | None = None) -> Section:
     """Figs. 6-13 on the user's own recording."""
@@ -38,12 +48,7 @@ def recording_step(recording: Path, figures: Path, data: Path, *, mic: str, disp
     kwargs = {"fs": fs} if fs is not None else {}
     rec = read_recording(recording, channels=[mic, displacement], **kwargs)
     mic_name, disp_name = list(rec.data_vars)[:2]
-    figs = measurement_figures(rec, res, mic=mic_name, displacement=disp_name)
-    refs = []
-    for i, (name, fig) in enumerate(figs.items()):
-        stem = f"sec5_{i:02d}_{name}"
-        _save_fig(fig, figures, stem)
-        refs.append(FigureRef(stem, _CAPTIONS.get(name, name.replace("_", " "))))
+    refs = _save_measurement_figures(measurement_figures(rec, res, mic=mic_name, displacement=disp_name), figures, "")
     f_sq, rf = res.squeal_frequency_hz, res.rising_fraction
     comps = (
         Comparison("squeal main frequency", F_PUBLISHED, f_sq, "Hz", None, "paper: its own rig; yours may differ"),
@@ -60,7 +65,7 @@ def recording_step(recording: Path, figures: Path, data: Path, *, mic: str, disp
         tuple((e.start_s, e.end_s, e.frequency_hz, e.peak_dba) for e in res.events[:12]),
     )
     return Section(
-        "measurement", f"§5: analysis of {recording.name} (Figs. 6-13)", paragraphs, comps, (table,), tuple(refs),
+        "measurement", f"§5: analysis of {recording.name} (Figs. 6-13)", paragraphs, comps, (table,), refs,
         ("recording_analysis.nc",),
         numbers={"squeal_frequency_hz": f_sq if f_sq is not None else math.nan,
                  "rising_fraction": rf if rf is not None else math.nan, "events": float(len(res.events))},
@@ -79,12 +84,7 @@ def measurement_step(model: FrictionModel, figures: Path, data: Path, *, quick: 
     res = analyze_recording(rec, mic="mic", displacement="displacement", rpm=RPM, radius=RADIUS)
     save_dataset(rec, data / "synthetic_recording.nc")
     save_dataset(res.to_dataset(), data / "synthetic_recording_analysis.nc")
-    figs = measurement_figures(rec, res)
-    refs = []
-    for i, (name, fig) in enumerate(figs.items()):
-        stem = f"sec5_{i:02d}_{name}"
-        _save_fig(fig, figures, stem)
-        refs.append(FigureRef(stem, "[SYNTHETIC] " + _CAPTIONS.get(name, name.replace("_", " "))))
+    refs = _save_measurement_figures(measurement_figures(rec, res), figures, "[SYNTHETIC] ")
     f_sq = res.squeal_frequency_hz
     rf = res.rising_fraction
     truth_rf = float(rec.attrs["truth_rising_fraction"])
@@ -116,7 +116,7 @@ def measurement_step(model: FrictionModel, figures: Path, data: Path, *, quick: 
     )
     return Section(
         "measurement", "§5: rig measurement analysis (Figs. 6-13) on a SYNTHETIC recording", paragraphs, comps,
-        (table,), tuple(refs), ("synthetic_recording.nc", "synthetic_recording_analysis.nc"),
+        (table,), refs, ("synthetic_recording.nc", "synthetic_recording_analysis.nc"),
         numbers={"squeal_frequency_hz": f_sq if f_sq is not None else math.nan,
                  "rising_fraction": rf if rf is not None else math.nan, "truth_rising_fraction": truth_rf,
                  "events": float(len(res.events)), "model_frequency_hz": f_model},
