@@ -56,6 +56,15 @@ def output_options(*, dataset: bool = True, plot: bool = True) -> Callable[[F], 
     return deco
 
 
+def scheduler_option(f: F) -> F:
+    """--scheduler ADDRESS|local: run the work on a Dask cluster."""
+    return click.option(
+        "--scheduler", default=None, metavar="ADDRESS|local",
+        help="Run on a Dask cluster: a scheduler address (tcp://HOST:8786, or a scheduler file .json), "
+        "or 'local' for a local cluster with one worker per core. Needs squealkit[distributed].",
+    )(f)
+
+
 def build_model_from_options(preset: str | None, config: Path | None, sets: tuple[str, ...]):
     """The model named by --preset/--config with the --set overrides applied."""
     from ..models import build_model, parse_assignments

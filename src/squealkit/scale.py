@@ -1,0 +1,173 @@
+"""Run squealkit's work on a Dask cluster (``dask.distributed``), or in this process.
+
+Every job that can outgrow one machine (stability sweeps, batches of transient runs,
+Monte Carlo samples, test campaigns) is cut into independent tasks that each write or
+return a small piece. :func:`map_tasks` runs them: in this process when ``client`` is
+None, on the cluster otherwise, yielding results as they complete. The same function
+computes each piece either way, so a cluster run gives the same numbers as a local one.
+
+A lost worker is handled by the scheduler: its tasks are run again on the others
+(every task here is a pure function of its arguments, and zarr regions are rewritten
+whole), so a job survives workers that die mid-run.
+
+Install the optional part with ``pip install "squealkit[distributed]"``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from typing import Any
+
+from ._validation import InputError
+
+__all__ = ["cluster_client", "get_client", "map_tasks"]
+
+Progress = Callable[[int, int], None]
+
+
+def _distributed():
+    try:
+        import distributed
+    except ImportError as e:  # pragma: no cover - the test extra installs it
+        raise InputError(
+            "Running on a Dask cluster needs dask.distributed: pip install \"squealkit[distributed]\"."
+        ) from e
+    return distributed
+
+
+def get_client(scheduler: str, *, n_workers: int | None = None):
+    """A ``distributed.Client`` for ``scheduler``.
+
+    Parameters
+    ----------
+    scheduler : str
+        ``"local"`` starts a local cluster of worker processes (one thread each, one per
+        core unless ``n_workers`` says otherwise); anything else is a scheduler address,
+        e.g. ``"tcp://10.0.0.5:8786"`` or a scheduler file ``*.json``.
+    n_workers : int, optional
+        Workers of a local cluster.
+
+    Returns
+    -------
+    distributed.Client
+        Close it (and with it a local cluster) when done, or use :func:`cluster_client`.
+    """
+    distributed = _distributed()
+    if not isinstance(scheduler, str) or not scheduler.strip():
+        raise InputError(f"Scheduler {scheduler!r} must be 'local' or an address like tcp://HOST:8786.")
+    scheduler = scheduler.strip()
+    if scheduler == "local":
+        n = n_workers or os.cpu_count() or 1
+        cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                           dashboard_address=None)
+        client = distributed.Client(cluster)
+        return client
+    try:
+        if scheduler.endswith(".json"):
+            return distributed.Client(scheduler_file=scheduler, timeout="10s")
+        return distributed.Client(scheduler, timeout="10s")
+    except (OSError, TimeoutError, ValueError) as e:
+        raise InputError(f"Cannot reach the Dask scheduler {scheduler!r}: {e}") from e
+
+
+@contextlib.contextmanager
+def cluster_client(scheduler: str | None, *, n_workers: int | None = None) -> Iterator[Any]:
+    """Context manager: a client for ``scheduler`` (None yields None), closed on exit."""
+    if scheduler is None:
+        yield None
+        return
+    client = get_client(scheduler, n_workers=n_workers)
+    try:
+        yield client
+    finally:
+        cluster = client.cluster if scheduler.strip() == "local" else None
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _in_worker(fn: Callable[..., Any], item: Any) -> Any:
+    """Run one task on a worker, with numba's threads limited to the worker's share."""
+    try:
+        import numba
+        from distributed import get_worker
+
+        nthreads = get_worker().state.nthreads
+        numba.set_num_threads(max(1, min(nthreads, numba.config.NUMBA_NUM_THREADS)))
+    except (ImportError, ValueError):  # pragma: no cover - outside a worker
+        pass
+    return fn(item)
+
+
+def map_tasks(
+    fn: Callable[[Any], Any],
+    items: Sequence[Any] | Iterable[Any],
+    *,
+    client: Any = None,
+    progress: Progress | None = None,
+    weights: Sequence[int] | None = None,
+    name: str = "squealkit",
+) -> Iterator[tuple[int, Any]]:
+    """Apply ``fn`` to every item; yield ``(index, result)`` as the tasks complete.
+
+    Parameters
+    ----------
+    fn : callable
+        A module-level function of one argument (it is pickled to the workers).
+    items : sequence
+        The tasks' arguments. Keep them small: each is sent to a worker.
+    client : distributed.Client, optional
+        Run on this cluster; without it, run here one after another, in order.
+    progress : callable, optional
+        ``progress(done, total)`` after each task, in units of ``weights``.
+    weights : sequence of int, optional
+        Work per task for the progress report (default 1 each).
+    name : str
+        Prefix of the Dask task keys (shown on the dashboard).
+
+    Yields
+    ------
+    (int, object)
+        Task index and its result; on a cluster each result is released once yielded.
+
+    Examples
+    --------
+    >>> sorted(map_tasks(abs, [-2, 3]))
+    [(0, 2), (1, 3)]
+    """
+    items = list(items)
+    w = [1] * len(items) if weights is None else [int(x) for x in weights]
+    total = sum(w)
+    done = 0
+    if client is None:
+        for i, item in enumerate(items):
+            result = fn(item)
+            done += w[i]
+            if progress is not None:
+                progress(done, total)
+            yield i, result
+        return
+    distributed = _distributed()
+    keys = [f"{name}-{i}-{_token(fn, it)}" for i, it in enumerate(items)]
+    futures = client.map(_in_worker, [fn] * len(items), items, key=keys)
+    index = {f.key: i for i, f in enumerate(futures)}
+    try:
+        for fut in distributed.as_completed(futures):
+            i = index[fut.key]
+            result = fut.result()
+            fut.release()
+            done += w[i]
+            if progress is not None:
+                progress(done, total)
+            yield i, result
+    finally:
+        for fut in futures:
+            fut.release()
+
+
+def _token(fn: Callable[..., Any], item: Any) -> str:
+    from dask.base import tokenize
+
+    return tokenize(fn, item)
