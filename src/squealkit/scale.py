@@ -18,11 +18,16 @@ from __future__ import annotations
 import contextlib
 import os
 from collections.abc import Callable, Iterable, Iterator, Sequence
+from pathlib import Path
 from typing import Any
 
-from ._validation import InputError
+import numpy as np
+import xarray as xr
 
-__all__ = ["cluster_client", "get_client", "map_tasks"]
+from ._validation import InputError
+from .io import atomic_path
+
+__all__ = ["cluster_client", "get_client", "lazy_template", "map_tasks", "stream_to_zarr"]
 
 Progress = Callable[[int, int], None]
 
@@ -171,3 +176,85 @@ def _token(fn: Callable[..., Any], item: Any) -> str:
     from dask.base import tokenize
 
     return tokenize(fn, item)
+
+
+def lazy_template(sample: xr.Dataset, dim: str, index: np.ndarray, chunk: int) -> xr.Dataset:
+    """A full-size, dask-backed dataset shaped like ``sample`` but ``len(index)`` long in ``dim``.
+
+    ``sample`` is one computed piece of the result (e.g. one row); every variable along
+    ``dim`` becomes lazy zeros chunked ``chunk`` along ``dim`` (whole along the others), so
+    writing the template stores only the metadata and the coordinates. ``index`` is the
+    coordinate of ``dim``.
+    """
+    import dask.array as da
+
+    n = len(index)
+
+    def full(v: xr.Variable) -> xr.Variable:
+        shape = tuple(n if d == dim else s for d, s in zip(v.dims, v.shape, strict=True))
+        chunks = tuple(chunk if d == dim else s for d, s in zip(v.dims, v.shape, strict=True))
+        return xr.Variable(v.dims, da.zeros(shape, dtype=v.dtype, chunks=chunks), v.attrs)
+
+    data_vars = {k: (full(v.variable) if dim in v.dims else v.variable) for k, v in sample.data_vars.items()}
+    coords = {}
+    for k, v in sample.coords.items():
+        if k == dim:
+            coords[k] = xr.Variable((dim,), np.asarray(index), v.attrs)
+        elif dim in v.dims:
+            coords[k] = full(v.variable)
+        else:
+            coords[k] = v.variable
+    return xr.Dataset(data_vars, coords, attrs=sample.attrs)
+
+
+def _write_region(item: tuple) -> int:
+    """Compute one piece and write it into its region of the zarr store."""
+    fn, arg, path, dim, start, stop = item
+    piece: xr.Dataset = fn(arg)
+    drop = [k for k, v in piece.variables.items() if dim not in v.dims]
+    piece.drop_vars(drop).to_zarr(path, region={dim: slice(start, stop)}, consolidated=False)
+    return stop - start
+
+
+def stream_to_zarr(
+    store: str | Path,
+    template: xr.Dataset,
+    dim: str,
+    pieces: Sequence[tuple[Callable[[Any], xr.Dataset], Any, int, int]],
+    *,
+    client: Any = None,
+    progress: Progress | None = None,
+    weights: Sequence[int] | None = None,
+    name: str = "squealkit-piece",
+) -> xr.Dataset:
+    """Write a result piece by piece into a zarr store; never hold it whole in one process.
+
+    Parameters
+    ----------
+    store : path
+        The zarr store (a folder; replaced only when every piece is written). On a
+        multi-machine cluster it must lie on a file system every worker sees.
+    template : xarray.Dataset
+        The full result, lazily (see :func:`lazy_template`); its chunks along ``dim``
+        must match the pieces.
+    dim : str
+        The dimension the pieces split.
+    pieces : sequence of (fn, arg, start, stop)
+        ``fn(arg)`` computes the piece ``start:stop`` along ``dim`` (module-level fn).
+    client, progress, weights, name
+        As in :func:`map_tasks` (weights default to the pieces' lengths).
+
+    Returns
+    -------
+    xarray.Dataset
+        The store opened lazily (dask-backed).
+    """
+    final = Path(store)
+    with atomic_path(final, directory=True) as tmp:
+        template.to_zarr(tmp, mode="w", compute=False, consolidated=False)
+        path = str(tmp.resolve())
+        items = [(fn, arg, path, dim, a, b) for fn, arg, a, b in pieces]
+        w = weights if weights is not None else [b - a for *_, a, b in pieces]
+        for _ in map_tasks(_write_region, items, client=client, progress=progress, weights=w, name=name):
+            pass
+    return xr.open_zarr(final, consolidated=False)

@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from .._validation import InputError, validate_finite
-from ._options import check_output_suffix, emit_json
+from ._options import check_output_suffix, emit_json, progress_callback, scheduler_option
 
 #: Show a progress bar for recordings longer than this [s].
 _PROGRESS_ABOVE_S = 60.0
@@ -51,10 +51,11 @@ def _band(text: str) -> tuple[float, float]:
               help="Write the labelled result of one file as netCDF (.nc).")
 @click.option("--summary", "summary_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write the campaign summary (one row per recording) as CSV.")
+@scheduler_option
 def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float, radius: float, band: str,
             threshold_dba: float, min_duration: float, fs: float | None, scales: tuple[str, ...],
             units: tuple[str, ...], as_json: bool, plot_dir: Path | None, out_path: Path | None,
-            summary_path: Path | None) -> None:
+            summary_path: Path | None, scheduler: str | None) -> None:
     """Find squeal in rig recordings and relate it to the disc run-out (paper §5).
 
     Each FILE is .csv, .wav, .nc/.h5 or .tdms with a microphone and a displacement
@@ -67,6 +68,13 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float, ra
       squealkit analyze rec.nc --mic mic --displacement displacement --rpm 900 --radius 0.05
       squealkit analyze a.tdms b.tdms --mic Mic --displacement Probe --rpm 900 --radius 0.05 \\
           --summary campaign.csv
+      squealkit analyze runs/*.nc --mic mic --displacement displacement --rpm 900 \\
+          --radius 0.05 --summary campaign.csv --scheduler tcp://10.0.0.5:8786
+
+    \b
+    With --scheduler each recording is analysed by a worker of the Dask cluster
+    (the files must be readable there under the same paths) and only the campaign
+    summary comes back: the output is the campaign, for one file or many.
     """
     from ..io import save_dataset, write_text
     from ..measurement import analyze_recording, open_recording
@@ -82,6 +90,13 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float, ra
     scale_map = {k: validate_finite(f"--scale {k}", v) for k, v in _pairs("--scale", scales).items()}
     unit_map = _pairs("--unit", units)
     sources = [open_recording(f, fs=fs, scale=scale_map or None, units=unit_map or None) for f in files]
+    if scheduler is not None:
+        if plot_dir is not None or out_path is not None:
+            raise InputError("--plot and --out work on this machine only; leave them out with --scheduler.")
+        _campaign_on_cluster(files, scheduler, as_json, summary_path, fs=fs, scale=scale_map or None,
+                             units=unit_map or None, mic=mic, displacement=displacement, rpm=rpm, radius=radius,
+                             band=band_, threshold_dba=threshold_dba, min_duration=min_duration)
+        return
     results = []
     for f, src in zip(files, sources, strict=True):
         kwargs = dict(mic=mic, displacement=displacement, rpm=rpm, radius=radius, band=band_,
@@ -111,10 +126,37 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float, ra
     for f, r in zip(files, results, strict=True):
         _print_text(f, r)
     if campaign is not None:
-        click.echo(f"campaign: {campaign.occurrence_percent:.1f}% of {len(results)} recordings squeal, "
-                   f"{campaign.n_events} events; frequencies: "
-                   + (", ".join(f"{g['frequency_hz']:.0f} Hz ({g['n_events']})" for g in campaign.frequencies)
-                      or "none"))
+        _print_campaign(campaign)
+
+
+def _print_campaign(campaign) -> None:
+    click.echo(f"campaign: {campaign.occurrence_percent:.1f}% of {len(campaign.rows)} recordings squeal, "
+               f"{campaign.n_events} events; frequencies: "
+               + (", ".join(f"{g['frequency_hz']:.0f} Hz ({g['n_events']})" for g in campaign.frequencies)
+                  or "none"))
+
+
+def _campaign_on_cluster(files, scheduler: str, as_json: bool, summary_path: Path | None, **kwargs) -> None:
+    from ..io import write_text
+    from ..measurement.campaign import analyze_campaign
+    from ..scale import cluster_client
+
+    with cluster_client(scheduler) as client, \
+            progress_callback("recordings", enabled=not as_json and len(files) > 1) as cb:
+        campaign = analyze_campaign(list(files), client=client, progress=cb, **kwargs)
+    if summary_path is not None:
+        write_text(summary_path, campaign.to_csv())
+    if as_json:
+        emit_json(campaign.to_dict())
+        return
+    for r in campaign.rows:
+        tag = " [SYNTHETIC]" if r["synthetic"] else ""
+        what = (f"squeal {r['squeal_frequency_hz']:.1f} Hz, peak {r['peak_dba']:.1f} dB(A), {r['n_events']} events, "
+                f"rising_fraction {r['rising_fraction']:.3f}" if r["squeal"] else "no squeal")
+        click.echo(f"{r['recording']}{tag}: {r['duration_s']:.3f} s, {what}")
+    _print_campaign(campaign)
+    if summary_path is not None:
+        click.echo(f"wrote summary: {summary_path}")
 
 
 def _stderr_console():

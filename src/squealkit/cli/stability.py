@@ -14,6 +14,7 @@ from ._options import (
     model_options,
     output_options,
     progress_callback,
+    scheduler_option,
 )
 
 
@@ -26,8 +27,10 @@ from ._options import (
 @click.option("--damped", is_flag=True, help="Include the damping matrix (the paper's sweep, eq. 7, is undamped).")
 @click.option("--plot-map", "map_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Also write a stability map with the critical-friction curve (.png/.svg/.pdf).")
+@scheduler_option
 @output_options()
-def stability(preset, config, sets, mu_spec, theta_spec, damped, map_path, as_json, out_path, plot_path) -> None:
+def stability(preset, config, sets, mu_spec, theta_spec, damped, map_path, scheduler, as_json, out_path,
+              plot_path) -> None:
     """Complex eigenvalues over friction mu and SRO incline theta (paper §3, Fig. 2).
 
     Solves M x'' + K(mu, tan theta) x = 0 (or with C, --damped) at every grid
@@ -40,6 +43,12 @@ def stability(preset, config, sets, mu_spec, theta_spec, damped, map_path, as_js
       squealkit stability --mu 0:0.8:401 --theta -8:8:401 --out map.nc --json
       squealkit stability --preset hoffmann2002 --mu 0:0.5:201 --theta 0
       squealkit stability --set alpha_deg=3 --damped --plot-map map.png
+      squealkit stability --mu 0:0.8:20001 --theta -8:8:20001 --out big.zarr --scheduler local
+
+    \b
+    With --out FILE.zarr the map is written tile by tile (blocks of mu rows), never held
+    whole in memory; --scheduler ADDRESS computes the tiles on a Dask cluster (the
+    store must be on a file system the workers share) with identical numbers.
 
     \b
     --json keys: unstable_omega_rad_s and unstable_frequency_hz ([min, max] of the
@@ -47,8 +56,9 @@ def stability(preset, config, sets, mu_spec, theta_spec, damped, map_path, as_js
     unstable_fraction, lock_in_fraction, max_growth_rate [1/s], grid_points,
     mu_range, theta_deg_range, damped.
     """
-    from .._validation import parse_range
+    from .._validation import InputError, parse_range
     from ..io import save_dataset, save_figure
+    from ..scale import cluster_client
     from ..stability import critical_friction_curve, stability_map, stability_summary
 
     check_output_suffix(out_path, (".nc", ".zarr"), "--out")
@@ -58,14 +68,17 @@ def stability(preset, config, sets, mu_spec, theta_spec, damped, map_path, as_js
     mu = parse_range("--mu", mu_spec)
     theta_deg = parse_range("--theta", theta_spec)
     if any(abs(t) >= 90.0 for t in theta_deg):
-        from .._validation import InputError
-
         raise InputError(f"--theta {theta_spec!r}: angles must lie strictly between -90 and 90 deg.")
     theta = [math.radians(t) for t in theta_deg]
-    with progress_callback("eigenvalues", enabled=not as_json and mu.size * len(theta) > 200_000) as cb:
-        ds = stability_map(model, mu, theta, damped=damped, progress=cb)
-    summary = stability_summary(ds)
-    if out_path is not None:
+    stream = out_path is not None and out_path.suffix.lower() == ".zarr"
+    if scheduler is not None and not stream:
+        raise InputError("--scheduler streams the map to zarr: give --out FILE.zarr.")
+    with cluster_client(scheduler) as client, \
+            progress_callback("eigenvalues", enabled=not as_json and mu.size * len(theta) > 200_000) as cb:
+        ds = stability_map(model, mu, theta, damped=damped, progress=cb,
+                           store=out_path if stream else None, client=client)
+        summary = stability_summary(ds)
+    if out_path is not None and not stream:
         save_dataset(ds, out_path)
     if plot_path is not None:
         from ..plotting.stability import fig2_plot

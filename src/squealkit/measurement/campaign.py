@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import csv
 import io
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -18,7 +19,7 @@ import numpy as np
 from .._validation import InputError
 from .analysis import MeasurementResult
 
-__all__ = ["CampaignSummary", "summarize_campaign"]
+__all__ = ["CampaignSummary", "analyze_campaign", "summarize_campaign"]
 
 _COLUMNS = ("recording", "synthetic", "duration_s", "squeal", "n_events", "squeal_frequency_hz", "peak_dba",
             "rising_fraction")
@@ -82,24 +83,92 @@ def summarize_campaign(results: Sequence[MeasurementResult], names: Sequence[str
     names = list(names) if names is not None else [str(r.attrs.get("source")) for r in results]
     if len(names) != len(results):
         raise InputError(f"Got {len(names)} names for {len(results)} recordings.")
-    rows = []
+    return _summarize([_row(name, r) for name, r in zip(names, results, strict=True)], freq_tol)
+
+
+def _row(name: str, r: MeasurementResult) -> dict[str, Any]:
+    """What the campaign keeps of one analysis: the CSV row and the events' frequency and level."""
+    return {"recording": name, "synthetic": int(bool(r.attrs.get("synthetic", False))),
+            "duration_s": r.duration_s, "squeal": int(r.squeal), "n_events": len(r.events),
+            "squeal_frequency_hz": r.squeal_frequency_hz, "peak_dba": r.peak_dba,
+            "rising_fraction": r.rising_fraction,
+            "_events": [(e.frequency_hz, e.peak_dba) for e in r.events]}
+
+
+def _summarize(rows: Sequence[dict[str, Any]], freq_tol: float) -> CampaignSummary:
     groups: list[dict[str, Any]] = []
-    for name, r in zip(names, results, strict=True):
-        rows.append({"recording": name, "synthetic": int(bool(r.attrs.get("synthetic", False))),
-                     "duration_s": r.duration_s, "squeal": int(r.squeal), "n_events": len(r.events),
-                     "squeal_frequency_hz": r.squeal_frequency_hz, "peak_dba": r.peak_dba,
-                     "rising_fraction": r.rising_fraction})
-        for e in r.events:
-            g = next((g for g in groups if abs(g["frequency_hz"] - e.frequency_hz) <= freq_tol), None)
+    for row in rows:
+        for f_hz, peak in row["_events"]:
+            g = next((g for g in groups if abs(g["frequency_hz"] - f_hz) <= freq_tol), None)
             if g is None:
-                g = {"frequency_hz": e.frequency_hz, "n_events": 0, "recordings": set(), "max_peak_dba": -np.inf}
+                g = {"frequency_hz": f_hz, "n_events": 0, "recordings": set(), "max_peak_dba": -np.inf}
                 groups.append(g)
-            g["frequency_hz"] = (g["frequency_hz"] * g["n_events"] + e.frequency_hz) / (g["n_events"] + 1)
+            g["frequency_hz"] = (g["frequency_hz"] * g["n_events"] + f_hz) / (g["n_events"] + 1)
             g["n_events"] += 1
-            g["recordings"].add(name)
-            g["max_peak_dba"] = max(g["max_peak_dba"], e.peak_dba)
+            g["recordings"].add(row["recording"])
+            g["max_peak_dba"] = max(g["max_peak_dba"], peak)
     freqs = tuple({"frequency_hz": g["frequency_hz"], "n_events": g["n_events"],
                    "n_recordings": len(g["recordings"]), "max_peak_dba": g["max_peak_dba"]}
                   for g in sorted(groups, key=lambda g: -g["n_events"]))
-    occ = 100.0 * sum(r.squeal for r in results) / len(results)
-    return CampaignSummary(tuple(rows), occ, sum(len(r.events) for r in results), freqs)
+    occ = 100.0 * sum(r["squeal"] for r in rows) / len(rows)
+    clean = tuple({k: v for k, v in r.items() if k != "_events"} for r in rows)
+    return CampaignSummary(clean, occ, sum(r["n_events"] for r in rows), freqs)
+
+
+def _analyze_one(arg: tuple) -> dict[str, Any]:
+    """Read and analyse one recording (a task of a campaign); keep only its summary row."""
+    from .analysis import analyze_recording
+    from .readers import open_recording
+
+    path, name, open_kw, analysis_kw = arg
+    return _row(name, analyze_recording(open_recording(path, **open_kw), **analysis_kw))
+
+
+def analyze_campaign(
+    files: Sequence[str | Path],
+    *,
+    mic: str | int,
+    displacement: str | int,
+    rpm: float,
+    radius: float,
+    fs: float | None = None,
+    scale: Mapping[str, float] | None = None,
+    units: Mapping[str, str] | None = None,
+    freq_tol: float = 100.0,
+    client: Any = None,
+    progress: Callable[[int, int], None] | None = None,
+    **options: Any,
+) -> CampaignSummary:
+    """Analyse many recordings and summarise them as one campaign, here or on a Dask cluster.
+
+    Each recording is read and analysed by one task (on a worker when ``client`` is given;
+    the files must be readable there under the same paths), which returns only its
+    summary row and events, so a campaign of hundreds of long recordings never gathers
+    their analyses in one process. The rows keep the order of ``files``.
+
+    Parameters
+    ----------
+    files : sequence of path
+        Recordings (formats of :func:`~squealkit.measurement.open_recording`).
+    mic, displacement, rpm, radius, **options
+        As for :func:`~squealkit.measurement.analyze_recording` (``band``,
+        ``threshold_dba``, ``min_duration``, ...).
+    fs, scale, units
+        As for :func:`~squealkit.measurement.open_recording`.
+    freq_tol : float
+        Frequency grouping tolerance [Hz] of the summary.
+    client : distributed.Client, optional
+    progress : callable, optional
+        ``progress(done, total)`` in recordings.
+    """
+    from ..scale import map_tasks
+
+    if not files:
+        raise InputError("A campaign needs at least one recording.")
+    open_kw = {"fs": fs, "scale": dict(scale) if scale else None, "units": dict(units) if units else None}
+    analysis_kw = {"mic": mic, "displacement": displacement, "rpm": rpm, "radius": radius, **options}
+    items = [(str(Path(f).resolve()), str(f), open_kw, analysis_kw) for f in files]
+    rows: list[dict[str, Any] | None] = [None] * len(items)
+    for i, row in map_tasks(_analyze_one, items, client=client, progress=progress, name="squealkit-recording"):
+        rows[i] = row
+    return _summarize(rows, freq_tol)  # type: ignore[arg-type]

@@ -288,18 +288,26 @@ def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop):
 
 
 @nb.njit(cache=True, parallel=True)
-def quadratic_eigvals(M, C, K0, Kn, Kf, g, e, perms, signs, roots, chunk):
+def quadratic_eigvals(M, C, K0, Kn, Kf, g, e, perms, signs, roots, chunk, row):
     """All 2n eigenvalues of ``M s^2 + C s + K`` with ``K = K0 + g[i] Kn + e[i] Kf``.
 
     Fills ``roots`` (shape (len(g), 2n)); returns the number of cold (LAPACK) starts.
+    The points are rows of ``row`` points each; every row is solved in pieces of at most
+    ``chunk`` points from its start, each piece warm-starting point by point from a cold
+    first point. So a row's eigenvalues depend only on that row, not on which other rows
+    share the call: any split of a grid into blocks of rows gives identical numbers.
     """
     npts = g.shape[0]
-    nchunks = (npts + chunk - 1) // chunk
+    nrows = (npts + row - 1) // row
+    per_row = (row + chunk - 1) // chunk
+    nchunks = nrows * per_row
     counts = np.zeros(nchunks, dtype=np.int64)
     for c in nb.prange(nchunks):
-        start = c * chunk
-        stop = min(npts, start + chunk)
-        counts[c] = _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop)
+        r0 = (c // per_row) * row
+        start = r0 + (c % per_row) * chunk
+        stop = min(npts, r0 + row, start + chunk)
+        if start < stop:
+            counts[c] = _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop)
     return counts.sum()
 
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from functools import lru_cache
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import xarray as xr
@@ -19,7 +21,7 @@ from .. import __version__
 from .._validation import InputError, validate_array_finite
 from ..models import FrictionModel
 from ._kernels import derived_quantities, permutations_table, quadratic_eigvals, select_modes
-from .tracking import track_modes
+from .tracking import track_column, track_modes, track_rows
 
 __all__ = [
     "UNSTABLE_RTOL",
@@ -38,6 +40,8 @@ _KERNEL_MAX_DOF = 4
 _CHUNK = 4096
 #: Points per block between progress reports.
 _BLOCK = 1 << 18
+#: Grid points per tile of a streamed (zarr) or distributed sweep.
+_TILE_POINTS = 1 << 20
 
 
 @lru_cache(maxsize=8)
@@ -60,8 +64,8 @@ def _state_matrix_eigvals(M, C, K) -> NDArray[np.complex128]:
     return np.linalg.eigvals(A)
 
 
-def _all_roots(model: FrictionModel, g: NDArray, e: NDArray, damped: bool) -> NDArray[np.complex128]:
-    """All 2n eigenvalues for flat arrays of the contact factors g and e."""
+def _all_roots(model: FrictionModel, g: NDArray, e: NDArray, damped: bool, row: int) -> NDArray[np.complex128]:
+    """All 2n eigenvalues for flat arrays of the contact factors g and e (rows of ``row`` points)."""
     M = np.ascontiguousarray(model.mass_matrix(), dtype=float)
     C = np.ascontiguousarray(model.damping_matrix() if damped else np.zeros_like(M), dtype=float)
     K0, Kn, Kf = (np.ascontiguousarray(x, dtype=float) for x in model.stiffness_parts())
@@ -71,7 +75,7 @@ def _all_roots(model: FrictionModel, g: NDArray, e: NDArray, damped: bool) -> ND
         return _state_matrix_eigvals(M, C, K)
     roots = np.empty((g.shape[0], 2 * n), dtype=np.complex128)
     perms, signs = _perms(n)
-    quadratic_eigvals(M, C, K0, Kn, Kf, g, e, perms, signs, roots, _CHUNK)
+    quadratic_eigvals(M, C, K0, Kn, Kf, g, e, perms, signs, roots, _CHUNK, row)
     return roots
 
 
@@ -120,11 +124,14 @@ def eigenvalues(
     n = model.n_dof
     out = np.empty((g.shape[0], n), dtype=np.complex128)
     total = g.shape[0]
-    for start in range(0, max(total, 1), _BLOCK):
-        stop = min(total, start + _BLOCK)
+    # the last axis is a row: solved on its own, so a row's numbers never depend on the others
+    row = max(1, shape[-1]) if shape else 1
+    block = max(1, _BLOCK // row) * row
+    for start in range(0, max(total, 1), block):
+        stop = min(total, start + block)
         if stop <= start:
             break
-        roots = _all_roots(model, g[start:stop], e[start:stop], damped)
+        roots = _all_roots(model, g[start:stop], e[start:stop], damped, row)
         select_modes(roots, out[start:stop])
         if progress is not None:
             progress(stop, total)
@@ -140,6 +147,9 @@ def stability_map(
     track: bool = True,
     lock_in_rtol: float = 1e-3,
     progress: Callable[[int, int], None] | None = None,
+    store: str | Path | None = None,
+    client: Any = None,
+    tile_points: int = _TILE_POINTS,
 ) -> xr.Dataset:
     """Eigenvalues over a grid of friction ``mu`` and run-out incline ``theta`` (paper Fig. 2).
 
@@ -160,6 +170,16 @@ def stability_map(
         Relative frequency tolerance for the ``lock_in`` flag.
     progress : callable, optional
         ``progress(done, total)`` during the eigenvalue computation.
+    store : path, optional
+        Stream the result into this zarr store (``.zarr``) tile by tile (blocks of whole
+        ``mu`` rows, about ``tile_points`` points each) instead of building it in memory;
+        the store is opened lazily (dask-backed) and returned. For grids larger than memory.
+    client : distributed.Client, optional
+        Compute the tiles on this Dask cluster (needs ``store``, on a file system the
+        workers share). Numbers are identical to the local run: each ``mu`` row is solved
+        and tracked on its own, from a first column tracked up front.
+    tile_points : int
+        Grid points per tile when streaming.
 
     Returns
     -------
@@ -187,11 +207,46 @@ def stability_map(
     if np.any(np.abs(th_a) >= math.pi / 2):
         raise InputError("Parameter theta must lie strictly between -90 and 90 deg.")
     tan_t = np.tan(th_a)
-    lam = eigenvalues(model, mu_a[:, None], tan_t[None, :], damped=damped, progress=progress)
-    # lowest frequency first; tracking keeps the order of the first grid point
+    if store is None and client is not None:
+        raise InputError("A cluster run streams its result to zarr: pass store='....zarr' with client.")
+    if store is None:
+        lam = eigenvalues(model, mu_a[:, None], tan_t[None, :], damped=damped, progress=progress)
+        # lowest frequency first; tracking keeps the order of the first grid point
+        if track:
+            lam = track_modes(lam)
+        return _dataset(model, mu_a, th_a, lam, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol)
+    if Path(store).suffix.lower() != ".zarr":
+        raise InputError(f"Parameter store={str(store)!r} must be a zarr store ending in .zarr.")
+    if isinstance(tile_points, bool) or not isinstance(tile_points, int) or tile_points < 1:
+        raise InputError(f"Parameter tile_points={tile_points!r} must be an integer >= 1.")
+    return _stream_map(model, mu_a, th_a, damped=damped, track=track, lock_in_rtol=lock_in_rtol,
+                       progress=progress, store=store, client=client, tile_points=tile_points)
+
+
+def _tile(arg: tuple) -> xr.Dataset:
+    """One block of whole mu rows of a stability map (a task of a streamed sweep)."""
+    model, mu, theta, first, damped, track, lock_in_rtol = arg
+    lam = eigenvalues(model, mu[:, None], np.tan(theta)[None, :], damped=damped)
     if track:
-        lam = track_modes(lam)
-    return _dataset(model, mu_a, th_a, lam, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol)
+        lam = track_rows(lam, first)
+    return _dataset(model, mu, theta, lam, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol)
+
+
+def _stream_map(model, mu, theta, *, damped, track, lock_in_rtol, progress, store, client, tile_points):
+    from ..scale import lazy_template, stream_to_zarr
+
+    n_th = theta.size
+    rows = max(1, min(mu.size, -(-tile_points // n_th)))
+    # the first column, tracked along mu: each point is the cold first point of its row,
+    # so these are the same numbers the tiles compute for their column 0
+    first = eigenvalues(model, mu[:, None], np.tan(theta[:1])[None, :], damped=damped)[:, 0]
+    first = track_column(first) if track else first
+    sample = _tile((model, mu[:1], theta, first[:1], damped, track, lock_in_rtol))
+    template = lazy_template(sample, "mu", mu, rows)
+    pieces = [(_tile, (model, mu[a:a + rows], theta, first[a:a + rows], damped, track, lock_in_rtol),
+               a, min(mu.size, a + rows)) for a in range(0, mu.size, rows)]
+    return stream_to_zarr(store, template, "mu", pieces, client=client, progress=progress,
+                          weights=[(b - a) * n_th for *_, a, b in pieces], name="squealkit-stability")
 
 
 def _dataset(model, mu, theta, lam, *, damped, tracked, lock_in_rtol) -> xr.Dataset:
@@ -250,23 +305,28 @@ def stability_summary(ds: xr.Dataset) -> dict[str, object]:
         ([min, max] over unstable points of the frequency of the most unstable mode, or
         None), ``lock_in_fraction``, and the grid extent.
     """
-    sigma = ds["growth_rate"].values
-    omega = ds["omega"].values
-    any_unst = ds["any_unstable"].values
+    # reductions only, computed in one pass: a streamed (dask-backed) map is never loaded whole
+    any_u = ds["any_unstable"]
+    w_top = ds["omega"].where(ds["growth_rate"] == ds["growth_rate"].max("mode")).max("mode")
+    w_u = w_top.where(any_u)
+    r = xr.Dataset({
+        "unstable_fraction": any_u.mean(), "lock_in_fraction": ds["lock_in"].mean(),
+        "max_growth_rate": ds["growth_rate"].max(), "w_min": w_u.min(), "w_max": w_u.max(),
+        "any": any_u.any(),
+    }).compute()
     out: dict[str, object] = {
-        "grid_points": int(any_unst.size),
+        "grid_points": int(any_u.size),
         "mu_range": [float(ds.mu.min()), float(ds.mu.max())],
         "theta_deg_range": [float(ds.theta_deg.min()), float(ds.theta_deg.max())],
         "damped": bool(ds.attrs.get("damped", 0)),
-        "unstable_fraction": float(any_unst.mean()),
-        "lock_in_fraction": float(ds["lock_in"].values.mean()),
-        "max_growth_rate": float(sigma.max()),
+        "unstable_fraction": float(r["unstable_fraction"]),
+        "lock_in_fraction": float(r["lock_in_fraction"]),
+        "max_growth_rate": float(r["max_growth_rate"]),
         "unstable_omega_rad_s": None,
         "unstable_frequency_hz": None,
     }
-    if any_unst.any():
-        idx = np.argmax(sigma, axis=-1)
-        w = np.take_along_axis(omega, idx[..., None], axis=-1)[..., 0][any_unst]
-        out["unstable_omega_rad_s"] = [float(w.min()), float(w.max())]
-        out["unstable_frequency_hz"] = [float(w.min() / (2 * math.pi)), float(w.max() / (2 * math.pi))]
+    if bool(r["any"]):
+        lo, hi = float(r["w_min"]), float(r["w_max"])
+        out["unstable_omega_rad_s"] = [lo, hi]
+        out["unstable_frequency_hz"] = [lo / (2 * math.pi), hi / (2 * math.pi)]
     return out

@@ -91,27 +91,62 @@ def _order_locked(row):
                     row[m] = a
 
 
+@nb.njit(cache=True, nogil=True)
+def _track_column(col, perms):
+    """Track the first grid column (shape (n_mu, n)) along mu."""
+    nmu, n = col.shape
+    out = np.empty_like(col)
+    p1 = np.empty(n, dtype=np.complex128)
+    out[0] = col[0]
+    _order_locked(out[0])
+    for i in range(1, nmu):
+        _extrapolate(out[i - 1], out[i - 2] if i > 1 else out[i - 1], i > 1, p1)
+        _assign_step(p1, col[i], perms, out[i])
+        _order_locked(out[i])
+    return out
+
+
 @nb.njit(cache=True, parallel=True)
-def _track(lam, perms):
+def _track_rows(lam, first, perms):
+    """Track each row along theta from its tracked first point ``first[i]``, rows in parallel.
+
+    Ties at an exact coalescence are broken by the convention of _order_locked, the same
+    way in every row.
+    """
     nmu, nth, n = lam.shape
     out = np.empty_like(lam)
-    p1 = np.empty(n, dtype=np.complex128)
-    out[0, 0] = lam[0, 0]
-    _order_locked(out[0, 0])
-    # first column along mu
-    for i in range(1, nmu):
-        _extrapolate(out[i - 1, 0], out[i - 2, 0] if i > 1 else out[i - 1, 0], i > 1, p1)
-        _assign_step(p1, lam[i, 0], perms, out[i, 0])
-        _order_locked(out[i, 0])
-    # rows along theta, in parallel; ties at an exact coalescence are broken by the
-    # convention of _order_locked, the same way in every row
     for i in nb.prange(nmu):
         q = np.empty(n, dtype=np.complex128)
+        out[i, 0] = first[i]
         for j in range(1, nth):
             _extrapolate(out[i, j - 1], out[i, j - 2] if j > 1 else out[i, j - 1], j > 1, q)
             _assign_step(q, lam[i, j], perms, out[i, j])
             _order_locked(out[i, j])
     return out
+
+
+def _perms_for(n: int) -> NDArray[np.int64]:
+    if n <= _MAX_BRUTE_FORCE:
+        return np.array(list(itertools.permutations(range(n))), dtype=np.int64)
+    return np.empty((0, n), dtype=np.int64)
+
+
+def track_column(col: NDArray[np.complexfloating]) -> NDArray[np.complex128]:
+    """Track the first grid column, shape ``(n_mu, n_mode)``, along mu (see :func:`track_modes`)."""
+    col = np.ascontiguousarray(col, dtype=np.complex128)
+    return _track_column(col, _perms_for(col.shape[-1]))
+
+
+def track_rows(lam: NDArray[np.complexfloating], first: NDArray[np.complexfloating]) -> NDArray[np.complex128]:
+    """Track the rows of ``lam`` (shape ``(n_mu, n_theta, n_mode)``) along theta.
+
+    ``first`` (shape ``(n_mu, n_mode)``) is the tracked first column, from
+    :func:`track_column`; it must hold the same eigenvalues as ``lam[:, 0]``. Rows are
+    independent, so a grid may be tracked in blocks of rows with identical results.
+    """
+    lam = np.ascontiguousarray(lam, dtype=np.complex128)
+    first = np.ascontiguousarray(first, dtype=np.complex128)
+    return _track_rows(lam, first, _perms_for(lam.shape[-1]))
 
 
 def track_modes(lam: NDArray[np.complexfloating]) -> NDArray[np.complex128]:
@@ -128,12 +163,7 @@ def track_modes(lam: NDArray[np.complexfloating]) -> NDArray[np.complex128]:
         Tracked eigenvalues; at ``[0, 0]`` the order of the input is kept.
     """
     lam = np.ascontiguousarray(lam, dtype=np.complex128)  # a no-op for kernel output
-    n = lam.shape[-1]
-    if n <= _MAX_BRUTE_FORCE:
-        perms = np.array(list(itertools.permutations(range(n))), dtype=np.int64)
-    else:
-        perms = np.empty((0, n), dtype=np.int64)
-    return _track(lam, perms)
+    return track_rows(lam, track_column(lam[:, 0]))
 
 
 def lock_in(

@@ -11,6 +11,8 @@ import itertools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import xarray as xr
@@ -64,7 +66,7 @@ def _step_size(runs: Sequence[_Run], fs: float, dt: float | None) -> tuple[float
     return 1.0 / (fs * stride), stride
 
 
-def _initial_state(run: _Run, x0, v0, perturbation: float, rng, x_start: float) -> tuple[np.ndarray, np.ndarray]:
+def _initial_state(run: _Run, x0, v0, perturbation: float, noise, x_start: float) -> tuple[np.ndarray, np.ndarray]:
     n = run.model.n_dof
     q0, t0 = (float(a[0]) for a in run.profile.evaluate(np.array([x_start])))
     if x0 is None:
@@ -78,10 +80,20 @@ def _initial_state(run: _Run, x0, v0, perturbation: float, rng, x_start: float) 
     if v.shape != (n,) or not np.all(np.isfinite(v)):
         raise InputError(f"Parameter v0 must be {n} finite velocities [m/s].")
     if perturbation:
-        if not isinstance(rng, np.random.Generator):
-            raise InputError("A perturbation needs rng, a numpy.random.Generator (numpy.random.default_rng(seed)).")
-        x = x + perturbation * rng.standard_normal(n)
+        x = x + perturbation * noise
     return x, v
+
+
+def _perturbation_noise(perturbation: float, rng, n_runs: int, n: int) -> np.ndarray:
+    """Standard-normal perturbation per run, shape (n_runs, n): drawn from ``rng`` run after
+    run, or given (an array: the rows a distributed batch's piece takes from the whole)."""
+    if not perturbation:
+        return np.zeros((n_runs, n))
+    if isinstance(rng, np.ndarray):
+        return rng
+    if not isinstance(rng, np.random.Generator):
+        raise InputError("A perturbation needs rng, a numpy.random.Generator (numpy.random.default_rng(seed)).")
+    return rng.standard_normal((n_runs, n))
 
 
 def _integrate(
@@ -149,8 +161,9 @@ def _integrate(
 
     X = np.empty((R, n))
     V = np.empty((R, n))
+    noise = _perturbation_noise(perturbation, rng, R, n)
     for i, run in enumerate(runs):
-        X[i], V[i] = _initial_state(run, x0, v0, perturbation, rng, x_start)
+        X[i], V[i] = _initial_state(run, x0, v0, perturbation, noise[i], x_start)
     out_x = np.full((R, n_out, n), np.nan)
     out_v = np.full((R, n_out, n), np.nan)
     out_a = np.full((R, n_out, n), np.nan)
@@ -383,6 +396,9 @@ def simulate_batch(
     dt: float | None = None,
     limit: float = 1.0,
     progress: Progress | None = None,
+    store: str | Path | None = None,
+    client: Any = None,
+    runs_per_task: int = 16,
 ) -> xr.Dataset:
     """Many runs at once, in parallel over runs (numba ``prange``, all cores).
 
@@ -391,6 +407,12 @@ def simulate_batch(
     is the smallest any run needs. Returns the variables of :func:`simulate` with a leading
     ``run`` dimension and per-run ``status`` (``"completed"``/``"diverged"``), ``mu`` and
     ``speed``; samples after a divergence are NaN.
+
+    With ``store`` (a ``.zarr`` path) the runs are computed ``runs_per_task`` at a time and
+    written piece by piece into the store, which is returned opened lazily; with
+    ``client`` (a ``distributed.Client``) the pieces run on that Dask cluster. The step
+    and the perturbations are fixed for the whole batch up front, so the numbers are
+    identical to the in-memory run.
 
     Examples
     --------
@@ -404,8 +426,44 @@ def simulate_batch(
     profs = list(profiles) if isinstance(profiles, Sequence) else [profiles]
     speeds = np.atleast_1d(np.asarray(speed, dtype=float)).tolist()
     runs = _as_runs(models_l, mus, profs, speeds)
+    kw = dict(duration=duration, fs=fs, contact=as_contact(contact), x0=x0, perturbation=perturbation, x_start=x_start,
+              dt=dt, limit=limit)
+    if store is None and client is not None:
+        raise InputError("A cluster run streams its result to zarr: pass store='....zarr' with client.")
+    if store is None:
+        return _batch_dataset(runs, rng=rng, progress=progress, **kw)
+    if Path(store).suffix.lower() != ".zarr":
+        raise InputError(f"Parameter store={str(store)!r} must be a zarr store ending in .zarr.")
+    if isinstance(runs_per_task, bool) or not isinstance(runs_per_task, int) or runs_per_task < 1:
+        raise InputError(f"Parameter runs_per_task={runs_per_task!r} must be an integer >= 1.")
+    n = runs[0].model.n_dof
+    if any(r.model.n_dof != n for r in runs):
+        raise InputError("All models of a batch must have the same number of degrees of freedom.")
+    # one step and one set of perturbations for the whole batch, whatever the pieces
+    kw["dt"] = _step_size(runs, validate_fs(fs), dt)[0]
+    noise = _perturbation_noise(validate_positive("perturbation", perturbation, allow_zero=True), rng, len(runs), n)
+    from ..scale import lazy_template, stream_to_zarr
+
+    R = len(runs)
+    sample = _batch_piece((runs[:1], 0, noise[:1], kw))
+    pieces = [(_batch_piece, (runs[a:a + runs_per_task], a, noise[a:a + runs_per_task], kw), a,
+               min(R, a + runs_per_task)) for a in range(0, R, runs_per_task)]
+    template = lazy_template(sample, "run", np.arange(R), runs_per_task)
+    return stream_to_zarr(store, template, "run", pieces, client=client, progress=progress,
+                          name="squealkit-transient")
+
+
+def _batch_piece(arg: tuple) -> xr.Dataset:
+    """Runs ``first, first + 1, ...`` of a streamed batch (a task)."""
+    runs, first, noise, kw = arg
+    ds = _batch_dataset(runs, rng=noise, progress=None, **kw)
+    return ds.assign_coords(run=np.arange(first, first + len(runs)))
+
+
+def _batch_dataset(runs: Sequence[_Run], *, duration, fs, contact, x0, perturbation, rng, x_start, dt, limit,
+                   progress) -> xr.Dataset:
     raw = _integrate(
-        runs, duration=duration, fs=fs, contact=as_contact(contact), x0=x0, v0=None, perturbation=perturbation,
+        runs, duration=duration, fs=fs, contact=contact, x0=x0, v0=None, perturbation=perturbation,
         rng=rng, x_start=x_start, dt=dt, limit=limit, progress=progress,
     )
     n_out = raw["time"].size
