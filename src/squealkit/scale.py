@@ -69,6 +69,8 @@ def get_client(scheduler: str, *, n_workers: int | None = None):
                                            dashboard_address=None)
         client = distributed.Client(cluster)
         return client
+    if scheduler.endswith(".json") and not os.path.isfile(scheduler):
+        raise InputError(f"Scheduler file {scheduler!r} does not exist (dask scheduler --scheduler-file writes it).")
     try:
         if scheduler.endswith(".json"):
             return distributed.Client(scheduler_file=scheduler, timeout="10s")

@@ -5,8 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
+import xarray as xr
 
-from .._validation import InputError
+from .._validation import InputError, parse_range
 from ._options import (
     build_model_from_options,
     check_output_suffix,
@@ -14,12 +15,14 @@ from ._options import (
     model_options,
     output_options,
     progress_callback,
+    scheduler_option,
 )
 
 
 @click.command()
 @model_options
-@click.option("--mu", type=float, default=0.4, show_default=True, help="Friction coefficient.")
+@click.option("--mu", "mu_spec", default="0.4", show_default=True, metavar="MU|START:STOP:N",
+              help="Friction coefficient; START:STOP:N runs a batch of N runs (needs --out).")
 @click.option(
     "--sro", type=click.Choice(["sine", "file", "random", "none"]), default="sine", show_default=True,
     help="Disc surface run-out profile.",
@@ -38,9 +41,10 @@ from ._options import (
 @click.option("--speed", type=float, default=0.02, show_default=True, help="Sliding speed v [m/s].")
 @click.option("--duration", type=float, default=0.15, show_default=True, help="Simulated time [s].")
 @click.option("--fs", type=float, default=40_000.0, show_default=True, help="Output sample rate [Hz].")
+@scheduler_option
 @output_options()
-def simulate(preset, config, sets, mu, sro, sro_amplitude, sro_wavelength, sro_file, seed, perturbation, contact,
-             speed, duration, fs, as_json, out_path, plot_path) -> None:
+def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, sro_file, seed, perturbation, contact,
+             speed, duration, fs, scheduler, as_json, out_path, plot_path) -> None:
     """Simulate the time response of a model driven by disc surface run-out.
 
     \b
@@ -49,6 +53,12 @@ def simulate(preset, config, sets, mu, sro, sro_amplitude, sro_wavelength, sro_f
           --sro-wavelength 1e-3 --speed 0.02 --duration 0.15 --json --plot fig4.png
     Smooth disc (paper Fig. 3) with a small seeded start perturbation:
       squealkit simulate --sro none --perturbation 1e-9 --plot fig3.png
+    A batch of 64 runs over mu, written run block by run block to zarr, on a cluster:
+      squealkit simulate --mu 0.2:0.8:64 --out batch.zarr --scheduler local --json
+
+    \b
+    Batch --json keys: mu, status, max_growth_rate [1/s] (largest frozen-time
+    sigma(t)), peak_acceleration_m_s2 (per DOF), lists with one entry per run.
     """
     import numpy as np
 
@@ -75,6 +85,13 @@ def simulate(preset, config, sets, mu, sro, sro_amplitude, sro_wavelength, sro_f
     else:
         profile = Smooth()
 
+    mu_all = parse_range("--mu", mu_spec)
+    if mu_all.size > 1 or scheduler is not None:
+        _batch(model, mu_all, profile, speed=speed, duration=duration, fs=fs, contact=contact,
+               perturbation=perturbation, rng=rng, scheduler=scheduler, as_json=as_json, out_path=out_path,
+               plot_path=plot_path)
+        return
+    mu = float(mu_all[0])
     with progress_callback("simulating", enabled=not as_json and duration * 1e6 > 2e5) as progress:
         ds = run_simulation(
             model, mu=mu, profile=profile, speed=speed, duration=duration, fs=fs, contact=contact,
@@ -102,3 +119,40 @@ def simulate(preset, config, sets, mu, sro, sro_amplitude, sro_wavelength, sro_f
         click.echo(f"  {st['stage']:<8} {st['t_start']:.4f}-{st['t_end']:.4f} s: rate {st['rate_per_s']:+.1f} 1/s "
                    f"(mean sigma {st['sigma_mean_per_s']:+.1f} 1/s)")
 
+
+
+def _batch(model, mu, profile, *, scheduler, as_json, out_path, plot_path, **kw) -> None:
+    """Runs over a grid of mu, streamed to the --out store (on a Dask cluster with --scheduler)."""
+    from ..scale import cluster_client
+    from ..transient import simulate_batch
+
+    if out_path is None:
+        raise InputError("A batch (--mu START:STOP:N or --scheduler) needs --out FILE.zarr (or .nc without "
+                         "--scheduler).")
+    if plot_path is not None:
+        raise InputError("--plot draws one run; leave it out for a batch.")
+    stream = out_path.suffix.lower() == ".zarr"
+    if scheduler is not None and not stream:
+        raise InputError("--scheduler streams the batch to zarr: give --out FILE.zarr.")
+    with cluster_client(scheduler) as client, progress_callback("runs", enabled=not as_json) as progress:
+        ds = simulate_batch(model, mu=mu, profiles=profile, progress=progress, client=client,
+                            store=out_path if stream else None, **kw)
+        dofs = list(model.dof_names)
+        red = {"max_growth_rate": ds["growth_rate"].max("time")}
+        red.update({d: abs(ds[f"{d}_ddot"]).max("time") for d in dofs})
+        r = xr.Dataset(red).compute()
+        status = [str(x) for x in ds["status"].values]
+    if not stream:
+        from ..io import save_dataset
+
+        save_dataset(ds, out_path)
+    summary = {"mu": mu.tolist(), "status": status, "max_growth_rate": r["max_growth_rate"].values.tolist(),
+               "peak_acceleration_m_s2": {d: r[d].values.tolist() for d in dofs}}
+    if as_json:
+        emit_json(summary)
+        return
+    click.echo(f"{len(status)} runs, {status.count('diverged')} diverged; wrote {out_path}")
+    click.echo("      mu  status     max sigma [1/s]  " + "  ".join(f"peak |{d}_ddot| [m/s^2]" for d in dofs))
+    for i, m in enumerate(summary["mu"]):
+        accel = "  ".join(f"{summary['peak_acceleration_m_s2'][d][i]:>20.4g}" for d in dofs)
+        click.echo(f"  {m:6.3f}  {status[i]:<9}  {summary['max_growth_rate'][i]:>15.4g}  {accel}")
