@@ -237,6 +237,9 @@ def _stream_map(model, mu, theta, *, damped, track, lock_in_rtol, progress, stor
 
     n_th = theta.size
     rows = max(1, min(mu.size, -(-tile_points // n_th)))
+    if client is not None:  # enough tiles to keep every worker thread busy
+        threads = max(1, sum(client.nthreads().values()))
+        rows = max(1, min(rows, -(-mu.size // (4 * threads))))
     # the first column, tracked along mu: each point is the cold first point of its row,
     # so these are the same numbers the tiles compute for their column 0
     first = eigenvalues(model, mu[:, None], np.tan(theta[:1])[None, :], damped=damped)[:, 0]
