@@ -7,9 +7,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from click.testing import CliRunner
 from scipy import stats
 
 from squealkit._validation import InputError
+from squealkit.cli.main import cli
 from squealkit.io import load_dataset, save_dataset
 from squealkit.models import Hoffmann2002, PinOnDisc3DOF, get_preset, load_model
 from squealkit.stability import critical_friction, critical_friction_sensitivity
@@ -268,3 +270,66 @@ def test_plots(hoff):
     assert len(uncertainty_plot(no_sens).axes) == 1
     with pytest.raises(InputError, match="no Sobol' indices"):
         sensitivity_plot(no_sens)
+
+
+@pytest.fixture()
+def run():
+    runner = CliRunner()
+    return lambda *args: runner.invoke(cli, list(args))
+
+
+@pytest.fixture()
+def spread(tmp_path):
+    f = tmp_path / "spread.toml"
+    f.write_text('[uncertain]\nk3 = {dist = "normal", mean = 8e5, std = 8e4}\n'
+                 'm = {dist = "uniform", lower = 0.5, upper = 2.0}\n')
+    return f
+
+
+def test_cli_json(run, spread, hoff):
+    r = run("montecarlo", "--preset", "hoffmann2002", "--uncertain", str(spread), "--samples", "2048", "--seed", "7",
+            "--mu", "0.18:0.34:17", "--json")
+    assert r.exit_code == 0, r.output
+    out = json.loads(r.stdout)
+    assert len(out["mu"]) == len(out["probability_unstable"]) == len(out["ci_lower"]) == len(out["ci_upper"]) == 17
+    # the CLI calls the library: the same numbers as the Python run with this seed
+    assert out["probability_unstable"] == hoff.probability_unstable.values.tolist()
+    assert out["samples"] == 2048 and out["seed"] == 7 and out["ci_method"] == "clopper-pearson"
+    assert set(out["sensitivity"]) == {"k3", "m"}
+    assert set(out["sensitivity"]["k3"]) >= {"first_order", "total", "first_order_ci", "total_ci", "spearman"}
+    assert out["nominal_mu_critical"] == pytest.approx(Hoffmann2002().mu_critical_closed_form(), abs=1e-9)
+
+
+def test_cli_text_and_files(run, tmp_path):
+    nc, png = tmp_path / "mc.nc", tmp_path / "mc.png"
+    r = run("montecarlo", "--config", str(EXAMPLE), "--samples", "64", "--mu", "0:1:41", "--out", str(nc),
+            "--plot", str(png))
+    assert r.exit_code == 0, r.output
+    assert "P(unstable)" in r.stdout and "Sobol'" in r.stdout and "alpha_deg" in r.stdout
+    assert "(21 of 41 mu points" in r.stdout
+    assert load_dataset(nc).sizes["mu"] == 41
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    r = run("montecarlo", "--config", str(EXAMPLE), "--samples", "16", "--mu", "0.3:0.6:4", "--no-sensitivity",
+            "--theta", "2")
+    assert r.exit_code == 0, r.output
+    assert "Sobol'" not in r.stdout and "theta = 2 deg" in r.stdout
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["montecarlo"], "montecarlo needs an [uncertain] table"),
+        (["montecarlo", "--config", "examples/myrig.toml"], "myrig.toml has no [uncertain] table"),
+        (["montecarlo", "--config", str(EXAMPLE), "--mu", "0.5:0.2:4"], "strictly increasing"),
+        (["montecarlo", "--config", str(EXAMPLE), "--samples", "1"], "samples=1 must be an integer >= 2"),
+        (["montecarlo", "--config", str(EXAMPLE), "--theta", "95"], "between -90 and 90"),
+        (["montecarlo", "--config", str(EXAMPLE), "--out", "x.csv"], "must end in .nc or .zarr"),
+        (["montecarlo", "--config", str(EXAMPLE), "--set", "k9=1"], "Unknown parameter 'k9'"),
+    ],
+)
+def test_cli_bad_input_is_one_line_exit_2(run, args, message, monkeypatch):
+    monkeypatch.chdir(Path(__file__).parents[1])
+    r = run(*args)
+    assert r.exit_code == 2, r.output
+    assert message in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
