@@ -26,6 +26,7 @@ COMMANDS: dict[str, str] = {
     "tolerance": "squealkit.cli.tolerance:tolerance",
     "simulate": "squealkit.cli.simulate:simulate",
     "analyze": "squealkit.cli.analyze:analyze",
+    "montecarlo": "squealkit.cli.montecarlo:montecarlo",
     "synth": "squealkit.cli.synth:synth",
 }
 

@@ -9,16 +9,20 @@ from .critical import (
     runout_tolerance,
 )
 from .eigen import UNSTABLE_RTOL, eigenvalues, stability_map, stability_summary, unstable_threshold
+from .ensemble import ModelEnsemble, ensemble_onset, ensemble_unstable
 from .tracking import lock_in, track_modes
 
 __all__ = [
     "UNSTABLE_RTOL",
     "CriticalFriction",
+    "ModelEnsemble",
     "RunoutTolerance",
     "critical_friction",
     "critical_friction_curve",
     "critical_friction_sensitivity",
     "eigenvalues",
+    "ensemble_onset",
+    "ensemble_unstable",
     "lock_in",
     "runout_tolerance",
     "stability_map",

@@ -383,3 +383,18 @@ def derived_quantities(lam, unstable_rtol, lock_rtol):
                         lk = True
         locked[i] = lk
     return sigma, omega, zeta, unstable, smax, any_u, locked
+
+
+@nb.njit(cache=True, parallel=True)
+def quadratic_eigvals_stack(M, C, K0, Kn, Kf, g, e, perms, signs, roots):
+    """All 2n eigenvalues for a stack of S models, each over its own row of P points.
+
+    ``M``, ``C``, ``K0``, ``Kn``, ``Kf`` have shape (S, n, n); ``g`` and ``e`` (S, P);
+    ``roots`` (S, P, 2n) is filled. Each model's row is solved on its own, from a cold first
+    point and then warm-started point by point, so a model's eigenvalues depend only on it
+    and its row, never on the rest of the stack.
+    """
+    nmod = g.shape[0]
+    npts = g.shape[1]
+    for s in nb.prange(nmod):
+        _solve_chunk(M[s], C[s], K0[s], Kn[s], Kf[s], g[s], e[s], perms, signs, roots[s], 0, npts)
