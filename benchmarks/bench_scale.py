@@ -78,8 +78,11 @@ def montecarlo(samples: int, workers: list[int]) -> dict[int, float] | None:
     from squealkit.scale import cluster_client
 
     model = get_preset("lv2013")
+    # the scatter of examples/uncertain_rig.toml
     unc = parse_uncertain({"k3": {"dist": "normal", "mean": 9.452e8, "std": 4.7e7},
-                           "kc": {"dist": "normal", "mean": 8.0e7, "std": 8.0e6}}, model)
+                           "k1": {"dist": "normal", "mean": 8.545e6, "std": 4.3e5},
+                           "kc": {"dist": "lognormal", "mean": 4.632e7, "std": 4.6e6},
+                           "alpha_deg": {"dist": "uniform", "lower": 1.5, "upper": 2.5}}, model)
     mu = np.linspace(0.2, 0.7, 51)
     kw = dict(samples=samples, seed=1, sensitivity=False)
     squeal_propensity(model, unc, mu, samples=64, seed=1, sensitivity=False)

@@ -159,6 +159,19 @@ def test_campaign_on_cluster_matches_local(cluster, tmp_path):
     assert [r["squeal"] for r in remote.rows] == [1, 1, 0, 1]
 
 
+def test_montecarlo_on_cluster_is_identical_to_local(cluster):
+    from squealkit.uncertainty import parse_uncertain, squeal_propensity
+
+    model = get_preset("lv2013")
+    unc = parse_uncertain({"k3": {"dist": "normal", "mean": 9.452e8, "std": 4.7e7},
+                           "alpha_deg": {"dist": "uniform", "lower": 1.5, "upper": 2.5}}, model)
+    kw = dict(samples=256, seed=3, batch_size=40)
+    mu = np.linspace(0.3, 0.6, 16)
+    local = squeal_propensity(model, unc, mu, **kw)
+    remote = squeal_propensity(model, unc, mu, client=cluster.client, **kw)
+    xr.testing.assert_identical(local, remote)
+
+
 def test_cli_stability_with_scheduler_matches_local(cluster, tmp_path):
     runner = CliRunner()
     args = ["stability", "--mu", "0:0.8:41", "--theta", "-8:8:21", "--json"]
