@@ -24,7 +24,7 @@ from scipy import signal
 from .. import __version__
 from .._validation import InputError, validate_finite, validate_fs, validate_positive
 from .events import SquealEvent, link_components, tonal_components
-from .filters import lowpass
+from .filters import lowpass, lowpass_decimated
 from .readers import DEFAULT_BLOCK, RecordingSource, open_recording
 from .runout import revolution_frequency, surface_speed
 from .spectral import P_REF, a_weighting_db, refine_peak
@@ -363,10 +363,12 @@ def analyze_recording(
                 mic_spec_sum[lo:hi] += pb[loud].sum(axis=0)
             # band mean square per frame (Hann frames at 50 % overlap sum to the signal energy)
             e_tot[f0:f1] = pb.sum(axis=1)
-        # run-out: low-pass at full rate, then work on every D-th sample (fs / D >= 4 lowpass_freq)
-        sro_full = lowpass(q, s.lowpass_freq, fs_)
+        # run-out on every dec-th sample (fs / dec >= 4 lowpass_freq): the zero-phase Butterworth
+        # low-pass at lowpass_freq (paper Fig. 12), run at fs / dec after linear-phase anti-alias
+        # FIRs that pass up to 1.5 lowpass_freq and remove, 80 dB down, whatever would fold below
+        # it; so the corner keeps its meaning (lowpass_decimated; tests compare the full rate)
         o = (-w0) % dec
-        sro = sro_full[o::dec]
+        sro = lowpass_decimated(q[o:], s.lowpass_freq, fs_, dec)
         g0 = w0 + o  # global index of sro[0]
         macro = lowpass(sro, f_macro, fs_d, order=2)
         micro = sro - macro
