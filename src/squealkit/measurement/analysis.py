@@ -194,28 +194,36 @@ class _DatasetSource:
             yield start, out
 
 
-def _windows(src, names, core: int, margin: int) -> Iterator[tuple[int, int, int, dict[str, NDArray]]]:
-    """Yield ``(core_start, core_stop, window_start, {name: samples})`` with margins both sides."""
+def _windows(
+    src, names, core: int, margin: int, block: int
+) -> Iterator[tuple[int, int, int, dict[str, NDArray]]]:
+    """Yield ``(core_start, core_stop, window_start, {name: samples})`` with margins both sides.
+
+    Each window is a view of one block where it fits in one, else one copy of its samples.
+    """
     total = src.n_samples
-    buf = {n: np.empty(0) for n in names}
-    buf_start = 0
+    pieces: list[tuple[int, dict[str, NDArray]]] = []  # blocks still needed, in order
+    buf_end = 0
     next_core = 0
-    for _, block in src.iter_blocks(names, block=max(core, DEFAULT_BLOCK)):
-        for n in names:
-            buf[n] = np.concatenate([buf[n], block[n]])
-        buf_end = buf_start + len(buf[names[0]])
+    for start, blk in src.iter_blocks(names, block=block):
+        pieces.append((start, blk))
+        buf_end = start + len(blk[names[0]])
         while next_core < total and buf_end >= min(total, next_core + core + margin):
             w0 = max(0, next_core - margin)
             w1 = min(buf_end, next_core + core + margin)
             c1 = min(total, next_core + core)
-            yield next_core, c1, w0, {n: buf[n][w0 - buf_start:w1 - buf_start] for n in names}
+            parts = [(s0, b) for s0, b in pieces if s0 < w1 and s0 + len(b[names[0]]) > w0]
+            if len(parts) == 1:
+                s0, b = parts[0]
+                window = {n: b[n][w0 - s0:w1 - s0] for n in names}
+            else:
+                window = {n: np.concatenate([b[n][max(0, w0 - s0):w1 - s0] for s0, b in parts]) for n in names}
+            yield next_core, c1, w0, window
             next_core = c1
-            drop = max(0, next_core - margin) - buf_start
-            if drop > 0:
-                buf = {n: v[drop:] for n, v in buf.items()}
-                buf_start += drop
+            keep = max(0, next_core - margin)
+            pieces = [(s0, b) for s0, b in pieces if s0 + len(b[names[0]]) > keep]
     if next_core < total:
-        raise InputError(f"Recording ended after {buf_start + len(buf[names[0]])} of {total} samples.")
+        raise InputError(f"Recording ended after {buf_end} of {total} samples.")
 
 
 def analyze_recording(
@@ -339,7 +347,9 @@ def analyze_recording(
     ang_ecnt = np.zeros(nb)
     max_tan = 0.0
 
-    for c0, c1, w0, data in _windows(src, [mic_n, disp_n], core, margin):
+    # an in-memory recording is one block (windows are views of it); files are read block by block
+    block = total if isinstance(src, _DatasetSource) else max(core, DEFAULT_BLOCK)
+    for c0, c1, w0, data in _windows(src, [mic_n, disp_n], core, margin, block):
         p, q = data[mic_n], data[disp_n]
         f0 = -(-c0 // hop)
         f1 = min(n_frames, (c1 - 1) // hop + 1)
