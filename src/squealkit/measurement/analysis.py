@@ -337,8 +337,9 @@ def analyze_recording(
     comp_level: list[NDArray] = [np.empty(0)]
     comp_pow: list[NDArray] = [np.empty(0)]
     mic_spec_sum = np.zeros(freq.size)  # summed over loud frames, band bins only
-    rev_max: dict[str, dict[int, float]] = {k: {} for k in ("sro", "macro", "micro")}
-    rev_min: dict[str, dict[int, float]] = {k: {} for k in ("sro", "macro", "micro")}
+    n_rev = int((total - 1) * f_rev / fs_) + 1
+    rev_max = np.full((3, n_rev), -np.inf)  # sro, macro, micro per revolution
+    rev_min = np.full((3, n_rev), np.inf)
     nb = s.n_angle_bins
     ang_q = np.zeros(nb)
     ang_macro = np.zeros(nb)
@@ -402,15 +403,13 @@ def analyze_recording(
         ci = slice(-(-(c0 - g0) // dec), -(-(c1 - g0) // dec))
         idx = g0 + np.arange(ci.start, ci.stop) * dec
         turns = idx * (f_rev / fs_)
-        rev = np.floor(turns).astype(np.int64)
+        rev = turns.astype(np.int64)  # floor (turns >= 0)
         starts = np.concatenate([[0], np.flatnonzero(np.diff(rev)) + 1])
-        for key, sig in (("sro", sro[ci]), ("macro", macro[ci]), ("micro", micro[ci])):
-            mx = np.maximum.reduceat(sig, starts)
-            mn = np.minimum.reduceat(sig, starts)
-            for r, a_, b_ in zip(rev[starts].tolist(), mx.tolist(), mn.tolist(), strict=True):
-                rev_max[key][r] = max(rev_max[key].get(r, -np.inf), a_)
-                rev_min[key][r] = min(rev_min[key].get(r, np.inf), b_)
-        abin = ((turns % 1.0) * nb).astype(np.int64) % nb
+        r = rev[starts]  # distinct revolutions of this core; the next core may continue the last one
+        for j, sig in enumerate((sro[ci], macro[ci], micro[ci])):
+            rev_max[j, r] = np.maximum(rev_max[j, r], np.maximum.reduceat(sig, starts))
+            rev_min[j, r] = np.minimum(rev_min[j, r], np.minimum.reduceat(sig, starts))
+        abin = ((turns - rev) * nb).astype(np.int64) % nb
         ang_q += np.bincount(abin, sro[ci], nb)
         ang_macro += np.bincount(abin, macro[ci], nb)
         ang_cnt += np.bincount(abin, minlength=nb)
@@ -435,9 +434,10 @@ def analyze_recording(
     corr: float | None = None
     peak: float | None = None
     if events:
-        in_ev = np.zeros(n_frames, bool)
-        for fr in ev_frames:
-            in_ev[np.arange(fr.min(), fr.max() + 1)] = True
+        cover = np.zeros(n_frames + 1, np.int64)  # +1 at each event's first frame, -1 after its last
+        np.add.at(cover, np.array([fr[0] for fr in ev_frames]), 1)
+        np.add.at(cover, np.array([fr[-1] for fr in ev_frames]) + 1, -1)
+        in_ev = np.cumsum(cover[:-1]) > 0
         tot = float(e_tot[in_ev].sum())
         rising = float(e_rise[in_ev].sum() / tot) if tot > 0 else None
         peak = max(ev.peak_dba for ev in events)
@@ -472,11 +472,11 @@ def analyze_recording(
         },
         coords={"time": ("time", t_frames, {"units": "s", "long_name": "frame centre"})},
     )
-    revs = sorted(rev_max["sro"])
+    revs = np.flatnonzero(np.isfinite(rev_max[0]))
     revolutions = xr.Dataset(
-        {f"{k}_p2p": ("revolution", np.array([rev_max[k][r] - rev_min[k][r] for r in revs]), {"units": "m"})
-         for k in ("sro", "macro", "micro")},
-        coords={"revolution": ("revolution", np.array(revs, dtype=np.int64))},
+        {f"{k}_p2p": ("revolution", rev_max[j, revs] - rev_min[j, revs], {"units": "m"})
+         for j, k in enumerate(("sro", "macro", "micro"))},
+        coords={"revolution": ("revolution", revs.astype(np.int64))},
     )
     angle = (np.arange(nb) + 0.5) * 2 * math.pi / nb
     with np.errstate(divide="ignore", invalid="ignore"):
