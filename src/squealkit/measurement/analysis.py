@@ -312,6 +312,7 @@ def analyze_recording(
     w_a = 10 ** (a_weighting_db(freq[lo:hi]) / 10)
     win = signal.windows.hann(s.nperseg, sym=False)
     win32 = win.astype(np.float32)
+    w_a32 = w_a.astype(np.float32)
     pscale = 2.0 / (s.nperseg * float(np.sum(win**2)))
     thr_power = P_REF**2 * 10 ** (s.threshold_dba / 10)
     core = max(hop, round(s.chunk_s * fs_ / hop) * hop)
@@ -358,10 +359,13 @@ def analyze_recording(
         if f1 > f0:
             seg = p[f0 * hop - w0: (f1 - 1) * hop + n - w0]
             frames_ = np.lib.stride_tricks.sliding_window_view(seg.astype(np.float32), n)[::hop]
-            spec = sp_fft.rfft(frames_ * win32, axis=-1, workers=-1)[:, lo:hi]  # single precision: levels
-            pb = (spec.real.astype(np.float64)**2 + spec.imag.astype(np.float64)**2) * pscale  # [Pa^2] per bin
-            pa = pb * w_a
-            lev = pa.sum(axis=1)
+            # single precision (7 digits) for the framed spectra: levels, peaks and their refinement
+            spec = sp_fft.rfft(frames_ * win32, axis=-1, workers=-1)[:, lo:hi]
+            pb = spec.real**2
+            pb += spec.imag**2
+            pb *= np.float32(pscale)  # [Pa^2] per bin
+            pa = pb * w_a32
+            lev = pa.sum(axis=1, dtype=np.float64)
             level[f0:f1] = 10 * np.log10(np.maximum(lev, 1e-300) / P_REF**2)
             ridge_f[f0:f1] = (_refine_rows(pb, np.argmax(pa, axis=1)) + lo) * fs_ / n
             loud = np.flatnonzero(lev >= thr_power)  # a component cannot exceed its frame's level
@@ -371,9 +375,9 @@ def analyze_recording(
                 comp_freq.append(ff)
                 comp_level.append(fl)
                 comp_pow.append(P_REF**2 * 10 ** (fl / 10))
-                mic_spec_sum[lo:hi] += pb[loud].sum(axis=0)
+                mic_spec_sum[lo:hi] += pb[loud].sum(axis=0, dtype=np.float64)
             # band mean square per frame (Hann frames at 50 % overlap sum to the signal energy)
-            e_tot[f0:f1] = pb.sum(axis=1)
+            e_tot[f0:f1] = pb.sum(axis=1, dtype=np.float64)
         # run-out on every dec-th sample (fs / dec >= 4 lowpass_freq): the zero-phase Butterworth
         # low-pass at lowpass_freq (paper Fig. 12), run at fs / dec after linear-phase anti-alias
         # FIRs that pass up to 1.5 lowpass_freq and remove, 80 dB down, whatever would fold below
@@ -389,10 +393,11 @@ def analyze_recording(
         hp = signal.sosfilt(sos_hp, p[o:o + (p.size - o) // dec * dec])
         hp *= hp
         e_d = np.zeros(sro.size)
-        e_d[:hp.size // dec] = hp.reshape(-1, dec).sum(axis=1)
-        cs_e = np.concatenate([[0.0], np.cumsum(e_d)])
-        cs_r = np.concatenate([[0.0], np.cumsum(e_d * (tan_t > 0))])
-        cs_t = np.concatenate([[0.0], np.cumsum(tan_t)])
+        e_d[:hp.size // dec] = hp.reshape(-1, dec) @ np.ones(dec)  # sums of dec samples (matmul: fast)
+        cs_e, cs_r, cs_t = np.zeros((3, sro.size + 1))  # cumulative sums from 0
+        np.cumsum(e_d, out=cs_e[1:])
+        np.cumsum(np.where(tan_t > 0, e_d, 0.0), out=cs_r[1:])
+        np.cumsum(tan_t, out=cs_t[1:])
         if f1 > f0:
             a = -(-(np.arange(f0, f1) * hop + half - g0) // dec)
             b = a + hop // dec

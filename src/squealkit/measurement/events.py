@@ -94,8 +94,8 @@ def tonal_components(
         freq = (np.atleast_1d(refine_peak(mag3, np.ones(k.size, np.intp))) - 1 + k + lo) * fs / nperseg
     else:
         freq = np.empty(0)
-    level = 10 * np.log10(lobe[frame, k] / P_REF**2)
-    return frame, freq, level
+    level = 10 * np.log10(lobe[frame, k].astype(np.float64) / P_REF**2)
+    return frame, freq.astype(np.float64), level
 
 
 def link_components(
