@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+import xarray as xr
 from scipy.io import wavfile
 
 from squealkit import InputError
@@ -72,6 +73,21 @@ def test_netcdf_written_by_xarray(tmp_path, signals):
     ds = read_recording(f, channels=["disp", "mic"])
     assert ds["disp"].attrs["units"] == "m"
     assert np.array_equal(ds["mic"].values, p)
+
+
+def test_netcdf_channels_are_xarrays_data_variables(tmp_path, signals):
+    # the reader lists variables without xarray: coordinates (the time index and one named in a
+    # "coordinates" attribute) are not channels, and fs comes from the time coordinate
+    p, q = signals
+    f = tmp_path / "rec.nc"
+    ds = recording_dataset({"mic": p, "disp": q}, FS, {"mic": "Pa", "disp": "m"})
+    ds = ds.assign_coords(temperature=("time", np.full(N, 20.0)))
+    ds.attrs = {}
+    ds.to_netcdf(f, engine="h5netcdf")
+    src = open_recording(f)
+    with xr.open_dataset(f, engine="h5netcdf") as back:
+        assert src.channels == tuple(back.data_vars) == ("mic", "disp")
+    assert src.fs == pytest.approx(FS) and src.n_samples == N and src.units == {"mic": "Pa", "disp": "m"}
 
 
 def test_tdms_written_by_nptdms(tmp_path, signals):

@@ -6,7 +6,7 @@ data (synthetic recordings are labelled so wherever they appear).
 
 from .analysis import AnalysisSettings, MeasurementResult, analyze_recording
 from .events import SquealEvent
-from .filters import bandpass, butter_sos, highpass, lowpass
+from .filters import bandpass, butter_sos, highpass, lowpass, lowpass_decimated
 from .readers import RecordingSource, open_recording, read_recording, recording_dataset
 from .runout import incline, revolution_frequency, split_runout, surface_speed
 from .spectral import a_weighting_db, refine_peak, ridge, spectrogram
@@ -25,6 +25,7 @@ __all__ = [
     "highpass",
     "incline",
     "lowpass",
+    "lowpass_decimated",
     "open_recording",
     "read_recording",
     "recording_dataset",

@@ -24,7 +24,7 @@ from scipy import signal
 from .. import __version__
 from .._validation import InputError, validate_finite, validate_fs, validate_positive
 from .events import SquealEvent, link_components, tonal_components
-from .filters import lowpass
+from .filters import lowpass, lowpass_decimated
 from .readers import DEFAULT_BLOCK, RecordingSource, open_recording
 from .runout import revolution_frequency, surface_speed
 from .spectral import P_REF, a_weighting_db, refine_peak
@@ -194,28 +194,36 @@ class _DatasetSource:
             yield start, out
 
 
-def _windows(src, names, core: int, margin: int) -> Iterator[tuple[int, int, int, dict[str, NDArray]]]:
-    """Yield ``(core_start, core_stop, window_start, {name: samples})`` with margins both sides."""
+def _windows(
+    src, names, core: int, margin: int, block: int
+) -> Iterator[tuple[int, int, int, dict[str, NDArray]]]:
+    """Yield ``(core_start, core_stop, window_start, {name: samples})`` with margins both sides.
+
+    Each window is a view of one block where it fits in one, else one copy of its samples.
+    """
     total = src.n_samples
-    buf = {n: np.empty(0) for n in names}
-    buf_start = 0
+    pieces: list[tuple[int, dict[str, NDArray]]] = []  # blocks still needed, in order
+    buf_end = 0
     next_core = 0
-    for _, block in src.iter_blocks(names, block=max(core, DEFAULT_BLOCK)):
-        for n in names:
-            buf[n] = np.concatenate([buf[n], block[n]])
-        buf_end = buf_start + len(buf[names[0]])
+    for start, blk in src.iter_blocks(names, block=block):
+        pieces.append((start, blk))
+        buf_end = start + len(blk[names[0]])
         while next_core < total and buf_end >= min(total, next_core + core + margin):
             w0 = max(0, next_core - margin)
             w1 = min(buf_end, next_core + core + margin)
             c1 = min(total, next_core + core)
-            yield next_core, c1, w0, {n: buf[n][w0 - buf_start:w1 - buf_start] for n in names}
+            parts = [(s0, b) for s0, b in pieces if s0 < w1 and s0 + len(b[names[0]]) > w0]
+            if len(parts) == 1:
+                s0, b = parts[0]
+                window = {n: b[n][w0 - s0:w1 - s0] for n in names}
+            else:
+                window = {n: np.concatenate([b[n][max(0, w0 - s0):w1 - s0] for s0, b in parts]) for n in names}
+            yield next_core, c1, w0, window
             next_core = c1
-            drop = max(0, next_core - margin) - buf_start
-            if drop > 0:
-                buf = {n: v[drop:] for n, v in buf.items()}
-                buf_start += drop
+            keep = max(0, next_core - margin)
+            pieces = [(s0, b) for s0, b in pieces if s0 + len(b[names[0]]) > keep]
     if next_core < total:
-        raise InputError(f"Recording ended after {buf_start + len(buf[names[0]])} of {total} samples.")
+        raise InputError(f"Recording ended after {buf_end} of {total} samples.")
 
 
 def analyze_recording(
@@ -304,6 +312,7 @@ def analyze_recording(
     w_a = 10 ** (a_weighting_db(freq[lo:hi]) / 10)
     win = signal.windows.hann(s.nperseg, sym=False)
     win32 = win.astype(np.float32)
+    w_a32 = w_a.astype(np.float32)
     pscale = 2.0 / (s.nperseg * float(np.sum(win**2)))
     thr_power = P_REF**2 * 10 ** (s.threshold_dba / 10)
     core = max(hop, round(s.chunk_s * fs_ / hop) * hop)
@@ -329,8 +338,9 @@ def analyze_recording(
     comp_level: list[NDArray] = [np.empty(0)]
     comp_pow: list[NDArray] = [np.empty(0)]
     mic_spec_sum = np.zeros(freq.size)  # summed over loud frames, band bins only
-    rev_max: dict[str, dict[int, float]] = {k: {} for k in ("sro", "macro", "micro")}
-    rev_min: dict[str, dict[int, float]] = {k: {} for k in ("sro", "macro", "micro")}
+    n_rev = int((total - 1) * f_rev / fs_) + 1
+    rev_max = np.full((3, n_rev), -np.inf)  # sro, macro, micro per revolution
+    rev_min = np.full((3, n_rev), np.inf)
     nb = s.n_angle_bins
     ang_q = np.zeros(nb)
     ang_macro = np.zeros(nb)
@@ -339,7 +349,9 @@ def analyze_recording(
     ang_ecnt = np.zeros(nb)
     max_tan = 0.0
 
-    for c0, c1, w0, data in _windows(src, [mic_n, disp_n], core, margin):
+    # an in-memory recording is one block (windows are views of it); files are read block by block
+    block = total if isinstance(src, _DatasetSource) else max(core, DEFAULT_BLOCK)
+    for c0, c1, w0, data in _windows(src, [mic_n, disp_n], core, margin, block):
         p, q = data[mic_n], data[disp_n]
         f0 = -(-c0 // hop)
         f1 = min(n_frames, (c1 - 1) // hop + 1)
@@ -347,10 +359,13 @@ def analyze_recording(
         if f1 > f0:
             seg = p[f0 * hop - w0: (f1 - 1) * hop + n - w0]
             frames_ = np.lib.stride_tricks.sliding_window_view(seg.astype(np.float32), n)[::hop]
-            spec = sp_fft.rfft(frames_ * win32, axis=-1, workers=-1)[:, lo:hi]  # single precision: levels
-            pb = (spec.real.astype(np.float64)**2 + spec.imag.astype(np.float64)**2) * pscale  # [Pa^2] per bin
-            pa = pb * w_a
-            lev = pa.sum(axis=1)
+            # single precision (7 digits) for the framed spectra: levels, peaks and their refinement
+            spec = sp_fft.rfft(frames_ * win32, axis=-1, workers=-1)[:, lo:hi]
+            pb = spec.real**2
+            pb += spec.imag**2
+            pb *= np.float32(pscale)  # [Pa^2] per bin
+            pa = pb * w_a32
+            lev = pa.sum(axis=1, dtype=np.float64)
             level[f0:f1] = 10 * np.log10(np.maximum(lev, 1e-300) / P_REF**2)
             ridge_f[f0:f1] = (_refine_rows(pb, np.argmax(pa, axis=1)) + lo) * fs_ / n
             loud = np.flatnonzero(lev >= thr_power)  # a component cannot exceed its frame's level
@@ -360,13 +375,15 @@ def analyze_recording(
                 comp_freq.append(ff)
                 comp_level.append(fl)
                 comp_pow.append(P_REF**2 * 10 ** (fl / 10))
-                mic_spec_sum[lo:hi] += pb[loud].sum(axis=0)
+                mic_spec_sum[lo:hi] += pb[loud].sum(axis=0, dtype=np.float64)
             # band mean square per frame (Hann frames at 50 % overlap sum to the signal energy)
-            e_tot[f0:f1] = pb.sum(axis=1)
-        # run-out: low-pass at full rate, then work on every D-th sample (fs / D >= 4 lowpass_freq)
-        sro_full = lowpass(q, s.lowpass_freq, fs_)
+            e_tot[f0:f1] = pb.sum(axis=1, dtype=np.float64)
+        # run-out on every dec-th sample (fs / dec >= 4 lowpass_freq): the zero-phase Butterworth
+        # low-pass at lowpass_freq (paper Fig. 12), run at fs / dec after linear-phase anti-alias
+        # FIRs that pass up to 1.5 lowpass_freq and remove, 80 dB down, whatever would fold below
+        # it; so the corner keeps its meaning (lowpass_decimated; tests compare the full rate)
         o = (-w0) % dec
-        sro = sro_full[o::dec]
+        sro = lowpass_decimated(q[o:], s.lowpass_freq, fs_, dec)
         g0 = w0 + o  # global index of sro[0]
         macro = lowpass(sro, f_macro, fs_d, order=2)
         micro = sro - macro
@@ -376,10 +393,11 @@ def analyze_recording(
         hp = signal.sosfilt(sos_hp, p[o:o + (p.size - o) // dec * dec])
         hp *= hp
         e_d = np.zeros(sro.size)
-        e_d[:hp.size // dec] = hp.reshape(-1, dec).sum(axis=1)
-        cs_e = np.concatenate([[0.0], np.cumsum(e_d)])
-        cs_r = np.concatenate([[0.0], np.cumsum(e_d * (tan_t > 0))])
-        cs_t = np.concatenate([[0.0], np.cumsum(tan_t)])
+        e_d[:hp.size // dec] = hp.reshape(-1, dec) @ np.ones(dec)  # sums of dec samples (matmul: fast)
+        cs_e, cs_r, cs_t = np.zeros((3, sro.size + 1))  # cumulative sums from 0
+        np.cumsum(e_d, out=cs_e[1:])
+        np.cumsum(np.where(tan_t > 0, e_d, 0.0), out=cs_r[1:])
+        np.cumsum(tan_t, out=cs_t[1:])
         if f1 > f0:
             a = -(-(np.arange(f0, f1) * hop + half - g0) // dec)
             b = a + hop // dec
@@ -390,15 +408,13 @@ def analyze_recording(
         ci = slice(-(-(c0 - g0) // dec), -(-(c1 - g0) // dec))
         idx = g0 + np.arange(ci.start, ci.stop) * dec
         turns = idx * (f_rev / fs_)
-        rev = np.floor(turns).astype(np.int64)
+        rev = turns.astype(np.int64)  # floor (turns >= 0)
         starts = np.concatenate([[0], np.flatnonzero(np.diff(rev)) + 1])
-        for key, sig in (("sro", sro[ci]), ("macro", macro[ci]), ("micro", micro[ci])):
-            mx = np.maximum.reduceat(sig, starts)
-            mn = np.minimum.reduceat(sig, starts)
-            for r, a_, b_ in zip(rev[starts].tolist(), mx.tolist(), mn.tolist(), strict=True):
-                rev_max[key][r] = max(rev_max[key].get(r, -np.inf), a_)
-                rev_min[key][r] = min(rev_min[key].get(r, np.inf), b_)
-        abin = ((turns % 1.0) * nb).astype(np.int64) % nb
+        r = rev[starts]  # distinct revolutions of this core; the next core may continue the last one
+        for j, sig in enumerate((sro[ci], macro[ci], micro[ci])):
+            rev_max[j, r] = np.maximum(rev_max[j, r], np.maximum.reduceat(sig, starts))
+            rev_min[j, r] = np.minimum(rev_min[j, r], np.minimum.reduceat(sig, starts))
+        abin = ((turns - rev) * nb).astype(np.int64) % nb
         ang_q += np.bincount(abin, sro[ci], nb)
         ang_macro += np.bincount(abin, macro[ci], nb)
         ang_cnt += np.bincount(abin, minlength=nb)
@@ -423,9 +439,10 @@ def analyze_recording(
     corr: float | None = None
     peak: float | None = None
     if events:
-        in_ev = np.zeros(n_frames, bool)
-        for fr in ev_frames:
-            in_ev[np.arange(fr.min(), fr.max() + 1)] = True
+        cover = np.zeros(n_frames + 1, np.int64)  # +1 at each event's first frame, -1 after its last
+        np.add.at(cover, np.array([fr[0] for fr in ev_frames]), 1)
+        np.add.at(cover, np.array([fr[-1] for fr in ev_frames]) + 1, -1)
+        in_ev = np.cumsum(cover[:-1]) > 0
         tot = float(e_tot[in_ev].sum())
         rising = float(e_rise[in_ev].sum() / tot) if tot > 0 else None
         peak = max(ev.peak_dba for ev in events)
@@ -460,11 +477,11 @@ def analyze_recording(
         },
         coords={"time": ("time", t_frames, {"units": "s", "long_name": "frame centre"})},
     )
-    revs = sorted(rev_max["sro"])
+    revs = np.flatnonzero(np.isfinite(rev_max[0]))
     revolutions = xr.Dataset(
-        {f"{k}_p2p": ("revolution", np.array([rev_max[k][r] - rev_min[k][r] for r in revs]), {"units": "m"})
-         for k in ("sro", "macro", "micro")},
-        coords={"revolution": ("revolution", np.array(revs, dtype=np.int64))},
+        {f"{k}_p2p": ("revolution", rev_max[j, revs] - rev_min[j, revs], {"units": "m"})
+         for j, k in enumerate(("sro", "macro", "micro"))},
+        coords={"revolution": ("revolution", revs.astype(np.int64))},
     )
     angle = (np.arange(nb) + 0.5) * 2 * math.pi / nb
     with np.errstate(divide="ignore", invalid="ignore"):

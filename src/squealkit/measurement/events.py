@@ -13,7 +13,6 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.ndimage import maximum_filter1d
 
 from .spectral import P_REF, refine_peak
 
@@ -76,20 +75,27 @@ def tonal_components(
     if power_a.shape[0] == 0 or power_a.shape[1] < 5:
         return np.empty(0, np.intp), np.empty(0), np.empty(0)
     thr = P_REF**2 * 10 ** (threshold_dba / 10)
-    c = np.cumsum(np.pad(power_a, ((0, 0), (3, 2))), axis=1)
-    lobe = c[:, 5:] - c[:, :-5]  # sum over bins k-2..k+2
-    is_max = (power_a == maximum_filter1d(power_a, 5, axis=1, mode="constant")) & (lobe >= thr)
-    is_max &= power_a >= power_a.max(axis=1, keepdims=True) * 10 ** (-_DYNAMIC_RANGE_DB / 10)
-    is_max[:, [0, -1]] = False
+    pa = power_a
+    lobe = pa.copy()  # sum over bins k-2..k+2 (the Hann main lobe), zero beyond the band
+    lobe[:, 1:] += pa[:, :-1]
+    lobe[:, 2:] += pa[:, :-2]
+    lobe[:, :-1] += pa[:, 1:]
+    lobe[:, :-2] += pa[:, 2:]
+    # local maxima over k-2..k+2 among bins 1..n-2 (the band's edge bins never count)
+    c = pa[:, 1:-1]
+    is_max = (c >= pa[:, :-2]) & (c >= pa[:, 2:]) & (lobe[:, 1:-1] >= thr)
+    is_max[:, 1:] &= c[:, 1:] >= pa[:, :-3]
+    is_max[:, :-1] &= c[:, :-1] >= pa[:, 3:]
+    is_max &= c >= pa.max(axis=1, keepdims=True) * 10 ** (-_DYNAMIC_RANGE_DB / 10)
     frame, k = np.nonzero(is_max)
+    k += 1
     if frame.size:
-        kk = np.clip(k, 1, power.shape[1] - 2)
-        mag3 = np.sqrt(power[frame[:, None], kk[:, None] + np.array([-1, 0, 1])])
-        freq = (np.atleast_1d(refine_peak(mag3, np.ones(kk.size, np.intp))) - 1 + kk + lo) * fs / nperseg
+        mag3 = np.sqrt(power[frame[:, None], k[:, None] + np.array([-1, 0, 1])])
+        freq = (np.atleast_1d(refine_peak(mag3, np.ones(k.size, np.intp))) - 1 + k + lo) * fs / nperseg
     else:
         freq = np.empty(0)
-    level = 10 * np.log10(lobe[frame, k] / P_REF**2)
-    return frame, freq, level
+    level = 10 * np.log10(lobe[frame, k].astype(np.float64) / P_REF**2)
+    return frame, freq.astype(np.float64), level
 
 
 def link_components(
@@ -101,39 +107,43 @@ def link_components(
 
     A component joins the open track nearest in frequency within ``freq_tol`` [Hz]; a track
     closes after ``max_gap`` frames without a component. Returns the events (sorted by
-    start) and, for each, the frames it covers.
+    start) and, for each, the frames it covers (ascending).
     """
     order = np.lexsort((freq, frame))
-    open_tracks: list[dict] = []
-    done: list[dict] = []
-    for i in order:
-        fr, f = int(frame[i]), float(freq[i])
-        still = []
+    # a track is a list [first, last, wsum, fsum, freq, peak, frames] (plain Python: this loop is
+    # the analysis' one per-component step)
+    open_tracks: list[list] = []
+    done: list[list] = []
+    wait = max_gap + 1
+    for fr, f, w, lev in zip(frame[order].tolist(), freq[order].tolist(), power[order].tolist(),
+                             level[order].tolist(), strict=True):
         for tr in open_tracks:
-            (done if fr - tr["last"] > max_gap + 1 else still).append(tr)
-        open_tracks = still
+            if fr - tr[1] > wait:  # close the tracks that have waited too long
+                done.extend(t for t in open_tracks if fr - t[1] > wait)
+                open_tracks = [t for t in open_tracks if fr - t[1] <= wait]
+                break
         best, best_d = None, freq_tol
         for tr in open_tracks:
-            d = abs(tr["freq"] - f)
-            if d <= best_d and tr["last"] != fr:
+            d = abs(tr[4] - f)
+            if d <= best_d and tr[1] != fr:
                 best, best_d = tr, d
         if best is None:
-            best = {"first": fr, "last": fr, "wsum": 0.0, "fsum": 0.0, "peak": -np.inf, "frames": []}
+            best = [fr, fr, 0.0, 0.0, f, -np.inf, []]
             open_tracks.append(best)
-        w = float(power[i])
-        best["last"] = fr
-        best["wsum"] += w
-        best["fsum"] += w * f
-        best["freq"] = best["fsum"] / best["wsum"] if best["wsum"] > 0 else f
-        best["peak"] = max(best["peak"], float(level[i]))
-        best["frames"].append(fr)
+        best[1] = fr
+        best[2] += w
+        best[3] += w * f
+        best[4] = best[3] / best[2] if best[2] > 0 else f
+        if lev > best[5]:
+            best[5] = lev
+        best[6].append(fr)
     done.extend(open_tracks)
     events, frames = [], []
-    for tr in sorted(done, key=lambda t: (t["first"], t["freq"])):
-        start = float(frame_start_s[tr["first"]])
-        end = float(frame_start_s[tr["last"]] + frame_len_s)
+    for first, last, _, _, f_mean, peak, frs in sorted(done, key=lambda t: (t[0], t[4])):
+        start = float(frame_start_s[first])
+        end = float(frame_start_s[last] + frame_len_s)
         if end - start + 1e-12 < min_duration:
             continue
-        events.append(SquealEvent(start, end, tr["freq"], tr["peak"]))
-        frames.append(np.asarray(tr["frames"], dtype=np.intp))
+        events.append(SquealEvent(start, end, f_mean, peak))
+        frames.append(np.asarray(frs, dtype=np.intp))
     return events, frames

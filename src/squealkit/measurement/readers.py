@@ -109,7 +109,9 @@ class RecordingSource:
         for start, data in reader(names, block):
             out = {}
             for n in names:
-                v = np.asarray(data[n], dtype=np.float64) * self.scales.get(n, 1.0)
+                v = np.asarray(data[n], dtype=np.float64)
+                if n in self.scales:
+                    v = v * self.scales[n]
                 _check_finite(n, v, start)
                 out[n] = v
             yield start, out
@@ -307,23 +309,38 @@ def _open_wav(p: Path, fs: float | None) -> RecordingSource:
 
 
 def _open_netcdf(p: Path, fs: float | None) -> RecordingSource:
-    with xr.open_dataset(p, engine="h5netcdf") as ds:
-        names = [str(n) for n, v in ds.data_vars.items() if v.ndim == 1 and np.issubdtype(v.dtype, np.number)]
+    import h5netcdf
+
+    # netCDF-4 is HDF5: h5netcdf lists the variables without reading any samples (xarray would
+    # load the time coordinate to index it). Data variables, as in xarray: 1-D numeric variables
+    # that are neither a dimension's coordinate nor named in a "coordinates" attribute.
+    with h5netcdf.File(p, "r") as f:
+        variables = f.variables
+        coords = set(f.dimensions)
+        for v in variables.values():
+            coords.update(_attr_str(v.attrs.get("coordinates", "")).split())
+        names = [n for n, v in variables.items()
+                 if n not in coords and v.ndim == 1 and np.issubdtype(v.dtype, np.number)]
         if not names:
             raise InputError(f"Recording {str(p)!r} has no 1-D numeric variable.")
-        dim = str(ds[names[0]].dims[0])
-        names = [n for n in names if ds[n].dims == (dim,)]
+        dim = variables[names[0]].dimensions[0]
+        names = [n for n in names if variables[n].dimensions == (dim,)]
+        n_samples = int(f.dimensions[dim].size)
         if fs is None:
-            if "fs" in ds.attrs:
-                fs = validate_fs(ds.attrs["fs"], "fs attribute")
-            elif dim in ds.coords and ds.sizes[dim] > 1:
-                t = ds[dim].values[:64].astype(float)
+            if "fs" in f.attrs:
+                fs = validate_fs(f.attrs["fs"], "fs attribute")
+            elif dim in variables and n_samples > 1:
+                t = np.asarray(variables[dim][:64], dtype=float)
                 fs = 1.0 / float(np.median(np.diff(t)))
             else:
                 raise InputError(f"Recording {str(p)!r} has no 'fs' attribute or time coordinate; give fs.")
-        units = {n: str(ds[n].attrs.get("units", "")) for n in names}
-        extra = {"dim": dim, "synthetic": bool(ds.attrs.get("synthetic", 0))}
-        return RecordingSource(p, "netcdf", float(fs), int(ds.sizes[dim]), tuple(names), units, {}, extra)
+        units = {n: _attr_str(variables[n].attrs.get("units", "")) for n in names}
+        extra = {"dim": dim, "synthetic": bool(f.attrs.get("synthetic", 0))}
+        return RecordingSource(p, "netcdf", float(fs), n_samples, tuple(names), units, {}, extra)
+
+
+def _attr_str(value: Any) -> str:
+    return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
 
 
 def _open_tdms(p: Path, fs: float | None) -> RecordingSource:
