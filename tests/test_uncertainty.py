@@ -132,7 +132,7 @@ def test_same_seed_same_result_whatever_the_batching(hoff):
 def test_dask_client_gives_identical_result(hoff):
     distributed = pytest.importorskip("distributed")
     seen = []
-    with distributed.Client(processes=False, n_workers=1, threads_per_worker=2, dashboard_address=None) as client:
+    with distributed.Client(processes=False, n_workers=1, threads_per_worker=1, dashboard_address=None) as client:
         ds = squeal_propensity(Hoffmann2002(), HOFF_UNC, HOFF_MU, samples=2048, seed=7, batch_size=500,
                                client=client, progress=lambda done, total: seen.append((done, total)))
     xr.testing.assert_identical(ds, hoff)

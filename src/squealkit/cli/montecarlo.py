@@ -92,7 +92,7 @@ def montecarlo(preset, config, sets, uncertain_path, samples, mu_spec, theta_deg
     if not abs(theta_deg) < 90.0:
         raise InputError(f"--theta {theta_deg!r}: the angle must lie strictly between -90 and 90 deg.")
     with cluster_client(scheduler) as client, progress_callback(
-        "Monte Carlo samples", enabled=not as_json and (samples >= 1024 or client is not None)
+        "Monte Carlo", enabled=not as_json and (samples >= 1024 or client is not None)
     ) as cb:
         ds = squeal_propensity(model, uncertain, mu, samples=samples, theta=math.radians(theta_deg), damped=damped,
                                seed=seed, confidence=confidence, sensitivity=not no_sensitivity, client=client,

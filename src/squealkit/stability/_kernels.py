@@ -396,5 +396,8 @@ def quadratic_eigvals_stack(M, C, K0, Kn, Kf, g, e, perms, signs, roots):
     """
     nmod = g.shape[0]
     npts = g.shape[1]
+    # start as a plain int64 (a literal 0 would compile a second specialization of
+    # _solve_chunk beside the one quadratic_eigvals uses)
+    start = npts - npts
     for s in nb.prange(nmod):
-        _solve_chunk(M[s], C[s], K0[s], Kn[s], Kf[s], g[s], e[s], perms, signs, roots[s], 0, npts)
+        _solve_chunk(M[s], C[s], K0[s], Kn[s], Kf[s], g[s], e[s], perms, signs, roots[s], start, npts)
