@@ -54,8 +54,8 @@ def sweep(points: float, workers: list[int]) -> dict[int, float]:
         rates = {}
         for w in workers:
             with cluster_client("local", n_workers=w) as client:
-                client.run(lambda: None)
-                stability_map(model, mu[:8], theta[:8], damped=True, store=Path(d) / "warm.zarr", client=client)
+                # load the compiled kernels in every worker first (numba cache), as a long job would
+                client.run(lambda: stability_map(model, mu[:8], theta[:8], damped=True))
                 t, ds = _timed(lambda client=client, w=w: stability_map(
                     model, mu, theta, damped=True, store=Path(d) / f"w{w}.zarr", client=client))
                 xr.testing.assert_identical(ref.load(), ds.load())
@@ -84,7 +84,7 @@ def montecarlo(samples: int, workers: list[int]) -> dict[int, float] | None:
                            "kc": {"dist": "lognormal", "mean": 4.632e7, "std": 4.6e6},
                            "alpha_deg": {"dist": "uniform", "lower": 1.5, "upper": 2.5}}, model)
     mu = np.linspace(0.2, 0.7, 51)
-    kw = dict(samples=samples, seed=1, sensitivity=False)
+    kw = dict(samples=samples, seed=1, sensitivity=False, batch_size=1024)
     squeal_propensity(model, unc, mu, samples=64, seed=1, sensitivity=False)
     t_base, ref = _timed(lambda: squeal_propensity(model, unc, mu, **kw))
     print(f"Monte Carlo {samples} samples x {mu.size} mu (no sensitivity)")
@@ -92,7 +92,7 @@ def montecarlo(samples: int, workers: list[int]) -> dict[int, float] | None:
     rates = {}
     for w in workers:
         with cluster_client("local", n_workers=w) as client:
-            squeal_propensity(model, unc, mu, samples=64, seed=1, sensitivity=False, client=client)
+            client.run(lambda: squeal_propensity(model, unc, mu, samples=64, seed=1, sensitivity=False))
             t, ds = _timed(lambda client=client: squeal_propensity(model, unc, mu, client=client, **kw))
             xr.testing.assert_identical(ref, ds)
         rates[w] = samples / t / w
