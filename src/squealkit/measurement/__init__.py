@@ -9,7 +9,7 @@ from .events import SquealEvent
 from .filters import bandpass, butter_sos, highpass, lowpass, lowpass_decimated
 from .readers import RecordingSource, open_recording, read_recording, recording_dataset
 from .runout import incline, revolution_frequency, split_runout, surface_speed
-from .spectral import a_weighting_db, refine_peak, ridge, spectrogram
+from .spectral import a_weighting_db, phase_advance_freq, refine_peak, ridge, spectrogram
 from .synthetic import SyntheticSource, synthetic_recording, synthetic_source
 
 __all__ = [
@@ -27,6 +27,7 @@ __all__ = [
     "lowpass",
     "lowpass_decimated",
     "open_recording",
+    "phase_advance_freq",
     "read_recording",
     "recording_dataset",
     "refine_peak",
