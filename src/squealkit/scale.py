@@ -16,6 +16,7 @@ Install the optional part with ``pip install "squealkit[distributed]"``.
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
@@ -65,8 +66,9 @@ def get_client(scheduler: str, *, n_workers: int | None = None):
     scheduler = scheduler.strip()
     if scheduler == "local":
         n = n_workers or os.cpu_count() or 1
+        # a failing task reaches the caller as its exception; the workers need not log it too
         cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                           dashboard_address=None)
+                                           dashboard_address=None, silence_logs=logging.CRITICAL)
         client = distributed.Client(cluster)
         return client
     if scheduler.endswith(".json") and not os.path.isfile(scheduler):

@@ -91,6 +91,8 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float, ra
     unit_map = _pairs("--unit", units)
     sources = [open_recording(f, fs=fs, scale=scale_map or None, units=unit_map or None) for f in files]
     if scheduler is not None:
+        for src in sources:  # bad channel names fail here, in one line, not on a worker
+            src.resolve(mic), src.resolve(displacement)
         if plot_dir is not None or out_path is not None:
             raise InputError("--plot and --out work on this machine only; leave them out with --scheduler.")
         _campaign_on_cluster(files, scheduler, as_json, summary_path, fs=fs, scale=scale_map or None,
