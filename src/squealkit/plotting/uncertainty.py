@@ -6,26 +6,13 @@ the matplotlib Figure; matplotlib is imported inside the functions.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 import xarray as xr
 
 from .._validation import InputError
+from .stability import _axes, _figure
 
 __all__ = ["propensity_plot", "sensitivity_plot", "uncertainty_plot"]
-
-
-def _figure(**kwargs: Any):
-    from matplotlib.figure import Figure
-
-    return Figure(**kwargs)
-
-
-def _axes(ax, figsize: tuple[float, float]):
-    if ax is None:
-        ax = _figure(figsize=figsize).add_subplot(1, 1, 1)
-    return ax.figure, ax
 
 
 def propensity_plot(ds: xr.Dataset, ax=None):
