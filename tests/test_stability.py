@@ -195,6 +195,22 @@ def test_tracking_follows_crossing_modes():
     assert np.all(np.diff(untracked, axis=1) >= 0)  # frequency order swaps at the crossing
 
 
+def test_warm_start_through_a_double_root_finds_every_root():
+    # Two uncoupled DOFs crossing at mu = 0.5 (omega = 1000 rad/s twice). Warm-started from
+    # the double root, two approximations once converged onto 1000 and missed the other root
+    # (1% frequency error, a false instability); the Vieta check now sends such points to a
+    # cold start. Reference: the closed-form frequencies sqrt(k/m) of the two DOFs.
+    m = MatrixModel(M=np.eye(2), K0=np.diag([1.0e6, 0.5e6]), Kf=np.diag([0.0, 1.0e6]))
+    for n in (101, 1001, 10007):
+        mu = np.linspace(0, 1, n)
+        lam = eigenvalues(m, mu[None, :], 0.0)[0]  # one row: each point warm-started from the last
+        ref = np.sort(np.stack([np.sqrt(0.5e6 + 1e6 * mu), np.full_like(mu, 1e3)], axis=1), axis=1)
+        # sqrt(eps)-level at the exact double root, as for any polynomial root finder
+        np.testing.assert_allclose(np.sort(lam.imag, axis=1), ref, rtol=1e-8)
+        off = mu != 0.5
+        assert np.all(np.abs(lam.real[off]) <= 1e-9 * np.abs(lam[off]))  # no false instability
+
+
 def test_stability_inputs_rejected():
     m = get_preset("lv2013")
     with pytest.raises(InputError, match="theta"):

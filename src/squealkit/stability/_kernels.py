@@ -27,6 +27,8 @@ _MAX_ITER = 60
 # No fast-math: with it, a freshly compiled kernel and the same kernel loaded from numba's
 # cache gave results differing in the last bits, so a Dask worker (cache) and the process
 # that compiled could disagree. Strict IEEE arithmetic costs no measurable speed here.
+#: relative tolerance of the Vieta check of warm-started roots
+_TOL_VIETA = 1.0e-10
 #: a correction this small is rounding noise
 _TOL_ROUNDING = 1.0e-14
 #: a correction this small, after a superlinear step, leaves an error ~ its cube
@@ -206,6 +208,34 @@ def _aberth_conj(b, u):
 
 
 @nb.njit(cache=True, nogil=True)
+def _vieta_ok(b, z, m, conj):
+    """Whether the roots z[:m] (with their conjugates when ``conj``) are all of monic ``b``'s roots.
+
+    Checks the first two elementary symmetric functions against the coefficients (Vieta):
+    two approximations that converged onto one root, leaving another out (possible when a
+    warm start sits at a double root), change them by far more than rounding, while they
+    stay well-conditioned when the roots themselves are not (near a double root).
+    """
+    deg = b.shape[0] - 1
+    e1 = 0.0 + 0.0j
+    p2 = 0.0 + 0.0j
+    mag = 0.0
+    for k in range(m):
+        zk = z[k]
+        if conj:
+            e1 += 2.0 * zk.real
+            p2 += 2.0 * (zk * zk).real
+            mag += 2.0 * abs(zk)
+        else:
+            e1 += zk
+            p2 += zk * zk
+            mag += abs(zk)
+    e2 = 0.5 * (e1 * e1 - p2)
+    tol = _TOL_VIETA * max(mag, 1.0)
+    return abs(e1 + b[deg - 1]) <= tol and abs(e2 - b[deg - 2]) <= tol * max(mag, 1.0)
+
+
+@nb.njit(cache=True, nogil=True)
 def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop):
     n = M.shape[0]
     deg = 2 * n
@@ -249,7 +279,7 @@ def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop):
                 if n_conj > 1:
                     zk = 2.0 * zk - roots[idx - 2, k]
                 u[k] = zk / w0
-            if _aberth_conj(b, u):
+            if _aberth_conj(b, u) and _vieta_ok(b, u, n, True):
                 for k in range(n):
                     roots[idx, k] = u[k] * w0
                     roots[idx, n + k] = u[k].conjugate() * w0
@@ -262,7 +292,7 @@ def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop):
                 if n_guess > 1:
                     zk = 2.0 * zk - roots[idx - 2, k]
                 z[k] = zk / w0
-            converged = _aberth(b, z)
+            converged = _aberth(b, z) and _vieta_ok(b, z, deg, False)
         if not converged:
             _companion_roots(b, z)
             converged = _aberth(b, z)
