@@ -310,11 +310,11 @@ def stability_summary(ds: xr.Dataset) -> dict[str, object]:
     """
     # reductions only, computed in one pass: a streamed (dask-backed) map is never loaded whole
     any_u = ds["any_unstable"]
-    w_top = ds["omega"].where(ds["growth_rate"] == ds["growth_rate"].max("mode")).max("mode")
+    w_top = ds["omega"].where(ds["growth_rate"] == ds["max_growth_rate"]).max("mode")
     w_u = w_top.where(any_u)
     r = xr.Dataset({
         "unstable_fraction": any_u.mean(), "lock_in_fraction": ds["lock_in"].mean(),
-        "max_growth_rate": ds["growth_rate"].max(), "w_min": w_u.min(), "w_max": w_u.max(),
+        "max_growth_rate": ds["max_growth_rate"].max(), "w_min": w_u.min(), "w_max": w_u.max(),
         "any": any_u.any(),
     }).compute()
     out: dict[str, object] = {
