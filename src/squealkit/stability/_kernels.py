@@ -319,10 +319,11 @@ def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop):
 
 
 @nb.njit(cache=True, parallel=True)
-def quadratic_eigvals(M, C, K0, Kn, Kf, g, e, perms, signs, roots, chunk, row):
+def quadratic_eigvals(M, C, K0, Kn, Kf, g, e, perms, signs, roots, radii, even, chunk, row):
     """All 2n eigenvalues of ``M s^2 + C s + K`` with ``K = K0 + g[i] Kn + e[i] Kf``.
 
-    Fills ``roots`` (shape (len(g), 2n)); returns the number of cold (LAPACK) starts.
+    Fills ``roots`` (shape (len(g), 2n)), their error radii ``radii`` and the flag ``even``
+    (see :func:`_radii_range`); returns the number of cold (LAPACK) starts.
     The points are rows of ``row`` points each; every row is solved in pieces of at most
     ``chunk`` points from its start, each piece warm-starting point by point from a cold
     first point. So a row's eigenvalues depend only on that row, not on which other rows
@@ -339,42 +340,302 @@ def quadratic_eigvals(M, C, K0, Kn, Kf, g, e, perms, signs, roots, chunk, row):
         stop = min(npts, r0 + row, start + chunk)
         if start < stop:
             counts[c] = _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop)
+            _radii_range(M, C, K0, Kn, Kf, g, e, perms, signs, roots, radii, even, start, stop)
     return counts.sum()
 
 
-@nb.njit(cache=True, parallel=True)
-def select_modes(roots, out):
-    """Pick n of the 2n roots per point, one per conjugate pair, lowest frequency first.
+#: Verdict codes of a grid point (see :data:`squealkit.stability.VERDICTS`).
+STABLE, FLUTTER, DIVERGENCE, INDETERMINATE = 0, 1, 2, 3
+#: the point needs a more accurate solver (internal; never in a result)
+UNDECIDED = 4
+_EPS = 2.220446049250313e-16
 
-    Of each complex pair the root with Im > 0 is kept; of real roots (overdamped or
-    divergent modes) the largest, so the most unstable root is never dropped. Sorting by
-    imaginary part descending (ties by real part descending) and taking the first n does
-    exactly that; the n are then written in ascending frequency.
+
+@nb.njit(cache=True, nogil=True)
+def _abs_charpoly(M, C, K, perms, signs, out, tmp_a, tmp_b):
+    """Coefficients of the Leibniz expansion with every term taken in absolute value.
+
+    ``sum_d out[d] |s|^d`` bounds the size of the terms that cancel in ``det(M s^2 + C s + K)``;
+    the rounding error of the computed coefficients is a small multiple of eps times it.
+    """
+    n = M.shape[0]
+    for i in range(2 * n + 1):
+        out[i] = 0.0
+    for p in range(perms.shape[0]):
+        tmp_a[0] = 1.0
+        deg = 0
+        for i in range(n):
+            j = perms[p, i]
+            k0 = abs(K[i, j])
+            c1 = abs(C[i, j])
+            m2 = abs(M[i, j])
+            if k0 == 0.0 and c1 == 0.0 and m2 == 0.0:
+                deg = -1
+                break
+            for d in range(deg + 3):
+                tmp_b[d] = 0.0
+            for d in range(deg + 1):
+                a = tmp_a[d]
+                tmp_b[d] += a * k0
+                tmp_b[d + 1] += a * c1
+                tmp_b[d + 2] += a * m2
+            deg += 2
+            for d in range(deg + 1):
+                tmp_a[d] = tmp_b[d]
+        if deg < 0:
+            continue
+        for d in range(deg + 1):
+            out[d] += tmp_a[d]
+
+
+@nb.njit(cache=True, nogil=True)
+def inclusion_radii(z, lead, err_at, radius, member, pairs=False):
+    """A-posteriori error radius of each computed root ``z`` of a polynomial with leading
+    coefficient ``lead``, whose value is uncertain by ``err_at[k]`` at ``z[k]``.
+
+    A perturbation of size ``delta`` moves the roots of a cluster of m close roots by about
+    ``(delta / (|lead| prod_{j outside} |z - z_j|))^(1/m)``: for a simple root this is the
+    classical ``delta / |p'(z)|``; near a double or multiple root (doublets, lock-in) the
+    m-th root makes the radius as large as rounding can really move the roots. A cluster is
+    grown until no other root lies within twice its radius. ``member`` is a boolean work
+    array of length ``len(z)``. With ``pairs`` the second half of ``z`` holds the
+    conjugates of the first, whose radii are the same.
+    """
+    deg = z.shape[0]
+    half = deg // 2
+    for k in range(half if pairs else deg):
+        zk = z[k]
+        for j in range(deg):
+            member[j] = j == k
+        m = 1
+        r = 0.0
+        for _ in range(deg):
+            prod2 = 1.0
+            for j in range(deg):
+                if not member[j]:
+                    d = zk - z[j]
+                    prod2 *= d.real * d.real + d.imag * d.imag
+            prod = abs(lead) * np.sqrt(prod2)
+            if prod > 0.0 and err_at[k] < np.inf:
+                r = err_at[k] / prod if m == 1 else (err_at[k] / prod) ** (1.0 / m)
+            else:
+                r = np.inf
+            grown = False
+            lim = 4.0 * r * r
+            for j in range(deg):
+                if not member[j]:
+                    d = z[j] - zk
+                    if d.real * d.real + d.imag * d.imag <= lim:
+                        member[j] = True
+                        m += 1
+                        grown = True
+            if not grown:
+                break
+        radius[k] = r
+        if pairs:
+            radius[half + k] = r
+
+
+@nb.njit(cache=True, nogil=True)
+def _radii_range(M, C, K0, Kn, Kf, g, e, perms, signs, roots, radii, even, start, stop):
+    """Error radius of every root of points ``start:stop`` from the kernel's own rounding.
+
+    Each coefficient of ``det(M s^2 + C s + K)`` is a signed sum of Leibniz terms; its
+    rounding error is at most ``gamma`` (a few eps per operation) times the same sum taken
+    in absolute value, and that sum, evaluated at ``|s|``, is the permanent of
+    ``|M| |s|^2 + |C| |s| + |K|``, which is at most the product of its row sums. So
+    ``gamma prod_i (m_i |s|^2 + c_i |s| + k_i)`` (row sums of absolute entries) bounds the
+    polynomial's error at s, and :func:`inclusion_radii` turns it into a radius per root.
+    Roots stored as conjugate pairs (the kernel's fast path) share one radius.
+    ``even[i]`` is set where the polynomial is even in s (C = 0, or C skew and K symmetric:
+    roots in pairs +-s).
+    """
+    n = M.shape[0]
+    deg = 2 * n
+    gamma = 4.0 * (4 * n + perms.shape[0] + 8) * _EPS
+    a = np.empty(deg + 1)
+    tmp_a = np.empty(deg + 3)
+    tmp_b = np.empty(deg + 3)
+    err_at = np.empty(deg)
+    member = np.empty(deg, dtype=np.bool_)
+    rm = np.zeros(n)
+    rc = np.zeros(n)
+    rk = np.empty(n)
+    # the leading coefficient, det(M), does not depend on the point
+    _charpoly(M, C, K0, perms, signs, a, tmp_a, tmp_b)
+    lead = a[deg]
+    c_zero = True
+    c_skew = True
+    for r in range(n):
+        for c in range(n):
+            rm[r] += abs(M[r, c])
+            rc[r] += abs(C[r, c])
+            if C[r, c] != 0.0:
+                c_zero = False
+            if C[r, c] != -C[c, r]:
+                c_skew = False
+    for i in range(start, stop):
+        gi = g[i]
+        ei = e[i]
+        k_sym = True
+        for r in range(n):
+            acc = 0.0
+            for c in range(n):
+                kij = K0[r, c] + gi * Kn[r, c] + ei * Kf[r, c]
+                acc += abs(kij)
+                if c_skew and not c_zero and c > r:
+                    kji = K0[c, r] + gi * Kn[c, r] + ei * Kf[c, r]
+                    if kij != kji:
+                        k_sym = False
+            rk[r] = acc
+        pairs = True
+        for k in range(n):
+            if roots[i, n + k] != roots[i, k].conjugate():
+                pairs = False
+        for k in range(n if pairs else deg):
+            x = abs(roots[i, k])
+            acc = gamma
+            for r in range(n):
+                acc *= (rm[r] * x + rc[r]) * x + rk[r]
+            err_at[k] = acc
+        if pairs:
+            for k in range(n):
+                err_at[n + k] = err_at[k]
+        inclusion_radii(roots[i], lead, err_at, radii[i], member, pairs)
+        even[i] = c_zero or (c_skew and k_sym)
+
+
+@nb.njit(cache=True, nogil=True)
+def _classify_row(z, rad, even, rtol):
+    """Snap provably real (or, for an even polynomial, imaginary) roots; return the verdict
+    and the threshold ``rtol |lambda|_max``.
+
+    The polynomial is real, so a non-real root comes with its conjugate; a root whose
+    inclusion disc reaches the real axis and holds no other root (within four radii) is
+    therefore real. For an even polynomial (undamped, or gyroscopic and conservative) roots
+    also come in pairs +-s, and an isolated root whose disc reaches the imaginary axis is
+    imaginary. A point is unstable when a root, and every root whose disc touches its disc,
+    lies beyond the threshold by more than its radius; stable when no disc reaches it.
+    """
+    deg = z.shape[0]
+    mag2 = 0.0
+    for k in range(deg):
+        mag2 = max(mag2, z[k].real * z[k].real + z[k].imag * z[k].imag)
+    for k in range(deg):
+        r = rad[k]
+        near_real = abs(z[k].imag) <= r
+        near_imag = even and abs(z[k].real) <= r
+        if not (near_real or near_imag):
+            continue
+        alone = True
+        for j in range(deg):
+            if j != k:
+                d = z[j] - z[k]
+                lim = 4.0 * r + rad[j]
+                if d.real * d.real + d.imag * d.imag <= lim * lim:
+                    alone = False
+                    break
+        if alone and near_real:
+            z[k] = complex(z[k].real, 0.0)
+        if alone and near_imag:
+            z[k] = complex(0.0, z[k].imag)
+    mag = np.sqrt(mag2)
+    thr = rtol * mag
+    possible = False
+    best = -np.inf
+    real_best = False
+    for k in range(deg):
+        if z[k].real + rad[k] > thr:
+            possible = True
+        lo = z[k].real - rad[k]
+        if lo > thr and lo > best:
+            sure = True
+            for j in range(deg):
+                if abs(z[j] - z[k]) <= rad[j] + rad[k] and z[j].real - rad[j] <= thr:
+                    sure = False
+            if sure:
+                best = lo
+                real_best = abs(z[k].imag) <= rad[k]
+    if best > -np.inf:
+        return (DIVERGENCE if real_best else FLUTTER), thr
+    if possible:
+        return UNDECIDED, thr
+    return STABLE, thr
+
+
+@nb.njit(cache=True, parallel=True)
+def classify_points(roots, radii, even, rtol, verdict, thr):
+    """Verdict of every point (``STABLE``, ``FLUTTER``, ``DIVERGENCE`` or ``UNDECIDED``)
+    and its instability threshold ``thr`` [1/s]; snaps provably real / imaginary roots in
+    place (see :func:`_classify_row`). Undecided points need a more accurate solver.
+    """
+    for i in nb.prange(roots.shape[0]):
+        verdict[i], thr[i] = _classify_row(roots[i], radii[i], even[i], rtol)
+
+
+@nb.njit(cache=True, parallel=True)
+def select_modes(roots, radii, out, out_err):
+    """Pick n of the 2n roots per point, one per conjugate pair, in ascending frequency.
+
+    Of each complex pair the root with Im > 0 is kept. Roots within their error radius of
+    the real axis are real (overdamped or divergent modes, rigid-body modes): they are
+    written with Im = 0 (frequency 0, so first) and the largest of them are kept, so the
+    most unstable root is never dropped, whatever the rounding of their imaginary parts.
+    ``out_err`` receives the error radius of each kept root.
     """
     npts, deg = roots.shape
     n = out.shape[1]
-    for i in nb.prange(npts):
-        r = roots[i].copy()
-        for a in range(1, deg):  # insertion sort, deg is tiny
-            key = r[a]
-            j = a - 1
-            while j >= 0 and (
-                r[j].imag < key.imag or (r[j].imag == key.imag and r[j].real < key.real)
-            ):
-                r[j + 1] = r[j]
-                j -= 1
-            r[j + 1] = key
-        for k in range(n):
-            out[i, k] = r[n - 1 - k]
+    nchunks = (npts + 1023) // 1024
+    for c in nb.prange(nchunks):
+        val = np.empty(deg, dtype=np.complex128)
+        re = np.empty(deg, dtype=np.int64)
+        up = np.empty(deg, dtype=np.int64)
+        for i in range(c * 1024, min(npts, (c + 1) * 1024)):
+            n_up = 0
+            n_re = 0
+            for k in range(deg):
+                z = roots[i, k]
+                if abs(z.imag) <= radii[i, k]:
+                    val[k] = complex(z.real, 0.0)
+                    # insertion by real part, largest first
+                    j = n_re
+                    while j > 0 and val[re[j - 1]].real < z.real:
+                        re[j] = re[j - 1]
+                        j -= 1
+                    re[j] = k
+                    n_re += 1
+                elif z.imag > 0.0:
+                    val[k] = z
+                    # insertion by frequency, lowest first
+                    j = n_up
+                    while j > 0 and val[up[j - 1]].imag > z.imag:
+                        up[j] = up[j - 1]
+                        j -= 1
+                    up[j] = k
+                    n_up += 1
+            m = 0
+            for j in range(min(n_re, max(0, n - n_up))):
+                out[i, m] = val[re[j]]
+                out_err[i, m] = radii[i, re[j]]
+                m += 1
+            for j in range(min(n_up, n - m)):
+                out[i, m] = val[up[j]]
+                out_err[i, m] = radii[i, up[j]]
+                m += 1
+            for k in range(m, n):  # never for a consistent set of roots
+                out[i, k] = complex(np.nan, np.nan)
+                out_err[i, k] = np.inf
 
 
 @nb.njit(cache=True, parallel=True)
-def derived_quantities(lam, unstable_rtol, lock_rtol):
+def derived_quantities(lam, err, thr, verdict, lock_rtol):
     """Per-mode and per-point quantities of a stability map in one pass.
 
-    ``lam`` has shape (npts, n). Returns growth rate, omega, damping ratio, the unstable
-    flag per mode, and per point the largest growth rate, whether any mode is unstable
-    and whether two modes have locked in (frequencies within ``lock_rtol``, one unstable).
+    ``lam`` and its error radii ``err`` have shape (npts, n); ``thr`` and ``verdict`` are
+    per point. Returns growth rate, omega, damping ratio, the unstable flag per mode (growth
+    beyond ``thr`` by more than the error radius), and per point the largest growth rate,
+    whether the point is unstable (flutter or divergence) and whether two modes have locked
+    in (frequencies within ``lock_rtol``, one unstable).
     """
     npts, n = lam.shape
     sigma = np.empty((npts, n))
@@ -385,12 +646,7 @@ def derived_quantities(lam, unstable_rtol, lock_rtol):
     any_u = np.empty(npts, dtype=np.bool_)
     locked = np.empty(npts, dtype=np.bool_)
     for i in nb.prange(npts):
-        mag_max = 0.0
-        for k in range(n):
-            mag_max = max(mag_max, abs(lam[i, k]))
-        thr = unstable_rtol * mag_max
         best = -np.inf
-        anyu = False
         for k in range(n):
             s = lam[i, k].real
             w = lam[i, k].imag
@@ -398,12 +654,10 @@ def derived_quantities(lam, unstable_rtol, lock_rtol):
             sigma[i, k] = s
             omega[i, k] = w
             zeta[i, k] = -s / mag if mag > 0.0 else 0.0
-            u = s > thr
-            unstable[i, k] = u
-            anyu = anyu or u
+            unstable[i, k] = s - err[i, k] > thr[i]
             best = max(best, s)
         smax[i] = best
-        any_u[i] = anyu
+        any_u[i] = verdict[i] == FLUTTER or verdict[i] == DIVERGENCE
         lk = False
         for k in range(n):
             for m in range(k + 1, n):
@@ -417,11 +671,12 @@ def derived_quantities(lam, unstable_rtol, lock_rtol):
 
 
 @nb.njit(cache=True, parallel=True)
-def quadratic_eigvals_stack(M, C, K0, Kn, Kf, g, e, perms, signs, roots):
+def quadratic_eigvals_stack(M, C, K0, Kn, Kf, g, e, perms, signs, roots, radii, even):
     """All 2n eigenvalues for a stack of S models, each over its own row of P points.
 
     ``M``, ``C``, ``K0``, ``Kn``, ``Kf`` have shape (S, n, n); ``g`` and ``e`` (S, P);
-    ``roots`` (S, P, 2n) is filled. Each model's row is solved on its own, from a cold first
+    ``roots`` (S, P, 2n), their error radii ``radii`` (S, P, 2n) and ``even`` (S, P) are
+    filled. Each model's row is solved on its own, from a cold first
     point and then warm-started point by point, so a model's eigenvalues depend only on it
     and its row, never on the rest of the stack.
     """
@@ -432,3 +687,5 @@ def quadratic_eigvals_stack(M, C, K0, Kn, Kf, g, e, perms, signs, roots):
     start = npts - npts
     for s in nb.prange(nmod):
         _solve_chunk(M[s], C[s], K0[s], Kn[s], Kf[s], g[s], e[s], perms, signs, roots[s], start, npts)
+        _radii_range(M[s], C[s], K0[s], Kn[s], Kf[s], g[s], e[s], perms, signs, roots[s], radii[s], even[s],
+                     start, npts)

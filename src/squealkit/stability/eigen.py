@@ -20,14 +20,17 @@ from numpy.typing import ArrayLike, NDArray
 from .. import __version__
 from .._validation import InputError, validate_array_finite
 from ..models import FrictionModel
-from ._kernels import derived_quantities, permutations_table, quadratic_eigvals, select_modes
-from .tracking import track_column, track_modes, track_rows
+from ._kernels import derived_quantities, permutations_table, quadratic_eigvals
+from ._solve import VERDICTS, lapack_roots, solve_points
+from .tracking import carry_along, track_column, track_modes, track_rows
 
 __all__ = [
     "UNSTABLE_RTOL",
+    "VERDICTS",
     "eigenvalues",
     "stability_map",
     "stability_summary",
+    "stability_verdict",
     "unstable_threshold",
 ]
 
@@ -54,29 +57,59 @@ def unstable_threshold(lam: NDArray[np.complexfloating]) -> NDArray[np.float64]:
     return UNSTABLE_RTOL * np.max(np.abs(lam), axis=-1)
 
 
-def _state_matrix_eigvals(M, C, K) -> NDArray[np.complex128]:
-    n = M.shape[0]
-    Minv = np.linalg.inv(M)
-    A = np.zeros((*K.shape[:-2], 2 * n, 2 * n))
-    A[..., :n, n:] = np.eye(n)
-    A[..., n:, :n] = -Minv @ K
-    A[..., n:, n:] = -Minv @ C
-    return np.linalg.eigvals(A)
+def _matrices(model: FrictionModel, damped: bool) -> tuple[NDArray, ...]:
+    """The model's matrices stacked as one model: M, C, K0, Kn, Kf, each (1, n, n)."""
+    M = np.asarray(model.mass_matrix(), dtype=float)
+    C = np.asarray(model.damping_matrix(), dtype=float) if damped else np.zeros_like(M)
+    K0, Kn, Kf = (np.asarray(x, dtype=float) for x in model.stiffness_parts())
+    return tuple(np.ascontiguousarray(a[None]) for a in (M, C, K0, Kn, Kf))
 
 
-def _all_roots(model: FrictionModel, g: NDArray, e: NDArray, damped: bool, row: int) -> NDArray[np.complex128]:
-    """All 2n eigenvalues for flat arrays of the contact factors g and e (rows of ``row`` points)."""
-    M = np.ascontiguousarray(model.mass_matrix(), dtype=float)
-    C = np.ascontiguousarray(model.damping_matrix() if damped else np.zeros_like(M), dtype=float)
-    K0, Kn, Kf = (np.ascontiguousarray(x, dtype=float) for x in model.stiffness_parts())
-    n = M.shape[0]
+def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int):
+    """Modes, error radii, verdicts and thresholds of flat arrays of contact factors g, e."""
+    M, C, K0, Kn, Kf = mats
+    n = M.shape[-1]
+    which = np.zeros(g.shape[0], dtype=np.int64)
     if n > _KERNEL_MAX_DOF:
-        K = K0 + g[:, None, None] * Kn + e[:, None, None] * Kf
-        return _state_matrix_eigvals(M, C, K)
-    roots = np.empty((g.shape[0], 2 * n), dtype=np.complex128)
-    perms, signs = _perms(n)
-    quadratic_eigvals(M, C, K0, Kn, Kf, g, e, perms, signs, roots, _CHUNK, row)
-    return roots
+        K = K0[0] + g[:, None, None] * Kn[0] + e[:, None, None] * Kf[0]
+        roots, radii = lapack_roots(np.broadcast_to(M[0], K.shape), np.broadcast_to(C[0], K.shape), K)
+        roots = np.ascontiguousarray(roots)
+        radii = np.ascontiguousarray(radii)
+        even = None
+    else:
+        roots = np.empty((g.shape[0], 2 * n), dtype=np.complex128)
+        radii = np.empty((g.shape[0], 2 * n))
+        even = np.empty(g.shape[0], dtype=np.bool_)
+        perms, signs = _perms(n)
+        quadratic_eigvals(M[0], C[0], K0[0], Kn[0], Kf[0], g, e, perms, signs, roots, radii, even, _CHUNK, row)
+    return solve_points(M, C, K0, Kn, Kf, which, g, e, roots, radii, even, UNSTABLE_RTOL)
+
+
+def _solve_grid(model, mu, tan_theta, damped, progress=None):
+    """``(lam, err, verdict, thr)`` over ``broadcast(mu, tan_theta)``; see :func:`eigenvalues`."""
+    mu_a = validate_array_finite("mu", mu)
+    t_a = validate_array_finite("tan_theta", tan_theta)
+    mu_b, t_b = np.broadcast_arrays(mu_a, t_a)
+    shape = mu_b.shape
+    g = np.ascontiguousarray((1.0 - mu_b * t_b).ravel())
+    e = np.ascontiguousarray((model.sliding_direction * (mu_b + t_b)).ravel())
+    n = model.n_dof
+    total = g.shape[0]
+    lam = np.empty((total, n), dtype=np.complex128)
+    err = np.empty((total, n))
+    verdict = np.empty(total, dtype=np.int8)
+    thr = np.empty(total)
+    mats = _matrices(model, damped)
+    # the last axis is a row: solved on its own, so a row's numbers never depend on the others
+    row = max(1, shape[-1]) if shape else 1
+    block = max(1, _BLOCK // row) * row
+    for start in range(0, total, block):
+        stop = min(total, start + block)
+        sl = slice(start, stop)
+        lam[sl], err[sl], verdict[sl], thr[sl] = _solve_block(mats, g[sl], e[sl], row)
+        if progress is not None:
+            progress(stop, total)
+    return (lam.reshape((*shape, n)), err.reshape((*shape, n)), verdict.reshape(shape), thr.reshape(shape))
 
 
 def eigenvalues(
@@ -90,8 +123,11 @@ def eigenvalues(
     """Complex eigenvalues lambda = sigma + j omega [1/s] of the model (paper eqs. 7-8).
 
     One eigenvalue per mode: of each conjugate pair the one with ``omega >= 0``; of real
-    pairs (overdamped or divergent modes) the larger. Modes are ordered by frequency,
-    lowest first, at each point (use :func:`stability_map` for tracked modes).
+    roots (overdamped, divergent or rigid-body modes; real within their error radius, and
+    returned with omega = 0) the largest, so a growing real root is never dropped. Modes are
+    ordered by frequency, lowest first, at each point (use :func:`stability_map` for tracked
+    modes). Roots that rounding leaves undecided are recomputed (see
+    :func:`stability_verdict`).
 
     Parameters
     ----------
@@ -112,30 +148,37 @@ def eigenvalues(
     --------
     >>> from squealkit.models import get_preset
     >>> lam = eigenvalues(get_preset("lv2013"), mu=0.0)
-    >>> bool(np.all(np.abs(lam.real) < 1e-9 * np.abs(lam)))   # undamped, no friction
+    >>> bool(np.all(lam.real == 0.0))   # undamped, no friction: on the imaginary axis
     True
     """
-    mu_a = validate_array_finite("mu", mu)
-    t_a = validate_array_finite("tan_theta", tan_theta)
-    mu_b, t_b = np.broadcast_arrays(mu_a, t_a)
-    shape = mu_b.shape
-    g = np.ascontiguousarray((1.0 - mu_b * t_b).ravel())
-    e = np.ascontiguousarray((model.sliding_direction * (mu_b + t_b)).ravel())
-    n = model.n_dof
-    out = np.empty((g.shape[0], n), dtype=np.complex128)
-    total = g.shape[0]
-    # the last axis is a row: solved on its own, so a row's numbers never depend on the others
-    row = max(1, shape[-1]) if shape else 1
-    block = max(1, _BLOCK // row) * row
-    for start in range(0, max(total, 1), block):
-        stop = min(total, start + block)
-        if stop <= start:
-            break
-        roots = _all_roots(model, g[start:stop], e[start:stop], damped, row)
-        select_modes(roots, out[start:stop])
-        if progress is not None:
-            progress(stop, total)
-    return out.reshape((*shape, n))
+    return _solve_grid(model, mu, tan_theta, damped, progress)[0]
+
+
+def stability_verdict(
+    model: FrictionModel,
+    mu: ArrayLike,
+    tan_theta: ArrayLike = 0.0,
+    *,
+    damped: bool = False,
+) -> NDArray[np.str_]:
+    """The verdict at each point: ``"stable"``, ``"flutter"``, ``"divergence"`` or ``"indeterminate"``.
+
+    A point is unstable when some eigenvalue's real part exceeds
+    ``UNSTABLE_RTOL * |lambda|_max`` by more than its a-posteriori error radius: by a
+    complex pair (``"flutter"``, mode-coupling squeal) or by a real root (``"divergence"``).
+    It is stable when no eigenvalue can reach the threshold. Each computed root carries an
+    error radius; where a radius straddles the threshold (near-double roots: disc doublets,
+    the lock-in point, rigid-body modes) the point is recomputed by LAPACK on the state
+    matrix and then in 50-digit arithmetic. ``"indeterminate"`` means even that cannot
+    decide: the answer lies within the rounding of the model's own numbers.
+
+    Examples
+    --------
+    >>> from squealkit.models import get_preset
+    >>> stability_verdict(get_preset("lv2013"), [0.0, 0.6]).tolist()
+    ['stable', 'flutter']
+    """
+    return np.asarray(VERDICTS)[_solve_grid(model, mu, tan_theta, damped)[2]]
 
 
 def stability_map(
@@ -210,11 +253,11 @@ def stability_map(
     if store is None and client is not None:
         raise InputError("A cluster run streams its result to zarr: pass store='....zarr' with client.")
     if store is None:
-        lam = eigenvalues(model, mu_a[:, None], tan_t[None, :], damped=damped, progress=progress)
+        sol = _solve_grid(model, mu_a[:, None], tan_t[None, :], damped, progress)
         # lowest frequency first; tracking keeps the order of the first grid point
         if track:
-            lam = track_modes(lam)
-        return _dataset(model, mu_a, th_a, lam, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol)
+            sol = _tracked(sol, track_modes(sol[0]))
+        return _dataset(model, mu_a, th_a, sol, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol)
     if Path(store).suffix.lower() != ".zarr":
         raise InputError(f"Parameter store={str(store)!r} must be a zarr store ending in .zarr.")
     if isinstance(tile_points, bool) or not isinstance(tile_points, int) or tile_points < 1:
@@ -226,10 +269,16 @@ def stability_map(
 def _tile(arg: tuple) -> xr.Dataset:
     """One block of whole mu rows of a stability map (a task of a streamed sweep)."""
     model, mu, theta, first, damped, track, lock_in_rtol = arg
-    lam = eigenvalues(model, mu[:, None], np.tan(theta)[None, :], damped=damped)
+    sol = _solve_grid(model, mu[:, None], np.tan(theta)[None, :], damped)
     if track:
-        lam = track_rows(lam, first)
-    return _dataset(model, mu, theta, lam, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol)
+        sol = _tracked(sol, track_rows(sol[0], first))
+    return _dataset(model, mu, theta, sol, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol)
+
+
+def _tracked(sol, lam_tracked):
+    """``sol`` with its modes in the tracked order (error radii carried along)."""
+    lam, err, verdict, thr = sol
+    return lam_tracked, carry_along(lam, err, lam_tracked), verdict, thr
 
 
 def _stream_map(model, mu, theta, *, damped, track, lock_in_rtol, progress, store, client, tile_points):
@@ -252,12 +301,15 @@ def _stream_map(model, mu, theta, *, damped, track, lock_in_rtol, progress, stor
                           weights=[(b - a) * n_th for *_, a, b in pieces], name="squealkit-stability")
 
 
-def _dataset(model, mu, theta, lam, *, damped, tracked, lock_in_rtol) -> xr.Dataset:
+def _dataset(model, mu, theta, sol, *, damped, tracked, lock_in_rtol) -> xr.Dataset:
+    lam, err, verdict, thr = sol
     n = lam.shape[-1]
     grid = lam.shape[:-1]
     flat = np.ascontiguousarray(lam.reshape(-1, n))
     sigma, omega, zeta, unstable, smax, any_u, locked = (
-        a.reshape(grid + a.shape[1:]) for a in derived_quantities(flat, UNSTABLE_RTOL, lock_in_rtol)
+        a.reshape(grid + a.shape[1:])
+        for a in derived_quantities(flat, np.ascontiguousarray(err.reshape(-1, n)), thr.ravel(),
+                                    verdict.ravel(), lock_in_rtol)
     )
     dims = ("mu", "theta", "mode")
     n = lam.shape[-1]
@@ -268,9 +320,14 @@ def _dataset(model, mu, theta, lam, *, damped, tracked, lock_in_rtol) -> xr.Data
             "omega": (dims, omega, {"units": "rad/s", "long_name": "damped circular frequency omega_d"}),
             "frequency": (dims, omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency"}),
             "damping_ratio": (dims, zeta, {"units": "1", "long_name": "damping ratio -sigma/|lambda|"}),
-            "unstable": (dims, unstable, {"long_name": "mode unstable (sigma > 1e-9 |lambda|)"}),
+            "growth_rate_error": (dims, err, {"units": "1/s", "long_name": "error radius of the eigenvalue"}),
+            "unstable": (dims, unstable,
+                         {"long_name": "mode unstable (sigma beyond 1e-9 |lambda|_max by more than its error)"}),
+            "verdict": (("mu", "theta"), verdict,
+                        {"long_name": "stability verdict", "flag_values": np.arange(len(VERDICTS), dtype=np.int8),
+                         "flag_meanings": " ".join(VERDICTS)}),
             "max_growth_rate": (("mu", "theta"), smax, {"units": "1/s", "long_name": "largest growth rate"}),
-            "any_unstable": (("mu", "theta"), any_u, {"long_name": "some mode unstable"}),
+            "any_unstable": (("mu", "theta"), any_u, {"long_name": "unstable: flutter or divergence"}),
             "lock_in": (("mu", "theta"), locked,
                         {"long_name": "two modes coalesced in frequency, one unstable", "rtol": lock_in_rtol}),
         },
@@ -303,7 +360,9 @@ def stability_summary(ds: xr.Dataset) -> dict[str, object]:
     Returns
     -------
     dict
-        ``unstable_fraction`` (share of grid points with an unstable mode),
+        ``unstable_fraction`` (share of grid points with an unstable mode), and of it
+        ``flutter_fraction`` and ``divergence_fraction``; ``indeterminate_fraction`` (points
+        within rounding of the limit, see :func:`stability_verdict`),
         ``max_growth_rate`` [1/s], ``unstable_omega_rad_s`` and ``unstable_frequency_hz``
         ([min, max] over unstable points of the frequency of the most unstable mode, or
         None), ``lock_in_fraction``, and the grid extent.
@@ -312,7 +371,11 @@ def stability_summary(ds: xr.Dataset) -> dict[str, object]:
     any_u = ds["any_unstable"]
     w_top = ds["omega"].where(ds["growth_rate"] == ds["max_growth_rate"]).max("mode")
     w_u = w_top.where(any_u)
+    verdict = ds["verdict"] if "verdict" in ds else None
+    fractions = {} if verdict is None else {
+        f"{name}_fraction": (verdict == code).mean() for code, name in enumerate(VERDICTS)}
     r = xr.Dataset({
+        **fractions,
         "unstable_fraction": any_u.mean(), "lock_in_fraction": ds["lock_in"].mean(),
         "max_growth_rate": ds["max_growth_rate"].max(), "w_min": w_u.min(), "w_max": w_u.max(),
         "any": any_u.any(),
@@ -328,6 +391,9 @@ def stability_summary(ds: xr.Dataset) -> dict[str, object]:
         "unstable_omega_rad_s": None,
         "unstable_frequency_hz": None,
     }
+    for name in VERDICTS[1:]:
+        if f"{name}_fraction" in r:
+            out[f"{name}_fraction"] = float(r[f"{name}_fraction"])
     if bool(r["any"]):
         lo, hi = float(r["w_min"]), float(r["w_max"])
         out["unstable_omega_rad_s"] = [lo, hi]

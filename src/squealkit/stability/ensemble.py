@@ -19,7 +19,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import InputError, validate_array_finite, validate_finite
 from ..models import FrictionModel
-from ._kernels import quadratic_eigvals_stack, select_modes
+from ._kernels import DIVERGENCE, FLUTTER, INDETERMINATE, quadratic_eigvals_stack
+from ._solve import lapack_roots, solve_points
 from .eigen import _KERNEL_MAX_DOF, UNSTABLE_RTOL, _perms
 
 __all__ = ["ONSET_STATUS", "ModelEnsemble", "ensemble_onset", "ensemble_unstable"]
@@ -87,29 +88,38 @@ class ModelEnsemble:
         return ModelEnsemble(self.M[i], self.C[i], self.K0[i], self.Kn[i], self.Kf[i], self.sliding[i])
 
 
-def _unstable_rows(ens: ModelEnsemble, mu: NDArray, tan_theta: float) -> NDArray[np.bool_]:
-    """Stability flag of model s at mu[s, p] (shape (S, P)); the criterion of ``eigenvalues``."""
+def _verdict_rows(ens: ModelEnsemble, mu: NDArray, tan_theta: float) -> NDArray[np.int8]:
+    """Verdict code of model s at mu[s, p] (shape (S, P)); that of ``stability_verdict``."""
     S, P = mu.shape
     n = ens.n_dof
     g = np.ascontiguousarray(1.0 - mu * tan_theta)
     e = np.ascontiguousarray(ens.sliding[:, None] * (mu + tan_theta))
+    mats = tuple(np.ascontiguousarray(a) for a in (ens.M, ens.C, ens.K0, ens.Kn, ens.Kf))
+    which = np.repeat(np.arange(S, dtype=np.int64), P)
     if n > _KERNEL_MAX_DOF:
         K = ens.K0[:, None] + g[..., None, None] * ens.Kn[:, None] + e[..., None, None] * ens.Kf[:, None]
-        Minv = np.linalg.inv(ens.M)[:, None]
-        A = np.zeros((S, P, 2 * n, 2 * n))
-        A[..., :n, n:] = np.eye(n)
-        A[..., n:, :n] = -Minv @ K
-        A[..., n:, n:] = -Minv @ ens.C[:, None]
-        roots = np.linalg.eigvals(A)
+        shape = (S, P, n, n)
+        roots, radii = lapack_roots(np.broadcast_to(ens.M[:, None], shape).reshape(-1, n, n),
+                                    np.broadcast_to(ens.C[:, None], shape).reshape(-1, n, n), K.reshape(-1, n, n))
+        even = None
     else:
         roots = np.empty((S, P, 2 * n), dtype=np.complex128)
+        radii = np.empty((S, P, 2 * n))
+        even = np.empty((S, P), dtype=np.bool_)
         perms, signs = _perms(n)
-        quadratic_eigvals_stack(*(np.ascontiguousarray(a) for a in (ens.M, ens.C, ens.K0, ens.Kn, ens.Kf)),
-                                g, e, perms, signs, roots)
-    lam = np.empty((S * P, n), dtype=np.complex128)
-    select_modes(np.ascontiguousarray(roots.reshape(S * P, 2 * n)), lam)
-    thr = UNSTABLE_RTOL * np.max(np.abs(lam), axis=-1)
-    return np.any(lam.real > thr[:, None], axis=-1).reshape(S, P)
+        quadratic_eigvals_stack(*mats, g, e, perms, signs, roots, radii, even)
+        even = even.reshape(-1)
+    _, _, verdict, _ = solve_points(*mats, which, g.reshape(-1), e.reshape(-1),
+                                    np.ascontiguousarray(roots.reshape(S * P, 2 * n)),
+                                    np.ascontiguousarray(radii.reshape(S * P, 2 * n)), even, UNSTABLE_RTOL)
+    return verdict.reshape(S, P)
+
+
+def _unstable_rows(ens: ModelEnsemble, mu: NDArray, tan_theta: float) -> NDArray[np.bool_]:
+    """Whether model s is unstable (flutter, divergence, or indeterminate: never reported
+    stable without proof) at mu[s, p]."""
+    v = _verdict_rows(ens, mu, tan_theta)
+    return (v == FLUTTER) | (v == DIVERGENCE) | (v == INDETERMINATE)
 
 
 def _grid(mu: ArrayLike) -> NDArray[np.float64]:

@@ -125,6 +125,32 @@ def _track_rows(lam, first, perms):
     return out
 
 
+@nb.njit(cache=True, parallel=True)
+def _carry(lam, val, out_lam, out):
+    npts, n = lam.shape
+    for i in nb.prange(npts):
+        used = np.zeros(n, dtype=np.bool_)
+        for k in range(n):
+            for j in range(n):
+                if not used[j] and (lam[i, j] == out_lam[i, k] or (
+                        np.isnan(lam[i, j].real) and np.isnan(out_lam[i, k].real))):
+                    used[j] = True
+                    out[i, k] = val[i, j]
+                    break
+
+
+def carry_along(lam: NDArray, values: NDArray, lam_tracked: NDArray) -> NDArray:
+    """Reorder per-mode ``values`` (same shape as ``lam``) as tracking reordered ``lam``.
+
+    ``lam_tracked`` holds the same eigenvalues as ``lam`` at each point, permuted.
+    """
+    n = lam.shape[-1]
+    out = np.empty(values.shape, dtype=values.dtype)
+    _carry(np.ascontiguousarray(lam.reshape(-1, n)), np.ascontiguousarray(values.reshape(-1, n)),
+           np.ascontiguousarray(lam_tracked.reshape(-1, n)), out.reshape(-1, n))
+    return out
+
+
 def _perms_for(n: int) -> NDArray[np.int64]:
     if n <= _MAX_BRUTE_FORCE:
         return np.array(list(itertools.permutations(range(n))), dtype=np.int64)

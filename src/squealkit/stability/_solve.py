@@ -1,0 +1,244 @@
+"""The stability verdict: roots, their error radii, and refinement where rounding could decide.
+
+Every grid point goes through up to three solvers, each only where the one before cannot
+decide (see :func:`solve_points`):
+
+1. the compiled characteristic-polynomial kernel (n <= 4) with an a-posteriori error radius
+   per root (:func:`~squealkit.stability._kernels.root_radii`): near a double root, e.g. a
+   disc doublet or the lock-in point, the radius grows to the true rounding reach,
+   about sqrt(eps) |lambda|, so a doublet split by rounding is never called unstable;
+2. LAPACK on the balanced 2n x 2n state matrix, with the Bauer-Fike radius
+   ``kappa(X) * c eps ||A||`` (X the computed eigenvectors) — decides semisimple doublets,
+   which the polynomial cannot;
+3. the characteristic polynomial in 50-digit arithmetic (mpmath: determinants at the
+   roots of unity, then all roots), with the same inclusion radii at that precision —
+   decides near-defective clusters (one-way coupled doublets, rigid-body modes).
+
+A point that none of them decides is ``indeterminate``: its verdict is within rounding of
+the data themselves, and no answer is given silently.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._kernels import (
+    DIVERGENCE,
+    FLUTTER,
+    INDETERMINATE,
+    STABLE,
+    UNDECIDED,
+    classify_points,
+    inclusion_radii,
+    select_modes,
+)
+
+__all__ = ["VERDICTS", "IndeterminateWarning", "solve_points"]
+
+#: Point verdicts, indexed by their code.
+VERDICTS = ("stable", "flutter", "divergence", "indeterminate")
+assert (STABLE, FLUTTER, DIVERGENCE, INDETERMINATE) == (0, 1, 2, 3)
+#: Digits of the high-precision stage.
+_MP_DPS = 50
+#: Points refined in high precision per call at most; beyond, they stay indeterminate.
+MP_MAX_POINTS = 2000
+#: Safety factor on the backward error of LAPACK's eigenvalue solver.
+_LAPACK_C = 16.0
+
+
+class IndeterminateWarning(RuntimeWarning):
+    """Some verdicts could not be decided (within rounding of the model's own numbers)."""
+
+
+def _stiffness(K0, Kn, Kf, which, g, e):
+    return K0[which] + g[:, None, None] * Kn[which] + e[:, None, None] * Kf[which]
+
+
+def lapack_roots(M: NDArray, C: NDArray, K: NDArray) -> tuple[NDArray, NDArray]:
+    """All 2n eigenvalues of stacks ``M, C, K`` (P, n, n) and their Bauer-Fike error radii.
+
+    The state matrix is balanced by the scale w0 = sqrt(||M^-1 K||) (``y = [x, x'/w0]``) so
+    that its norm is about |lambda|. Every exact eigenvalue lies within
+    ``kappa(X) ||E||`` of a computed one, with X the computed eigenvectors and E LAPACK's
+    backward error (``_LAPACK_C * eps * ||A||``); a defective or nearly defective matrix has
+    a huge kappa and so a huge radius.
+    """
+    P, n, _ = M.shape
+    MinvK = np.linalg.solve(M, K)
+    MinvC = np.linalg.solve(M, C)
+    w0 = np.sqrt(np.maximum(np.linalg.norm(MinvK, axis=(-2, -1)), 1e-300))[:, None, None]
+    A = np.zeros((P, 2 * n, 2 * n))
+    A[:, :n, n:] = w0 * np.eye(n)
+    A[:, n:, :n] = -MinvK / w0
+    A[:, n:, n:] = -MinvC
+    w, X = np.linalg.eig(A)
+    radius = np.full(w.shape, np.inf)
+    normA = np.linalg.norm(A, axis=(-2, -1))
+    with np.errstate(all="ignore"):
+        try:
+            Xinv = np.linalg.inv(X)
+            kappa = np.linalg.norm(X, axis=(-2, -1)) * np.linalg.norm(Xinv, axis=(-2, -1))
+        except np.linalg.LinAlgError:
+            kappa = np.array([_kappa_one(x) for x in X])
+        r = _LAPACK_C * np.finfo(float).eps * normA * kappa
+    ok = np.isfinite(r)
+    radius[ok] = np.broadcast_to(r[:, None], w.shape)[ok]
+    return w, radius
+
+
+def _kappa_one(X: NDArray) -> float:
+    try:
+        return float(np.linalg.norm(X) * np.linalg.norm(np.linalg.inv(X)))
+    except np.linalg.LinAlgError:
+        return np.inf
+
+
+def mp_roots(M: NDArray, C: NDArray, K: NDArray, scale: float, dps: int = _MP_DPS) -> tuple[NDArray, NDArray]:
+    """All 2n roots of det(M s^2 + C s + K) in ``dps``-digit arithmetic, with error radii.
+
+    The coefficients come from the determinant at 2n+1 points on the circle of radius
+    ``scale`` (an inverse discrete Fourier transform, exact to the working precision); each
+    coefficient's error is bounded by ``tol max|p| / scale^d``, and :func:`inclusion_radii`
+    turns that into a radius per root. The matrices are taken exactly as given (doubles).
+    """
+    import mpmath
+
+    n = M.shape[0]
+    deg = 2 * n
+    N = deg + 1
+    with mpmath.workdps(dps):
+        Mm, Cm, Km = (mpmath.matrix(a.tolist()) for a in (M, C, K))
+        R = mpmath.mpf(scale)
+        vals = []
+        nodes = []
+        for k in range(N):
+            s = R * mpmath.expjpi(mpmath.mpf(2 * k) / N)
+            nodes.append(s)
+            vals.append(mpmath.det(s * s * Mm + s * Cm + Km))
+        pmax = max(abs(v) for v in vals)
+        coef = []
+        for d in range(N):
+            acc = mpmath.mpc(0)
+            for k in range(N):
+                acc += vals[k] * mpmath.expjpi(-mpmath.mpf(2 * k * d) / N)
+            coef.append(acc / N / R**d)
+        coef = [mpmath.re(c) for c in coef]  # a real polynomial
+        lead = coef[deg]
+        if lead == 0:
+            return np.full(deg, np.nan + 0j), np.full(deg, np.inf)
+        try:
+            z = mpmath.polyroots(coef[::-1], maxsteps=400, extraprec=4 * dps)
+        except mpmath.libmp.NoConvergence:
+            return np.full(deg, np.nan + 0j), np.full(deg, np.inf)
+        tol = mpmath.mpf(10) ** (-dps + 4) * N * pmax
+        err_at = np.array([float(sum(tol * (abs(zk) / R) ** d for d in range(N))) for zk in z])
+        roots = np.array([complex(zk) for zk in z])
+    radius = np.empty(deg)
+    inclusion_radii(roots, float(lead), err_at, radius, np.empty(deg, dtype=np.bool_))
+    return roots, radius
+
+
+def solve_points(
+    M: NDArray, C: NDArray, K0: NDArray, Kn: NDArray, Kf: NDArray, which: NDArray,
+    g: NDArray, e: NDArray, roots: NDArray, radii: NDArray, even: NDArray | None, rtol: float,
+) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """Verdict of every point from its roots, refining where the roots cannot decide.
+
+    Parameters
+    ----------
+    M, C, K0, Kn, Kf : ndarray, shape (S, n, n)
+        Stacked model matrices; point i uses model ``which[i]`` with
+        ``K = K0 + g[i] Kn + e[i] Kf``.
+    roots : ndarray, shape (P, 2n)
+        All roots of every point (modified: snapped, refined).
+    radii : ndarray, shape (P, 2n)
+        Their error radii.
+    even : ndarray of bool, shape (P,), or None
+        Where the characteristic polynomial is even in s, from the compiled kernel; None
+        for roots from LAPACK (then computed here, and LAPACK is not asked again).
+    rtol : float
+        A point is unstable when a growth rate exceeds ``rtol |lambda|_max``.
+
+    Returns
+    -------
+    lam, err : ndarray, shape (P, n)
+        One root per mode (see :func:`~squealkit.stability._kernels.select_modes`) and its
+        error radius [1/s].
+    verdict : ndarray of int8, shape (P,)
+        Codes into :data:`VERDICTS`.
+    thr : ndarray, shape (P,)
+        Growth rate [1/s] above which the point counts as unstable.
+    """
+    P, deg = roots.shape
+    n = deg // 2
+    from_kernel = even is not None
+    if not from_kernel:
+        even = _even_structure(M, C, K0, Kn, Kf, which, g, e)
+    verdict = np.empty(P, dtype=np.int8)
+    thr = np.empty(P)
+    classify_points(roots, radii, even, rtol, verdict, thr)
+    todo = np.flatnonzero(verdict == UNDECIDED)
+    if todo.size:
+        _refine(M, C, K0, Kn, Kf, which, g, e, roots, radii, even, rtol, verdict, thr, todo,
+                lapack=from_kernel)
+    lam = np.empty((P, n), dtype=np.complex128)
+    err = np.empty((P, n))
+    select_modes(roots, radii, lam, err)
+    return lam, err, verdict, thr
+
+
+def _even_structure(M, C, K0, Kn, Kf, which, g, e) -> NDArray[np.bool_]:
+    """Where det(M s^2 + C s + K) is even in s: C = 0, or C skew and K symmetric."""
+    Cw = C[which]
+    c_zero = ~np.any(Cw != 0.0, axis=(-2, -1))
+    c_skew = ~np.any(Cw != -np.swapaxes(Cw, -1, -2), axis=(-2, -1))
+    out = c_zero.copy()
+    check = np.flatnonzero(c_skew & ~c_zero)
+    if check.size:
+        K = _stiffness(K0, Kn, Kf, which[check], g[check], e[check])
+        out[check] = ~np.any(K != np.swapaxes(K, -1, -2), axis=(-2, -1))
+    return out
+
+
+def _refine(M, C, K0, Kn, Kf, which, g, e, roots, radii, even, rtol, verdict, thr, todo, *, lapack) -> None:
+    """LAPACK (unless the roots came from it), then high precision, at the undecided points
+    ``todo`` (in place)."""
+    for start in range(0, todo.size if lapack else 0, 4096):
+        idx = todo[start:start + 4096]
+        K = _stiffness(K0, Kn, Kf, which[idx], g[idx], e[idx])
+        w, r = lapack_roots(M[which[idx]], C[which[idx]], K)
+        v = np.empty(idx.size, dtype=np.int8)
+        t = np.empty(idx.size)
+        w = np.ascontiguousarray(w)
+        classify_points(w, r, even[idx], rtol, v, t)
+        roots[idx] = w
+        radii[idx] = r
+        verdict[idx] = v
+        thr[idx] = t
+    left = todo[verdict[todo] == UNDECIDED]
+    if left.size > MP_MAX_POINTS:
+        warnings.warn(
+            f"{left.size} points are within rounding of the stability limit; the first "
+            f"{MP_MAX_POINTS} were decided in {_MP_DPS}-digit arithmetic, the rest are reported "
+            "indeterminate.", IndeterminateWarning, stacklevel=4)
+    for i in left[:MP_MAX_POINTS]:
+        s_ = which[i]
+        K = K0[s_] + g[i] * Kn[s_] + e[i] * Kf[s_]
+        scale = float(np.nanmax(np.abs(roots[i]))) if np.isfinite(roots[i]).any() else 1.0
+        z, r = mp_roots(M[s_], C[s_], K, max(scale, 1e-300) * 1.5)
+        if not np.all(np.isfinite(z)):
+            verdict[i] = INDETERMINATE
+            continue
+        z = np.ascontiguousarray(z[None, :])
+        r = np.ascontiguousarray(r[None, :])
+        v = np.empty(1, dtype=np.int8)
+        t = np.empty(1)
+        classify_points(z, r, even[i:i + 1], rtol, v, t)
+        roots[i] = z[0]
+        radii[i] = r[0]
+        verdict[i] = INDETERMINATE if v[0] == UNDECIDED else v[0]
+        thr[i] = t[0]
+    verdict[verdict == UNDECIDED] = INDETERMINATE
