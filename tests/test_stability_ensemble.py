@@ -7,6 +7,7 @@ from scipy.linalg import block_diag
 from squealkit._validation import InputError
 from squealkit.models import Hoffmann2002, MatrixModel, get_preset
 from squealkit.stability import (
+    ONSET_STATUS,
     ModelEnsemble,
     critical_friction,
     eigenvalues,
@@ -51,7 +52,7 @@ def test_each_model_independent_of_the_rest_of_the_stack():
     models = _lv_models(8)
     whole = ModelEnsemble.from_models(models)
     u_all = ensemble_unstable(whole, MU)
-    mu_all, st_all = ensemble_onset(whole, MU, unstable=u_all)
+    mu_all, st_all = ensemble_onset(whole, MU)
     for idx in ([0], [3, 1], [7, 2, 5]):
         sub = ModelEnsemble.from_models([models[i] for i in idx])
         np.testing.assert_array_equal(ensemble_unstable(sub, MU), u_all[idx])
@@ -60,13 +61,14 @@ def test_each_model_independent_of_the_rest_of_the_stack():
         np.testing.assert_array_equal(st_s, st_all[idx])
 
 
-def test_status_and_clipping_to_the_range():
-    # the paper's rig loses stability at mu = 0.4448 (theta = 0; see test_stability)
+def test_status_and_censoring_outside_the_range():
+    # the paper's rig loses stability at mu = 0.4448 (theta = 0; see test_stability):
+    # outside the grid the onset is censored (NaN), never clipped to the range's end
     ens = ModelEnsemble.from_models([get_preset("lv2013")])
     mu_c, st = ensemble_onset(ens, np.linspace(0.5, 0.8, 4))
-    assert st.tolist() == [1] and mu_c.tolist() == [0.5]
+    assert [ONSET_STATUS[s] for s in st] == ["unstable_at_start"] and np.isnan(mu_c[0])
     mu_c, st = ensemble_onset(ens, np.linspace(0.0, 0.3, 4))
-    assert st.tolist() == [2] and mu_c.tolist() == [0.3]
+    assert [ONSET_STATUS[s] for s in st] == ["stable_in_range"] and np.isnan(mu_c[0])
     # run-out slope acts as friction (eq. 6): onset at mu_e = mu + tan(theta) ~ 0.4448
     mu_c, st = ensemble_onset(ens, MU, tan_theta=0.1)
     assert st.tolist() == [0] and mu_c[0] + 0.1 == pytest.approx(0.4448, abs=2e-3)

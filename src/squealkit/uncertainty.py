@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -46,9 +47,11 @@ from . import __version__
 from ._validation import InputError, validate_angle, validate_finite
 from .models import FrictionModel, load_model
 from .models.config import _read_toml
+from .stability import ONSET_STATUS
 
 __all__ = [
     "DISTRIBUTIONS",
+    "CensoredWarning",
     "UncertainParameter",
     "load_uncertain",
     "parse_uncertain",
@@ -56,6 +59,11 @@ __all__ = [
     "sample_parameters",
     "squeal_propensity",
 ]
+
+
+class CensoredWarning(UserWarning):
+    """Some samples' critical friction lies outside the friction grid (censored)."""
+
 
 #: Distribution name -> the accepted sets of keys.
 DISTRIBUTIONS: dict[str, tuple[tuple[str, ...], ...]] = {
@@ -317,7 +325,7 @@ def _evaluate(task: tuple) -> tuple[NDArray[np.bool_], NDArray[np.float64], NDAr
     model, names, values, mu, tan_theta, damped = task
     ens = ModelEnsemble.from_models(_sample_models(model, names, values), damped=damped)
     unstable = ensemble_unstable(ens, mu, tan_theta)
-    mu_c, status = ensemble_onset(ens, mu, tan_theta, unstable=unstable)
+    mu_c, status = ensemble_onset(ens, mu, tan_theta)
     return unstable, mu_c, status
 
 
@@ -401,7 +409,10 @@ def squeal_propensity(
     of the time at each mu.
 
     The global sensitivity is of each sample's critical friction ``mu_critical`` (the
-    lowest unstable mu, found by bisection to 1e-10, clipped to ``[mu[0], mu[-1]]``):
+    start of its first unstable window, found as by
+    :func:`~squealkit.stability.critical_friction`; NaN, a censored sample, where it lies
+    outside ``[mu[0], mu[-1]]``, with a :class:`CensoredWarning`; the indices use it clipped
+    to the range):
     Sobol' first-order and total indices (``scipy.stats.sobol_indices``, Saltelli 2010
     estimators) with percentile-bootstrap intervals, and Spearman's rank correlation. The
     first ``2 n_base`` samples double as Saltelli's two base matrices A and B, with
@@ -443,8 +454,9 @@ def squeal_propensity(
     xarray.Dataset
         Over ``mu``: ``probability_unstable``, ``ci_lower``, ``ci_upper``,
         ``unstable_count`` and ``nominal_unstable`` (the nominal model). Over ``sample``:
-        ``mu_critical``, ``onset_status`` (0 onset, 1 unstable at mu[0], 2 stable over the
-        range) and ``parameter_value`` (sample, parameter) in each parameter's unit. Over
+        ``mu_critical``, ``onset_status`` (codes of
+        :data:`~squealkit.stability.ONSET_STATUS`: 0 onset, 1 unstable at mu[0], 2 stable
+        over the range, 3 indeterminate) and ``parameter_value`` (sample, parameter) in each parameter's unit. Over
         ``parameter``: ``sobol_first_order``, ``sobol_total`` and their ``*_ci_lower`` /
         ``*_ci_upper``, ``spearman``, ``distribution_mean``, ``distribution_std``.
         ``attrs``: seed, samples, confidence, ci_method, theta, damped, the model and the
@@ -514,7 +526,14 @@ def squeal_propensity(
 
     nominal = ModelEnsemble.from_models([model], damped=damped)
     nom_unstable = ensemble_unstable(nominal, mu_a, tan_t)
-    nom_mu_c, nom_status = ensemble_onset(nominal, mu_a, tan_t, unstable=nom_unstable)
+    nom_mu_c, nom_status = ensemble_onset(nominal, mu_a, tan_t)
+    censored = int(np.sum(status[:samples] == 2))
+    below = int(np.sum(status[:samples] == 1))
+    if censored or below:
+        warnings.warn(
+            f"{censored} of {samples} samples are stable up to mu = {mu_a[-1]:g} and {below} unstable "
+            f"already at mu = {mu_a[0]:g}: their mu_critical lies outside the grid (censored, NaN); "
+            "widen the mu range to resolve them.", CensoredWarning, stacklevel=2)
     lower, upper = _binomial_band(count, samples, confidence)
 
     info = model.parameter_info()
@@ -530,16 +549,19 @@ def squeal_propensity(
         "unstable_count": ("mu", count, {"units": "1", "long_name": "unstable samples"}),
         "nominal_unstable": ("mu", nom_unstable[0], {"long_name": "nominal model unstable"}),
         "mu_critical": ("sample", mu_c[:samples],
-                        {"units": "1", "long_name": "critical friction of the sample, clipped to the mu range"}),
+                        {"units": "1", "long_name": "critical friction of the sample (NaN: outside the mu "
+                         "range, censored; see onset_status)"}),
         "onset_status": ("sample", status[:samples],
-                         {"flag_values": "0 1 2", "flag_meanings": "onset unstable_at_start stable_in_range"}),
+                         {"flag_values": " ".join(str(i) for i in range(len(ONSET_STATUS))),
+                          "flag_meanings": " ".join(ONSET_STATUS)}),
         "parameter_value": (("sample", "parameter"), X, {"long_name": "sampled value (unit: parameter_unit)"}),
         "distribution_mean": ("parameter", [float(x.mean()) for x in dists], {"long_name": "distribution mean"}),
         "distribution_std": ("parameter", [float(x.std()) for x in dists],
                              {"long_name": "distribution standard deviation"}),
     }
     if sensitivity:
-        f = mu_c
+        # Sobol' indices need a value per sample: a censored onset counts at the range's end
+        f = np.where(status == 2, mu_a[-1], np.where(status == 1, mu_a[0], mu_c))
         f_AB = f[samples:].reshape(d, n_base)
         s1, st, ci1, cit = _sobol(f[:n_base], f[n_base:2 * n_base], f_AB, confidence,
                                   np.random.default_rng(boot_seq))
@@ -552,7 +574,7 @@ def squeal_propensity(
             "sobol_first_order_ci_upper": ("parameter", ci1[1], ci_attrs),
             "sobol_total_ci_lower": ("parameter", cit[0], ci_attrs),
             "sobol_total_ci_upper": ("parameter", cit[1], ci_attrs),
-            "spearman": ("parameter", _spearman(X, mu_c[:samples]),
+            "spearman": ("parameter", _spearman(X, f[:samples]),
                          {"units": "1", "long_name": "Spearman rank correlation with mu_critical"}),
         }
     return xr.Dataset(
@@ -590,7 +612,7 @@ def squeal_propensity(
     )
 
 
-_STATUS_NAMES = ("onset", "unstable_at_start", "stable_in_range")
+_STATUS_NAMES = ONSET_STATUS
 
 
 def _num(x: Any) -> float | None:
@@ -607,14 +629,21 @@ def propensity_summary(ds: xr.Dataset) -> dict[str, Any]:
         ``mu``, ``probability_unstable``, ``ci_lower``, ``ci_upper``, ``unstable_count``,
         ``nominal_unstable`` (lists over mu); ``samples``, ``seed``, ``confidence``,
         ``ci_method``, ``theta_deg``, ``damped``, ``nominal_mu_critical``; ``mu_critical``
-        (``mean``, ``std``, ``p05``, ``p50``, ``p95`` over the samples and the share of each
-        ``onset_status``); ``parameters`` (the distributions); ``sensitivity``: per
+        (``mean`` and ``std`` over the samples with an onset in the range; ``p05``, ``p50``,
+        ``p95`` over all samples, censored ones counted beyond the range's ends, None where a
+        percentile falls among censored samples; ``censored``, the number of samples whose
+        onset lies outside the range; and the share of each ``onset_status``);
+        ``parameters`` (the distributions); ``sensitivity``: per
         parameter ``first_order``, ``first_order_ci``, ``total``, ``total_ci``,
         ``spearman`` and ``unit`` (None without sensitivity).
     """
     mc = ds["mu_critical"].values
     st = ds["onset_status"].values
-    p05, p50, p95 = np.percentile(mc, [5, 50, 95])
+    # order statistics with the censored samples at -inf (below the range) / +inf (above):
+    # a percentile that falls among censored samples is unknown (None)
+    ranked = np.where(st == 1, -np.inf, np.where(st == 2, np.inf, mc))
+    p05, p50, p95 = (_num(np.percentile(ranked, q, method="inverted_cdf")) for q in (5, 50, 95))
+    inside = mc[np.isfinite(mc)]
     out: dict[str, Any] = {
         "mu": ds.mu.values.tolist(),
         "probability_unstable": ds.probability_unstable.values.tolist(),
@@ -631,8 +660,10 @@ def propensity_summary(ds: xr.Dataset) -> dict[str, Any]:
         "nominal_mu_critical": _num(ds.attrs["nominal_mu_critical"]),
         "nominal_status": _STATUS_NAMES[int(ds.attrs["nominal_onset_status"])],
         "mu_critical": {
-            "mean": float(mc.mean()), "std": float(mc.std()), "p05": float(p05), "p50": float(p50),
-            "p95": float(p95),
+            "mean": _num(inside.mean()) if inside.size else None,
+            "std": _num(inside.std()) if inside.size else None,
+            "p05": p05, "p50": p50, "p95": p95,
+            "censored": int(np.sum((st == 1) | (st == 2))),
             **{f"{name}_fraction": float(np.mean(st == k)) for k, name in enumerate(_STATUS_NAMES)},
         },
         "parameters": json.loads(ds.attrs["uncertain"]),

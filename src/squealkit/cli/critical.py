@@ -21,9 +21,14 @@ from ._options import build_model_from_options, emit_json, model_options
 def critical(preset, config, sets, theta_spec, damped, mu_max, sensitivity, as_json) -> None:
     """Critical friction: where the brake first loses stability (paper §3, eq. 6).
 
-    Finds mu_crit by root-finding on the stability boundary (scan, then bisection
-    to rounding level), and the critical equivalent friction mu_e = mu_crit +
-    tan(theta), which the paper predicts is nearly independent of theta.
+    Finds every friction window in [0, --mu-max] where the brake is unstable (a
+    scan, a search of every point where two modes come close in frequency or a
+    growth rate peaks, so that windows much narrower than the scan are found,
+    then bisection of each boundary to rounding level). mu_crit is the start of
+    the first window; re-stabilisation at higher friction shows as a window
+    that ends before --mu-max. Also the critical equivalent friction mu_e =
+    mu_crit + tan(theta), which the paper predicts is nearly independent of
+    theta.
 
     \b
     Examples:
@@ -35,7 +40,11 @@ def critical(preset, config, sets, theta_spec, damped, mu_max, sensitivity, as_j
     \b
     --json keys (one theta): mu_critical, mu_e_critical, omega_rad_s,
     frequency_hz (of the mode that loses stability, at onset), theta_deg,
-    status (onset | unstable_without_friction | stable_in_range), damped;
+    status (onset | unstable_at_start | stable_in_range | indeterminate;
+    unstable_at_start = unstable without friction, mu_crit then negative),
+    unstable_intervals (list of [start, end]; a window open at --mu-max ends
+    there), indeterminate_intervals (windows no verdict could be reached in,
+    within rounding; usually empty), mu_max, damped;
     with --sensitivity a list "sensitivity" of {parameter, value, unit, dmu_dp,
     elasticity}. A range of theta gives the same keys, each a list over theta.
     """
@@ -59,6 +68,11 @@ def critical(preset, config, sets, theta_spec, damped, mu_max, sensitivity, as_j
         click.echo(f"  mu_crit   = {res.mu_critical:.8f}")
         click.echo(f"  mu_e_crit = {res.mu_e_critical:.8f}   (mu_crit + tan theta)")
         click.echo(f"  frequency = {res.omega_rad_s:.2f} rad/s = {res.frequency_hz:.2f} Hz at onset")
+        windows = ", ".join(f"[{a:.6f}, {b:.6f}]" for a, b in res.unstable_intervals) or "none"
+        click.echo(f"  unstable for mu in {windows}   (searched 0 to {mu_max:g})")
+        if res.indeterminate_intervals:
+            und = ", ".join(f"[{a:.6f}, {b:.6f}]" for a, b in res.indeterminate_intervals)
+            click.echo(f"  undecided within rounding for mu in {und}")
         if sensitivity:
             click.echo("  sensitivity of mu_crit (elasticity = % change of mu_crit per % change of p):")
             for row in out["sensitivity"]:
@@ -68,20 +82,28 @@ def critical(preset, config, sets, theta_spec, damped, mu_max, sensitivity, as_j
     if sensitivity:
         raise InputError("--sensitivity needs a single --theta value.")
     ds = critical_friction_curve(model, [math.radians(t) for t in theta_deg], damped=damped, mu_max=mu_max)
-    status = {0: "onset", 1: "unstable_without_friction", 2: "stable_in_range"}
+    from ..stability import ONSET_STATUS
+
+    def pairs(a):
+        return [[float(lo), float(hi)] for lo, hi in a if math.isfinite(lo)]
+
     out = {
         "theta_deg": ds.theta_deg.values,
         "mu_critical": ds.mu_critical.values,
         "mu_e_critical": ds.mu_e_critical.values,
         "omega_rad_s": ds.omega_rad_s.values,
         "frequency_hz": ds.frequency_hz.values,
-        "status": [status[int(s)] for s in ds.status.values],
+        "status": [ONSET_STATUS[int(s)] for s in ds.status.values],
+        "unstable_intervals": [pairs(w) for w in ds.unstable_intervals.values],
+        "indeterminate_intervals": [pairs(w) for w in ds.indeterminate_intervals.values],
+        "mu_max": mu_max,
         "damped": damped,
     }
     if as_json:
         emit_json(out)
         return
-    click.echo(f"{'theta [deg]':>12} {'mu_crit':>12} {'mu_e_crit':>12} {'f [Hz]':>10}")
-    for t, m, me, f in zip(out["theta_deg"], out["mu_critical"], out["mu_e_critical"], out["frequency_hz"],
-                           strict=True):
-        click.echo(f"{t:12.4g} {m:12.6f} {me:12.6f} {f:10.2f}")
+    click.echo(f"{'theta [deg]':>12} {'mu_crit':>12} {'mu_e_crit':>12} {'f [Hz]':>10}  unstable windows")
+    for t, m, me, f, w in zip(out["theta_deg"], out["mu_critical"], out["mu_e_critical"], out["frequency_hz"],
+                              out["unstable_intervals"], strict=True):
+        windows = " ".join(f"[{a:.4f}, {b:.4f}]" for a, b in w) or "-"
+        click.echo(f"{t:12.4g} {m:12.6f} {me:12.6f} {f:10.2f}  {windows}")

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib
 import sys
+import warnings
 from typing import Any
 
 import click
@@ -29,6 +30,11 @@ COMMANDS: dict[str, str] = {
     "montecarlo": "squealkit.cli.montecarlo:montecarlo",
     "synth": "squealkit.cli.synth:synth",
 }
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings reach the user as one line on stderr, like errors (no source lines)."""
+    click.echo(f"squealkit: warning: {message}", err=True)
 
 
 class SquealkitGroup(click.Group):
@@ -52,6 +58,8 @@ class SquealkitGroup(click.Group):
         standalone_mode: bool = True,
         **extra: Any,
     ) -> int:
+        shown = warnings.showwarning
+        warnings.showwarning = _one_line_warning
         try:
             rv = super().main(
                 args, prog_name or "squealkit", complete_var, standalone_mode=False, **extra
@@ -70,6 +78,8 @@ class SquealkitGroup(click.Group):
         except click.Abort:
             click.echo("squealkit: interrupted", err=True)
             code = 130
+        finally:
+            warnings.showwarning = shown
         if standalone_mode:
             sys.exit(code)
         return code

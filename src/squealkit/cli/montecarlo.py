@@ -69,9 +69,12 @@ def montecarlo(preset, config, sets, uncertain_path, samples, mu_spec, theta_deg
     --json keys: mu, probability_unstable, ci_lower, ci_upper, unstable_count,
     nominal_unstable (lists over mu, equal length); samples, seed, confidence,
     ci_method, theta_deg, damped, nominal_mu_critical, nominal_status;
-    mu_critical (mean, std, p05, p50, p95 over the samples, clipped to the mu
-    range, and onset_fraction, unstable_at_start_fraction,
-    stable_in_range_fraction); parameters (the distributions); sensitivity
+    mu_critical (mean, std over the samples with an onset in the mu range;
+    p05, p50, p95 over all, null where a percentile falls among censored
+    samples; censored, the count of samples whose onset lies outside the mu
+    range, with a warning on stderr; onset_fraction,
+    unstable_at_start_fraction, stable_in_range_fraction,
+    indeterminate_fraction); parameters (the distributions); sensitivity
     (per parameter: first_order, first_order_ci, total, total_ci, spearman,
     unit; null with --no-sensitivity).
     """
@@ -134,7 +137,10 @@ def _print_text(model, s: dict, ds) -> None:
     if len(rows) < n:
         click.echo(f"  ({len(rows)} of {n} mu points; --json or --out for all)")
     c = s["mu_critical"]
-    click.echo(f"mu_crit over the samples: median {c['p50']:.4f}, 5-95% {c['p05']:.4f}-{c['p95']:.4f} "
+    def q(v) -> str:
+        return "censored" if v is None else f"{v:.4f}"
+
+    click.echo(f"mu_crit over the samples: median {q(c['p50'])}, 5-95% {q(c['p05'])} to {q(c['p95'])} "
                f"({c['unstable_at_start_fraction']:.1%} unstable at mu = {s['mu'][0]:g}, "
                f"{c['stable_in_range_fraction']:.1%} stable up to {s['mu'][-1]:g})")
     if s["sensitivity"] is None:

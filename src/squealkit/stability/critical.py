@@ -1,16 +1,20 @@
-"""Critical friction, run-out tolerance and parameter sensitivity (paper §3, eqs. 5-6, 11).
+"""Critical friction, unstable windows, run-out tolerance and sensitivity (paper §3, eqs. 5-6, 11).
 
-The stability boundary is found by root-finding, not grid look-up: a fine scan brackets
-the first change of stability from a known side, then bisection on the stability
-indicator (``sigma_max > 1e-9 |lambda|``) narrows the bracket to rounding level. All
-brackets of a batch are bisected together, each step one vectorised eigenvalue call.
+The stability boundary is found by root-finding, not grid look-up: every window of
+instability along the friction (or slope) axis is located by
+:func:`~squealkit.stability._windows.find_windows` (a scan, golden-section search of the
+points where modes come close in frequency or a growth rate peaks, then bisection of
+every change of verdict to rounding level). A window narrower than the scan spacing is
+found through the frequency gap that closes around it. All rows of a batch (thetas,
+sides) are searched together, each step one vectorised eigenvalue call.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Sequence
+import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,9 +24,12 @@ from numpy.typing import ArrayLike, NDArray
 from .. import __version__
 from .._validation import InputError, validate_array_finite, validate_finite, validate_positive
 from ..models import FrictionModel
-from .eigen import eigenvalues, unstable_threshold
+from ._solve import IndeterminateWarning
+from ._windows import ONSET_STATUS, SCAN_POINTS, Windows, find_windows
+from .eigen import _solve_grid
 
 __all__ = [
+    "ONSET_STATUS",
     "CriticalFriction",
     "RunoutTolerance",
     "critical_friction",
@@ -31,55 +38,36 @@ __all__ = [
     "runout_tolerance",
 ]
 
-_BISECT_STEPS = 64
-_SCAN_POINTS = 401
+_SCAN_POINTS = SCAN_POINTS
 
 
-def _unstable(model: FrictionModel, mu: NDArray, t: NDArray, damped: bool) -> NDArray[np.bool_]:
-    lam = eigenvalues(model, mu, t, damped=damped)
-    return np.any(lam.real > unstable_threshold(lam)[..., None], axis=-1)
+def _evaluator(model: FrictionModel, damped: bool, mu: NDArray | None, t: NDArray | None):
+    """Path evaluator for :func:`find_windows`: rows index ``mu`` or ``t``, x is the other."""
+
+    def evaluate(rows: NDArray, x: NDArray, high_precision: bool = True):
+        mu_p = x if mu is None else mu[rows]
+        t_p = x if t is None else t[rows]
+        lam, _err, verdict, thr = _solve_grid(model, mu_p, t_p, damped, high_precision=high_precision)
+        return verdict, lam, thr
+
+    return evaluate
 
 
 def _onset_frequency(model: FrictionModel, mu: NDArray, t: NDArray, damped: bool) -> NDArray:
-    lam = eigenvalues(model, mu, t, damped=damped)
+    lam = _solve_grid(model, mu, t, damped)[0]
     idx = np.argmax(lam.real, axis=-1)
     return np.abs(np.take_along_axis(lam.imag, idx[..., None], axis=-1)[..., 0])
 
 
-def _first_change(
-    unstable_at: Callable[[NDArray], NDArray[np.bool_]],
-    start: NDArray,
-    stop: float,
-    scan: int,
-) -> tuple[NDArray, NDArray, NDArray[np.bool_], NDArray[np.bool_]]:
-    """Bracket and bisect the first change of stability going from ``start`` to ``stop``.
-
-    ``unstable_at(x)`` takes an array shaped like ``start`` (one value per batch entry).
-    Returns ``(x_from_side, x_other_side, found, state_at_start)``; where nothing changes
-    before ``stop``, ``found`` is False and both sides are NaN.
-    """
-    start = np.asarray(start, dtype=float)
-    s0 = unstable_at(start)
-    grid = start[None, ...] + (stop - start)[None, ...] * np.linspace(0.0, 1.0, scan).reshape(
-        (scan,) + (1,) * start.ndim
-    )
-    states = np.stack([unstable_at(grid[i]) for i in range(scan)])
-    changed = states != s0[None, ...]
-    found = changed.any(axis=0)
-    j = np.where(found, changed.argmax(axis=0), 1)
-    take = np.indices(start.shape)
-    a = grid[(j - 1, *take)]
-    b = grid[(j, *take)]
-    for _ in range(_BISECT_STEPS):
-        mid = 0.5 * (a + b)
-        same = unstable_at(mid) == s0
-        a = np.where(same, mid, a)
-        b = np.where(same, b, mid)
-        if np.all(np.abs(b - a) <= 4 * np.finfo(float).eps * np.maximum(1.0, np.abs(a))):
-            break
-    a = np.where(found, a, np.nan)
-    b = np.where(found, b, np.nan)
-    return a, b, found, s0
+def _intervals_array(win: Windows, n_rows: int, unstable: bool) -> NDArray[np.float64]:
+    """Windows of each row as an array (n_rows, W, 2) ascending, padded with NaN."""
+    per_row = [[(lo, hi) for lo, hi, u in win.of_row(b) if u == unstable] for b in range(n_rows)]
+    width = max(1, max((len(r) for r in per_row), default=0))
+    out = np.full((n_rows, width, 2), np.nan)
+    for b, r in enumerate(per_row):
+        if r:
+            out[b, : len(r)] = r
+    return out
 
 
 @dataclass(frozen=True)
@@ -98,9 +86,17 @@ class CriticalFriction:
     omega_rad_s, frequency_hz : float
         Frequency of the mode that loses stability, at onset.
     status : str
-        ``"onset"``, ``"unstable_without_friction"`` or ``"stable_in_range"``.
+        One of :data:`ONSET_STATUS`: ``"onset"``, ``"unstable_at_start"`` (unstable
+        without friction), ``"stable_in_range"`` or ``"indeterminate"``.
     damped : bool
         Whether damping was included.
+    unstable_intervals : tuple of (float, float)
+        Every friction window ``[start, end]`` in ``[0, mu_max]`` where the system is
+        unstable (flutter or divergence); a window open at ``mu_max`` ends there.
+    indeterminate_intervals : tuple of (float, float)
+        Windows where no verdict could be reached within rounding (usually empty).
+    mu_max : float
+        End of the searched range.
     """
 
     theta: float
@@ -110,6 +106,9 @@ class CriticalFriction:
     frequency_hz: float
     status: str
     damped: bool
+    unstable_intervals: tuple[tuple[float, float], ...] = ()
+    indeterminate_intervals: tuple[tuple[float, float], ...] = ()
+    mu_max: float = 2.0
 
     @property
     def theta_deg(self) -> float:
@@ -118,6 +117,8 @@ class CriticalFriction:
     def to_dict(self) -> dict[str, object]:
         d = dataclasses.asdict(self)
         d["theta_deg"] = self.theta_deg
+        d["unstable_intervals"] = [list(w) for w in self.unstable_intervals]
+        d["indeterminate_intervals"] = [list(w) for w in self.indeterminate_intervals]
         return d
 
 
@@ -129,11 +130,13 @@ def critical_friction_curve(
     mu_max: float = 2.0,
     scan: int = _SCAN_POINTS,
 ) -> xr.Dataset:
-    """Critical friction mu_crit(theta) and mu_e_crit = mu_crit + tan(theta) over theta.
+    """Critical friction mu_crit(theta), mu_e_crit = mu_crit + tan(theta), and every unstable window.
 
-    Starting from mu = 0 the search goes up to ``mu_max`` for the first loss of stability;
-    if the system is already unstable at mu = 0 it goes down to ``-mu_max`` for the first
-    stable point instead (a negative mu_crit).
+    Along ``mu`` from 0 to ``mu_max`` every window of instability is found (down to
+    windows much narrower than the scan spacing, through the closing frequency gap that
+    announces them). mu_crit is the start of the first. If the system is already unstable
+    at mu = 0 the search also goes down to ``-mu_max`` for the first stable point (a
+    negative mu_crit).
 
     Parameters
     ----------
@@ -145,14 +148,20 @@ def critical_friction_curve(
     mu_max : float
         Search range for |mu|.
     scan : int
-        Points of the bracketing scan (a narrower unstable window could be missed).
+        Points of the initial scan.
 
     Returns
     -------
     xarray.Dataset
         Over ``theta``: ``mu_critical``, ``mu_e_critical``, ``omega_rad_s``,
-        ``frequency_hz`` and ``status`` (0 onset, 1 unstable without friction,
-        2 stable in range).
+        ``frequency_hz``, ``status`` (codes of :data:`ONSET_STATUS`) and
+        ``unstable_intervals`` / ``indeterminate_intervals`` (theta, window, bound:
+        start and end, NaN-padded).
+
+    Warns
+    -----
+    IndeterminateWarning
+        When some window could not be decided within rounding.
     """
     th = np.atleast_1d(validate_array_finite("theta", theta)).astype(float)
     if th.ndim != 1:
@@ -161,38 +170,57 @@ def critical_friction_curve(
         raise InputError("Parameter theta must lie strictly between -90 and 90 deg.")
     mu_max = validate_positive("mu_max", mu_max)
     t = np.tan(th)
-
-    def unstable_at(mu: NDArray) -> NDArray[np.bool_]:
-        return _unstable(model, mu, t, damped)
-
-    s0 = unstable_at(np.zeros_like(t))
-    # stable at mu = 0: search upwards; unstable: search downwards for the boundary
-    up_a, _up_b, up_found, _ = _first_change(unstable_at, np.zeros_like(t), mu_max, scan)
-    _dn_a, dn_b, dn_found, _ = _first_change(unstable_at, np.zeros_like(t), -mu_max, scan)
-    # the boundary value: the stable side's end of the bracket (rounding-level bracket)
-    mu_c = np.where(s0, dn_b, up_a)
-    found = np.where(s0, dn_found, up_found)
-    status = np.where(s0, 1, np.where(found, 0, 2))
-    mu_c = np.where(found, mu_c, np.nan)
-    omega = np.full_like(t, np.nan)
-    if found.any():
-        # On the rounding-level bracket every growth rate is noise-sized; a step of 1e-6
-        # into the unstable side (always towards larger mu) makes the onset mode stand out.
-        step = 1e-6 * np.maximum(1.0, np.abs(mu_c[found]))
-        omega[found] = _onset_frequency(model, mu_c[found] + step, t[found], damped)
+    B = t.size
+    evaluate = _evaluator(model, damped, None, t)
+    up = find_windows(evaluate, np.zeros(B), np.full(B, mu_max), scan=scan)
+    near, far, first_unstable = up.first(B)
+    s0 = up.start_unstable
+    mu_c = np.where(np.isfinite(near) & ~s0, near, np.nan)
+    status = np.where(np.isfinite(mu_c), np.where(first_unstable, 0, 3), 2).astype(np.int8)
+    status[s0] = 1
+    if s0.any():
+        # unstable at mu = 0: the first stable point going down is the (negative) mu_crit
+        rows = np.flatnonzero(s0)
+        dn = find_windows(_evaluator(model, damped, None, t[rows]), np.zeros(rows.size),
+                          np.full(rows.size, -mu_max), scan=scan)
+        _near, dn_far, _ = dn.first(rows.size)
+        reached = np.isfinite(dn_far) & (dn_far > -mu_max)
+        mu_c[rows] = np.where(reached, dn_far, np.nan)
+    omega = np.full(B, np.nan)
+    inside = status == 0
+    if inside.any():
+        # just inside the window, where the onset mode's growth stands out from rounding
+        step = np.minimum(1e-6 * np.maximum(1.0, np.abs(mu_c)), 0.5 * (far - near))
+        omega[inside] = _onset_frequency(model, (mu_c + step)[inside], t[inside], damped)
+    back = np.flatnonzero(status == 1)
+    if back.size and np.isfinite(mu_c[back]).any():
+        ok = back[np.isfinite(mu_c[back])]
+        omega[ok] = _onset_frequency(model, mu_c[ok] + 1e-6 * np.maximum(1.0, np.abs(mu_c[ok])), t[ok], damped)
+    uns = _intervals_array(up, B, True)
+    ind = _intervals_array(up, B, False)
+    if np.isfinite(ind).any():
+        warnings.warn(
+            "Some friction windows could not be decided within rounding of the model's numbers "
+            "(see indeterminate_intervals).", IndeterminateWarning, stacklevel=2)
     ds = xr.Dataset(
         {
             "mu_critical": ("theta", mu_c, {"units": "1", "long_name": "critical friction coefficient"}),
             "mu_e_critical": ("theta", mu_c + t, {"units": "1", "long_name": "critical mu + tan(theta) (eq. 6)"}),
             "omega_rad_s": ("theta", omega, {"units": "rad/s", "long_name": "frequency at onset"}),
             "frequency_hz": ("theta", omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency at onset"}),
-            "status": ("theta", status.astype(np.int8),
-                       {"flag_values": "0 1 2", "flag_meanings": "onset unstable_without_friction stable_in_range"}),
+            "status": ("theta", status,
+                       {"flag_values": " ".join(str(i) for i in range(len(ONSET_STATUS))),
+                        "flag_meanings": " ".join(ONSET_STATUS)}),
+            "unstable_intervals": (("theta", "window", "bound"), uns,
+                                   {"units": "1", "long_name": "unstable friction windows [start, end]"}),
+            "indeterminate_intervals": (("theta", "indeterminate_window", "bound"), ind,
+                                        {"units": "1", "long_name": "undecided friction windows [start, end]"}),
         },
         coords={
             "theta": ("theta", th, {"units": "rad"}),
             "theta_deg": ("theta", np.degrees(th), {"units": "deg"}),
             "tan_theta": ("theta", t, {"units": "1"}),
+            "bound": ("bound", ["start", "end"]),
         },
         attrs={"model": model.to_json(), "damped": int(damped), "mu_max": mu_max,
                "squealkit_version": __version__},
@@ -200,7 +228,8 @@ def critical_friction_curve(
     return ds
 
 
-_STATUS = {0: "onset", 1: "unstable_without_friction", 2: "stable_in_range"}
+def _pairs(a: NDArray) -> tuple[tuple[float, float], ...]:
+    return tuple((float(lo), float(hi)) for lo, hi in a if np.isfinite(lo))
 
 
 def critical_friction(
@@ -210,7 +239,9 @@ def critical_friction(
     damped: bool = False,
     mu_max: float = 2.0,
 ) -> CriticalFriction:
-    """Critical friction at one run-out incline ``theta`` [rad] (paper §3, eq. 6).
+    """Critical friction and every unstable friction window at one run-out incline ``theta`` [rad].
+
+    See :func:`critical_friction_curve` (paper §3, eq. 6).
 
     Examples
     --------
@@ -218,8 +249,9 @@ def critical_friction(
 
     >>> from squealkit.models import Hoffmann2002
     >>> m = Hoffmann2002()
-    >>> abs(critical_friction(m).mu_critical - m.mu_critical_closed_form()) < 1e-9
-    True
+    >>> c = critical_friction(m)
+    >>> abs(c.mu_critical - m.mu_critical_closed_form()) < 1e-9, len(c.unstable_intervals)
+    (True, 1)
     """
     theta = validate_finite("theta", theta)
     ds = critical_friction_curve(model, [theta], damped=damped, mu_max=mu_max)
@@ -230,8 +262,11 @@ def critical_friction(
         mu_e_critical=float(r.mu_e_critical),
         omega_rad_s=float(r.omega_rad_s),
         frequency_hz=float(r.frequency_hz),
-        status=_STATUS[int(r.status)],
+        status=ONSET_STATUS[int(r.status)],
         damped=damped,
+        unstable_intervals=_pairs(r.unstable_intervals.values),
+        indeterminate_intervals=_pairs(r.indeterminate_intervals.values),
+        mu_max=mu_max,
     )
 
 
@@ -308,18 +343,13 @@ def runout_tolerance(
     slope_max = validate_positive("slope_max", slope_max)
     if wavelength is not None:
         wavelength = validate_positive("wavelength", wavelength)
-    mu_arr = np.array([mu])
-
-    def unstable_at(t: NDArray) -> NDArray[np.bool_]:
-        return _unstable(model, mu_arr, t, damped)
-
-    flat_unstable = bool(unstable_at(np.zeros(1))[0])
-    if flat_unstable:
+    evaluate = _evaluator(model, damped, np.array([mu, mu]), None)
+    win = find_windows(evaluate, np.zeros(2), np.array([slope_max, -slope_max]))
+    if win.start_unstable[0]:
         return RunoutTolerance(mu, 0.0, 0.0, "flat", wavelength, 0.0 if wavelength else None, False, damped)
-    sides = {}
-    for name, stop in (("rising", slope_max), ("falling", -slope_max)):
-        a, _, found, _ = _first_change(unstable_at, np.zeros(1), stop, _SCAN_POINTS)
-        sides[name] = abs(float(a[0])) if found[0] else math.inf
+    near, _far, _ = win.first(2)
+    sides = {name: abs(float(near[i])) if np.isfinite(near[i]) else math.inf
+             for i, name in enumerate(("rising", "falling"))}
     side = min(sides, key=lambda k: sides[k])
     s = sides[side]
     q0 = None if wavelength is None else s * wavelength / (2 * math.pi)

@@ -65,7 +65,7 @@ def _matrices(model: FrictionModel, damped: bool) -> tuple[NDArray, ...]:
     return tuple(np.ascontiguousarray(a[None]) for a in (M, C, K0, Kn, Kf))
 
 
-def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int):
+def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int, high_precision: bool = True):
     """Modes, error radii, verdicts and thresholds of flat arrays of contact factors g, e."""
     M, C, K0, Kn, Kf = mats
     n = M.shape[-1]
@@ -82,10 +82,11 @@ def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int):
         even = np.empty(g.shape[0], dtype=np.bool_)
         perms, signs = _perms(n)
         quadratic_eigvals(M[0], C[0], K0[0], Kn[0], Kf[0], g, e, perms, signs, roots, radii, even, _CHUNK, row)
-    return solve_points(M, C, K0, Kn, Kf, which, g, e, roots, radii, even, UNSTABLE_RTOL)
+    return solve_points(M, C, K0, Kn, Kf, which, g, e, roots, radii, even, UNSTABLE_RTOL,
+                        high_precision=high_precision)
 
 
-def _solve_grid(model, mu, tan_theta, damped, progress=None):
+def _solve_grid(model, mu, tan_theta, damped, progress=None, *, high_precision=True):
     """``(lam, err, verdict, thr)`` over ``broadcast(mu, tan_theta)``; see :func:`eigenvalues`."""
     mu_a = validate_array_finite("mu", mu)
     t_a = validate_array_finite("tan_theta", tan_theta)
@@ -106,7 +107,7 @@ def _solve_grid(model, mu, tan_theta, damped, progress=None):
     for start in range(0, total, block):
         stop = min(total, start + block)
         sl = slice(start, stop)
-        lam[sl], err[sl], verdict[sl], thr[sl] = _solve_block(mats, g[sl], e[sl], row)
+        lam[sl], err[sl], verdict[sl], thr[sl] = _solve_block(mats, g[sl], e[sl], row, high_precision)
         if progress is not None:
             progress(stop, total)
     return (lam.reshape((*shape, n)), err.reshape((*shape, n)), verdict.reshape(shape), thr.reshape(shape))

@@ -10,7 +10,6 @@ identical results.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -21,14 +20,11 @@ from .._validation import InputError, validate_array_finite, validate_finite
 from ..models import FrictionModel
 from ._kernels import DIVERGENCE, FLUTTER, INDETERMINATE, quadratic_eigvals_stack
 from ._solve import lapack_roots, solve_points
+from ._windows import ONSET_STATUS, SCAN_POINTS, find_windows
 from .eigen import _KERNEL_MAX_DOF, UNSTABLE_RTOL, _perms
 
 __all__ = ["ONSET_STATUS", "ModelEnsemble", "ensemble_onset", "ensemble_unstable"]
 
-#: ``status`` codes of :func:`ensemble_onset`.
-ONSET_STATUS = {0: "onset", 1: "unstable_at_start", 2: "stable_in_range"}
-#: Bisection ends when the bracket is this narrow (absolute, in mu).
-_ONSET_TOL = 1e-10
 
 
 @dataclass(frozen=True)
@@ -88,31 +84,38 @@ class ModelEnsemble:
         return ModelEnsemble(self.M[i], self.C[i], self.K0[i], self.Kn[i], self.Kf[i], self.sliding[i])
 
 
+def _solve_rows(ens: ModelEnsemble, which: NDArray, mu: NDArray, tan_theta: NDArray | float,
+                high_precision: bool = True) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """``(lam, err, verdict, thr)`` of model ``which[p]`` at ``mu[p]`` (flat arrays), as
+    :func:`~squealkit.stability.eigen._solve_grid` does for one model."""
+    n = ens.n_dof
+    which = np.ascontiguousarray(which, dtype=np.int64)
+    mu = np.asarray(mu, dtype=float)
+    g = np.ascontiguousarray(1.0 - mu * tan_theta)
+    e = np.ascontiguousarray(ens.sliding[which] * (mu + tan_theta))
+    mats = tuple(np.ascontiguousarray(a) for a in (ens.M, ens.C, ens.K0, ens.Kn, ens.Kf))
+    if n > _KERNEL_MAX_DOF:
+        K = ens.K0[which] + g[:, None, None] * ens.Kn[which] + e[:, None, None] * ens.Kf[which]
+        roots, radii = lapack_roots(ens.M[which], ens.C[which], K)
+        even = None
+    else:
+        sub = tuple(np.ascontiguousarray(a[which]) for a in mats)
+        roots = np.empty((which.size, 1, 2 * n), dtype=np.complex128)
+        radii = np.empty((which.size, 1, 2 * n))
+        even = np.empty((which.size, 1), dtype=np.bool_)
+        perms, signs = _perms(n)
+        quadratic_eigvals_stack(*sub, g[:, None], e[:, None], perms, signs, roots, radii, even)
+        even = even.reshape(-1)
+    return solve_points(*mats, which, g, e, np.ascontiguousarray(roots.reshape(which.size, 2 * n)),
+                        np.ascontiguousarray(radii.reshape(which.size, 2 * n)), even, UNSTABLE_RTOL,
+                        high_precision=high_precision)
+
+
 def _verdict_rows(ens: ModelEnsemble, mu: NDArray, tan_theta: float) -> NDArray[np.int8]:
     """Verdict code of model s at mu[s, p] (shape (S, P)); that of ``stability_verdict``."""
     S, P = mu.shape
-    n = ens.n_dof
-    g = np.ascontiguousarray(1.0 - mu * tan_theta)
-    e = np.ascontiguousarray(ens.sliding[:, None] * (mu + tan_theta))
-    mats = tuple(np.ascontiguousarray(a) for a in (ens.M, ens.C, ens.K0, ens.Kn, ens.Kf))
     which = np.repeat(np.arange(S, dtype=np.int64), P)
-    if n > _KERNEL_MAX_DOF:
-        K = ens.K0[:, None] + g[..., None, None] * ens.Kn[:, None] + e[..., None, None] * ens.Kf[:, None]
-        shape = (S, P, n, n)
-        roots, radii = lapack_roots(np.broadcast_to(ens.M[:, None], shape).reshape(-1, n, n),
-                                    np.broadcast_to(ens.C[:, None], shape).reshape(-1, n, n), K.reshape(-1, n, n))
-        even = None
-    else:
-        roots = np.empty((S, P, 2 * n), dtype=np.complex128)
-        radii = np.empty((S, P, 2 * n))
-        even = np.empty((S, P), dtype=np.bool_)
-        perms, signs = _perms(n)
-        quadratic_eigvals_stack(*mats, g, e, perms, signs, roots, radii, even)
-        even = even.reshape(-1)
-    _, _, verdict, _ = solve_points(*mats, which, g.reshape(-1), e.reshape(-1),
-                                    np.ascontiguousarray(roots.reshape(S * P, 2 * n)),
-                                    np.ascontiguousarray(radii.reshape(S * P, 2 * n)), even, UNSTABLE_RTOL)
-    return verdict.reshape(S, P)
+    return _solve_rows(ens, which, mu.reshape(-1), tan_theta)[2].reshape(S, P)
 
 
 def _unstable_rows(ens: ModelEnsemble, mu: NDArray, tan_theta: float) -> NDArray[np.bool_]:
@@ -171,35 +174,32 @@ def ensemble_onset(
     ens: ModelEnsemble,
     mu: ArrayLike,
     tan_theta: float = 0.0,
-    *,
-    unstable: NDArray[np.bool_] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
-    """Critical friction of every model: the lowest mu of the grid's range that is unstable.
+    """Critical friction of every model: the start of its first unstable window in the range.
 
-    The first unstable grid point brackets the onset; bisection on the stability flag then
-    narrows the bracket to 1e-10, all models together (a fixed number of steps set by the
-    grid, so a model's result never depends on the others). As for
-    :func:`~squealkit.stability.critical_friction`, the stable end of the bracket is
-    returned. An unstable window narrower than the grid spacing can be missed.
+    The search is that of :func:`~squealkit.stability.critical_friction` (a scan, a search of
+    every near-coalescence and growth-rate peak, so windows narrower than the scan are not
+    missed, then bisection to rounding level), all models together, each step one call; a
+    model's result depends only on that model.
 
     Parameters
     ----------
     ens : ModelEnsemble
     mu : array_like, shape (P,)
-        Strictly increasing friction grid; the search range is ``[mu[0], mu[-1]]``.
+        Strictly increasing friction grid; the search range is ``[mu[0], mu[-1]]`` (the
+        scan has ``P`` points, at least 51 and at most 401).
     tan_theta : float
         Run-out slope.
-    unstable : ndarray of bool, shape (S, P), optional
-        :func:`ensemble_unstable` on this grid, if already computed.
 
     Returns
     -------
     mu_critical : ndarray, shape (S,)
-        The onset; ``mu[0]`` for a model unstable at the start of the range and ``mu[-1]``
-        for one stable over the whole range (i.e. the onset clipped to the range).
+        The onset; NaN where it lies outside the range: below ``mu[0]`` (unstable at the
+        start) or above ``mu[-1]`` (stable over the range: a censored sample).
     status : ndarray of int8, shape (S,)
-        0 onset in the range, 1 unstable at ``mu[0]``, 2 stable over the range
-        (:data:`ONSET_STATUS`).
+        Codes of :data:`~squealkit.stability.ONSET_STATUS`: 0 onset in the range, 1
+        unstable at ``mu[0]``, 2 stable over the range, 3 indeterminate (the first
+        window's verdicts are all within rounding; ``mu_critical`` is its start).
 
     Examples
     --------
@@ -208,32 +208,21 @@ def ensemble_onset(
     >>> from squealkit.models import Hoffmann2002
     >>> models = [Hoffmann2002(k3=k) for k in (7e5, 8e5, 9e5)]
     >>> mu_c, status = ensemble_onset(ModelEnsemble.from_models(models), np.linspace(0, 0.6, 13))
-    >>> bool(np.allclose(mu_c, [m.mu_critical_closed_form() for m in models], atol=1e-10))
+    >>> bool(np.allclose(mu_c, [m.mu_critical_closed_form() for m in models], atol=1e-9))
     True
     """
     mu_a = _grid(mu)
     t = _slope(tan_theta)
     S = len(ens)
-    if unstable is None:
-        unstable = ensemble_unstable(ens, mu_a, t)
-    unstable = np.asarray(unstable, dtype=bool)
-    if unstable.shape != (S, mu_a.size):
-        raise InputError(f"unstable has shape {unstable.shape}; expected {(S, mu_a.size)}.")
-    found = unstable.any(axis=1)
-    first = np.argmax(unstable, axis=1)
-    status = np.where(~found, 2, np.where(first == 0, 1, 0)).astype(np.int8)
-    mu_c = np.where(status == 2, mu_a[-1], mu_a[0]).astype(float)
-    idx = np.flatnonzero(status == 0)
-    if idx.size:
-        a = mu_a[first[idx] - 1]
-        b = mu_a[first[idx]]
-        sub = ens.take(idx)
-        width = float(np.max(np.diff(mu_a)))
-        steps = max(1, min(64, math.ceil(math.log2(width / _ONSET_TOL))))
-        for _ in range(steps):
-            mid = 0.5 * (a + b)
-            unst = _unstable_rows(sub, mid[:, None], t)[:, 0]
-            a = np.where(unst, a, mid)
-            b = np.where(unst, mid, b)
-        mu_c[idx] = a
+
+    def evaluate(rows: NDArray, x: NDArray, high_precision: bool = True):
+        lam, _err, verdict, thr = _solve_rows(ens, rows, x, t, high_precision)
+        return verdict, lam, thr
+
+    scan = int(np.clip(mu_a.size, 51, SCAN_POINTS))
+    win = find_windows(evaluate, np.full(S, mu_a[0]), np.full(S, mu_a[-1]), scan=scan)
+    near, _far, first_unstable = win.first(S)
+    status = np.where(np.isfinite(near), np.where(first_unstable, 0, 3), 2).astype(np.int8)
+    status[win.start_unstable] = 1
+    mu_c = np.where((status == 0) | (status == 3), near, np.nan)
     return mu_c, status
