@@ -352,43 +352,6 @@ _EPS = 2.220446049250313e-16
 
 
 @nb.njit(cache=True, nogil=True)
-def _abs_charpoly(M, C, K, perms, signs, out, tmp_a, tmp_b):
-    """Coefficients of the Leibniz expansion with every term taken in absolute value.
-
-    ``sum_d out[d] |s|^d`` bounds the size of the terms that cancel in ``det(M s^2 + C s + K)``;
-    the rounding error of the computed coefficients is a small multiple of eps times it.
-    """
-    n = M.shape[0]
-    for i in range(2 * n + 1):
-        out[i] = 0.0
-    for p in range(perms.shape[0]):
-        tmp_a[0] = 1.0
-        deg = 0
-        for i in range(n):
-            j = perms[p, i]
-            k0 = abs(K[i, j])
-            c1 = abs(C[i, j])
-            m2 = abs(M[i, j])
-            if k0 == 0.0 and c1 == 0.0 and m2 == 0.0:
-                deg = -1
-                break
-            for d in range(deg + 3):
-                tmp_b[d] = 0.0
-            for d in range(deg + 1):
-                a = tmp_a[d]
-                tmp_b[d] += a * k0
-                tmp_b[d + 1] += a * c1
-                tmp_b[d + 2] += a * m2
-            deg += 2
-            for d in range(deg + 1):
-                tmp_a[d] = tmp_b[d]
-        if deg < 0:
-            continue
-        for d in range(deg + 1):
-            out[d] += tmp_a[d]
-
-
-@nb.njit(cache=True, nogil=True)
 def inclusion_radii(z, lead, err_at, radius, member, pairs=False):
     """A-posteriori error radius of each computed root ``z`` of a polynomial with leading
     coefficient ``lead``, whose value is uncertain by ``err_at[k]`` at ``z[k]``.
