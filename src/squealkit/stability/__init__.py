@@ -1,4 +1,5 @@
-"""Stability of friction-coupled systems: complex eigenvalues, critical friction, tolerances."""
+"""Stability of friction-coupled systems: complex eigenvalues, critical friction, tolerances,
+mode shapes and sensitivities."""
 
 from .critical import (
     CriticalFriction,
@@ -10,6 +11,7 @@ from .critical import (
 )
 from .eigen import UNSTABLE_RTOL, eigenvalues, stability_map, stability_summary, unstable_threshold
 from .ensemble import ModelEnsemble, ensemble_onset, ensemble_unstable
+from .modes import eigenvalue_sensitivity, mode_shapes, modes, modes_summary, onset_modes
 from .tracking import lock_in, track_modes
 
 __all__ = [
@@ -20,10 +22,15 @@ __all__ = [
     "critical_friction",
     "critical_friction_curve",
     "critical_friction_sensitivity",
+    "eigenvalue_sensitivity",
     "eigenvalues",
     "ensemble_onset",
     "ensemble_unstable",
     "lock_in",
+    "mode_shapes",
+    "modes",
+    "modes_summary",
+    "onset_modes",
     "runout_tolerance",
     "stability_map",
     "stability_summary",
