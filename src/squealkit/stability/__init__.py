@@ -6,12 +6,12 @@ from .critical import (
     RunoutTolerance,
     critical_friction,
     critical_friction_curve,
-    critical_friction_sensitivity,
     runout_tolerance,
 )
 from .eigen import UNSTABLE_RTOL, eigenvalues, stability_map, stability_summary, unstable_threshold
 from .ensemble import ModelEnsemble, ensemble_onset, ensemble_unstable
 from .modes import eigenvalue_sensitivity, mode_shapes, modes, modes_summary, onset_modes
+from .sensitivity import critical_friction_sensitivity
 from .tracking import lock_in, track_modes
 
 __all__ = [
