@@ -86,6 +86,7 @@ def _print_table(model, s: dict) -> None:
     for m in s["modes"]:
         amp = [math.hypot(*z) for z in m["shape"]]
         phase = [math.degrees(math.atan2(z[1], z[0])) for z in m["shape"]]
+        phase = [180.0 if p <= -180.0 + 1e-6 else p for p in phase]  # (-180, 180]
         top = sorted(range(len(amp)), key=lambda i: -amp[i])[:3]
         dofs = ", ".join(f"{m['dof_names'][i]} {amp[i]:.3g}/{phase[i]:+.0f}" for i in top if amp[i] >= 1e-3)
         mark = "  <- UNSTABLE" if m["unstable"] else ("  <- loses stability" if m.get("loses_stability") else "")

@@ -78,6 +78,7 @@ def modes_plot(ds: xr.Dataset, *, modes: list[int] | None = None, fig=None):
         color = colors[role]
         amp = np.abs(phi[k])
         phase = np.degrees(np.angle(phi[k]))
+        phase[phase <= -180.0 + 1e-6] = 180.0  # -180 and +180 are one phase; show (-180, 180]
         cell = outer[r, c].subgridspec(2, 1, height_ratios=[1.4, 1.0])
         ax_a = fig.add_subplot(cell[0])
         ax_p = fig.add_subplot(cell[1], sharex=ax_a)
