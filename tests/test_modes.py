@@ -142,6 +142,8 @@ def test_real_roots_are_all_kept():
     np.testing.assert_allclose(np.sort(ds.growth_rate.values), roots, rtol=1e-12)
     assert ds.real_root.all() and ds.attrs["verdict"] == "divergence"
     assert ds.unstable.values.tolist() == (ds.growth_rate.values > 0).tolist() == [True, False]
+    # no cycle, no work per cycle: NaN in the dataset, null in JSON
+    assert [m["friction_work"] for m in modes_summary(ds)["modes"]] == [None, None]
 
 
 # -- friction work --------------------------------------------------------------------------

@@ -377,9 +377,9 @@ def modes_summary(ds: xr.Dataset) -> dict[str, object]:
             "left_shape": [[float(z.real), float(z.imag)] for z in psi[k]],
             "participation": [float(p) for p in r.participation.values],
             "modal_mass": float(r.modal_mass),
-            "friction_work": float(r.friction_work),
-            "damping_work": float(r.damping_work),
-            "net_work": float(r.net_work),
+            "friction_work": _finite_or_none(r.friction_work),
+            "damping_work": _finite_or_none(r.damping_work),
+            "net_work": _finite_or_none(r.net_work),
         }
         if "loses_stability" in ds:
             row["loses_stability"] = bool(r.loses_stability)
@@ -397,6 +397,11 @@ def modes_summary(ds: xr.Dataset) -> dict[str, object]:
     if "mu_critical" in ds.attrs:
         out["mu_critical"] = float(ds.attrs["mu_critical"])
     return out
+
+
+def _finite_or_none(x: xr.DataArray) -> float | None:
+    v = float(x)
+    return v if math.isfinite(v) else None
 
 
 # -- eigenvalue derivatives ---------------------------------------------------------------
