@@ -81,18 +81,17 @@ def _print_table(model, s: dict) -> None:
     where = f"mu_crit = {s['mu']:.6f} (onset)" if "mu_critical" in s else f"mu = {s['mu']:g}"
     click.echo(f"model: {model.kind} ({'damped' if s['damped'] else 'undamped'}), {where}, "
                f"theta = {s['theta_deg']:g} deg: {s['verdict']}")
-    click.echo(f"{'mode':>4} {'f [Hz]':>10} {'sigma [1/s]':>12} {'zeta':>10} {'friction W [J]':>15} "
-               f"{'net W [J]':>11}  largest DOFs (amplitude, phase)")
+    click.echo(f"{'mode':>4} {'f [Hz]':>10} {'sigma [1/s]':>12} {'zeta':>9} {'W_friction [J]':>15} {'W_net [J]':>10}"
+               "  shape: amplitude@phase [deg]")
     for m in s["modes"]:
         amp = [math.hypot(*z) for z in m["shape"]]
         phase = [math.degrees(math.atan2(z[1], z[0])) for z in m["shape"]]
         phase = [180.0 if p <= -180.0 + 1e-6 else p for p in phase]  # (-180, 180]
         top = sorted(range(len(amp)), key=lambda i: -amp[i])[:3]
-        dofs = ", ".join(f"{m['dof_names'][i]} {amp[i]:.3g}/{phase[i]:+.0f}" for i in top if amp[i] >= 1e-3)
+        dofs = ", ".join(f"{m['dof_names'][i]} {amp[i]:.3g}@{phase[i]:+.0f}" for i in top if amp[i] >= 1e-3)
         mark = "  <- UNSTABLE" if m["unstable"] else ("  <- loses stability" if m.get("loses_stability") else "")
-        work = (f"{'-':>15} {'-':>11}" if m["real_root"] else
-                f"{m['friction_work']:15.4g} {m['net_work']:11.4g}")
-        click.echo(f"{m['mode']:4d} {m['frequency_hz']:10.2f} {m['growth_rate']:12.5g} {m['damping_ratio']:10.3g} "
+        work = (f"{'-':>15} {'-':>10}" if m["real_root"] else f"{m['friction_work']:15.4g} {m['net_work']:10.4g}")
+        click.echo(f"{m['mode']:4d} {m['frequency_hz']:10.2f} {m['growth_rate']:12.5g} {m['damping_ratio']:9.3g} "
                    f"{work}  {dofs}{mark}")
-    click.echo("W: energy per cycle for a shape of largest amplitude 1 m (scales with amplitude^2); "
-               "net W = friction - damping, with the sign of sigma.")
+    click.echo("W: energy per cycle for the shape scaled to 1 m largest amplitude (scales with amplitude^2); "
+               "W_net = friction - damping has the sign of sigma.")
