@@ -88,7 +88,7 @@ def _print_table(model, s: dict) -> None:
         phase = [math.degrees(math.atan2(z[1], z[0])) for z in m["shape"]]
         phase = [180.0 if p <= -180.0 + 1e-6 else p for p in phase]  # (-180, 180]
         top = sorted(range(len(amp)), key=lambda i: -amp[i])[:3]
-        dofs = ", ".join(f"{m['dof_names'][i]} {amp[i]:.3g}@{phase[i]:+.0f}" for i in top if amp[i] >= 1e-3)
+        dofs = ", ".join(f"{m['dof_names'][i]} {amp[i]:.3g}@{round(phase[i]):+d}" for i in top if amp[i] >= 1e-3)
         mark = "  <- UNSTABLE" if m["unstable"] else ("  <- loses stability" if m.get("loses_stability") else "")
         work = (f"{'-':>15} {'-':>10}" if m["real_root"] else f"{m['friction_work']:15.4g} {m['net_work']:10.4g}")
         click.echo(f"{m['mode']:4d} {m['frequency_hz']:10.2f} {m['growth_rate']:12.5g} {m['damping_ratio']:9.3g} "

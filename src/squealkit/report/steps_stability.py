@@ -186,7 +186,7 @@ def _onset_mode(model: FrictionModel, figures: Path, data: Path) -> tuple[str, d
     names = [f"{n} ({d})" if d != n else str(n) for n, d in zip(ds.dof.values, ds.dof_description.values,
                                                                   strict=True)]
     lead = int(order[0])
-    moves = [f"{names[i]} moves {amp[i]:.3g} of it at {phase[i]:+.0f} deg" for i in order[1:] if amp[i] >= 1e-3]
+    moves = [f"{names[i]} moves {amp[i]:.3g} of it at {round(phase[i]):+d} deg" for i in order[1:] if amp[i] >= 1e-3]
     share = ds.participation.values[k]
     top = int(np.argmax(share))
     freq = float(ds.frequency_hz[k])
