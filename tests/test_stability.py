@@ -220,7 +220,8 @@ def test_sensitivity_matches_hoffmanns_closed_form(params):
     h = Hoffmann2002(**params)
     ref = hoffmann_closed_form_gradient(h)
     scale = max(abs(v) * abs(getattr(h, k)) for k, v in ref.items())
-    for method, rtol in (("exact", 1e-8), ("fd", 1e-5)):
+    # FD (two onset searches per parameter, slow) on the default supports only
+    for method, rtol in (("exact", 1e-8), ("fd", 1e-5))[:1 if params else 2]:
         rows = {r["parameter"]: r["dmu_dp"] for r in critical_friction_sensitivity(h, method=method)}
         assert set(rows) == set(ref)
         for name, d in rows.items():  # per unit of p, compared at the scale of the largest p dmu/dp
