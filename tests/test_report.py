@@ -45,6 +45,8 @@ def test_reproduce_numbers_match_the_paper(paper):
     assert n["fig2"]["band_high"] == pytest.approx(15317.0, abs=10.0)
     # eqs. 5-6: mu + tan(theta) at onset is nearly constant over theta
     assert n["critical"]["mu_e_spread"] < 0.01
+    # §3: the mode that loses stability is the coupled pin/disc mode, 2387-2438 Hz (Fig. 2)
+    assert 2387.0 <= n["critical"]["onset_mode_frequency_hz"] <= 2438.0
     # §4 Fig. 4: growth on rising SRO, decay on falling SRO
     assert n["transient"]["rise_rate"] > 0 > n["transient"]["fall_rate"]
     # §5 (synthetic): squeal at the model's onset frequency, close to the measured 2388 Hz, on rising run-out

@@ -13,6 +13,7 @@ from squealkit.stability import (
     critical_friction,
     critical_friction_curve,
     critical_friction_sensitivity,
+    eigenvalue_sensitivity,
     eigenvalues,
     runout_tolerance,
     stability_map,
@@ -165,6 +166,94 @@ def test_sensitivity_predicts_a_finite_change():
     predicted = base * (1 + 0.01 * rows["k1"]["elasticity"])
     assert changed == pytest.approx(predicted, rel=2e-3)
     assert rows["P"]["dmu_dp"] == 0.0  # the static load does not enter K
+
+
+def elasticities(rows):
+    return {r["parameter"]: r["elasticity"] for r in rows}
+
+
+@pytest.mark.parametrize("damped", [False, True])
+def test_exact_sensitivity_agrees_with_finite_differences(damped):
+    # The exact derivatives (one onset search; coalescence formula undamped, Hopf damped)
+    # against central differences of two more onset searches per parameter (rel. step 1e-4).
+    # FD differentiates the search's boundary sigma = 1e-9 |lambda|, the exact method sigma = 0:
+    # they differ by ~1e-6 of mu_crit, hence the absolute floor on small elasticities.
+    # (A subset of the parameters keeps the FD side to ten onset searches; all of them agree.)
+    m = get_preset("lv2013")
+    names = ["k1", "k3", "kc", "alpha", "c1" if damped else "m2"]
+    exact = critical_friction_sensitivity(m, damped=damped, parameters=names)
+    fd = elasticities(critical_friction_sensitivity(m, damped=damped, parameters=names, method="fd"))
+    assert [r["parameter"] for r in exact] == sorted(fd, key=lambda k: -abs(fd[k]))
+    for r in exact:
+        assert r["elasticity"] == pytest.approx(fd[r["parameter"]], rel=1e-4, abs=1e-5), r
+
+
+def hoffmann_closed_form_gradient(h):
+    """d mu_crit / d p of Hoffmann's threshold s ((a - d)^2 + 4 b^2) / (4 b k3) (Hoffmann et al.
+    2002), differentiated by hand: a = sum k_i cos^2, b = sum k_i cos sin, d = sum k_i sin^2 + k3."""
+    s1, c1, s2, c2 = math.sin(h.alpha1), math.cos(h.alpha1), math.sin(h.alpha2), math.cos(h.alpha2)
+    a = h.k1 * c1**2 + h.k2 * c2**2
+    b = h.k1 * c1 * s1 + h.k2 * c2 * s2
+    d = h.k1 * s1**2 + h.k2 * s2**2 + h.k3
+    g = (a - d) ** 2 + 4 * b * b
+    partials = {  # (da, db, dd, dk3) per parameter
+        "k1": (c1**2, c1 * s1, s1**2, 0.0),
+        "k2": (c2**2, c2 * s2, s2**2, 0.0),
+        "k3": (0.0, 0.0, 1.0, 1.0),
+        "alpha1": (-2 * h.k1 * c1 * s1, h.k1 * (c1**2 - s1**2), 2 * h.k1 * c1 * s1, 0.0),
+        "alpha2": (-2 * h.k2 * c2 * s2, h.k2 * (c2**2 - s2**2), 2 * h.k2 * c2 * s2, 0.0),
+        "m": (0.0, 0.0, 0.0, 0.0),
+    }
+    out = {}
+    for name, (da, db, dd, dk3) in partials.items():
+        dg = 2 * (a - d) * (da - dd) + 8 * b * db
+        out[name] = h.sliding * (dg / (4 * b * h.k3) - g * (db * h.k3 + b * dk3) / (4 * b * b * h.k3**2))
+    return out
+
+
+@pytest.mark.parametrize(
+    "params",
+    [{}, {"k1": 2e6, "k2": 0.5e6, "alpha1": math.radians(40)},
+     {"sliding": -1, "alpha1": math.radians(150), "alpha2": math.radians(30)}],
+)
+def test_sensitivity_matches_hoffmanns_closed_form(params):
+    h = Hoffmann2002(**params)
+    ref = hoffmann_closed_form_gradient(h)
+    scale = max(abs(v) * abs(getattr(h, k)) for k, v in ref.items())
+    # FD (two onset searches per parameter, slow) on the default supports only
+    for method, rtol in (("exact", 1e-8), ("fd", 1e-5))[:1 if params else 2]:
+        rows = {r["parameter"]: r["dmu_dp"] for r in critical_friction_sensitivity(h, method=method)}
+        assert set(rows) == set(ref)
+        for name, d in rows.items():  # per unit of p, compared at the scale of the largest p dmu/dp
+            assert abs(d - ref[name]) * abs(getattr(h, name)) < rtol * scale, (method, name, d, ref[name])
+
+
+def test_coalescence_formula_is_the_limit_of_the_smooth_discriminant():
+    # Undamped onset is a double root; F = (lambda_1 - lambda_2)^2 is smooth through it, so
+    # -F_p / F_mu on the stable side, F_p = 2 (l1 - l2)(dl1/dp - dl2/dp) from the public
+    # eigenvalue derivatives, tends to d mu_crit / d p at O(delta): Richardson over delta.
+    m = get_preset("lv2013")
+    crit = critical_friction(m)
+    exact = {r["parameter"]: r["dmu_dp"] for r in critical_friction_sensitivity(m, parameters=["k1", "alpha"])}
+
+    def ratio(p, delta):
+        sp = eigenvalue_sensitivity(m, crit.mu_critical - delta, 0.0, p)
+        smu = eigenvalue_sensitivity(m, crit.mu_critical - delta, 0.0, "mu")
+        lam = sp.growth_rate.values + 1j * sp.omega.values
+        i, j = np.argsort(np.abs(lam - 1j * crit.omega_rad_s))[:2]
+        dp = sp.dgrowth_rate_dp.values + 1j * sp.domega_dp.values
+        dm = smu.dgrowth_rate_dp.values + 1j * smu.domega_dp.values
+        return -((lam[i] - lam[j]) * (dp[i] - dp[j]) / ((lam[i] - lam[j]) * (dm[i] - dm[j]))).real
+
+    for p in ("k1", "alpha"):
+        coarse, fine = ratio(p, 2.5e-3), ratio(p, 1.25e-3)
+        assert abs(coarse / exact[p] - 1) > 1e-3  # the plain quotient is still off ...
+        assert 2 * fine - coarse == pytest.approx(exact[p], rel=5e-6)  # ... its extrapolation is not
+
+
+def test_sensitivity_method_is_checked():
+    with pytest.raises(InputError, match="method='newton'"):
+        critical_friction_sensitivity(Hoffmann2002(), method="newton")
 
 
 @pytest.mark.parametrize("suffix", [".nc", ".zarr"])

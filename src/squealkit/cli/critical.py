@@ -16,7 +16,8 @@ from ._options import build_model_from_options, emit_json, model_options
 @click.option("--damped", is_flag=True, help="Include the damping matrix.")
 @click.option("--mu-max", default=2.0, show_default=True, type=float, help="Search friction up to this value.")
 @click.option("--sensitivity", is_flag=True,
-              help="Also report d mu_crit / d p and the elasticity for every model parameter.")
+              help="Also report d mu_crit / d p and the elasticity for every model parameter "
+              "(exact, from the eigenvectors at onset).")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON on stdout.")
 def critical(preset, config, sets, theta_spec, damped, mu_max, sensitivity, as_json) -> None:
     """Critical friction: where the brake first loses stability (paper §3, eq. 6).

@@ -21,6 +21,7 @@ from .._validation import InputError
 COMMANDS: dict[str, str] = {
     "stability": "squealkit.cli.stability:stability",
     "critical": "squealkit.cli.critical:critical",
+    "modes": "squealkit.cli.modes:modes",
     "presets": "squealkit.cli.presets:presets",
     "report": "squealkit.cli.reproduce:report",
     "reproduce": "squealkit.cli.reproduce:reproduce",
@@ -99,6 +100,7 @@ def cli() -> None:
     Start here:
       squealkit stability --plot fig2.png      # paper Fig. 2, lock-in band
       squealkit critical --theta 0 --json      # critical friction
+      squealkit modes --at-onset --plot mode.png       # shape of the squealing mode
       squealkit tolerance --mu 0.3 --wavelength 1e-3   # allowed run-out
       squealkit simulate --sro sine --plot fig4.png    # paper Fig. 4
       squealkit synth rec.nc                           # a SYNTHETIC rig recording

@@ -83,6 +83,8 @@ class FrictionModel(ABC):
     kind: ClassVar[str] = "abstract"
     #: Names of the degrees of freedom, in the order of the state vector.
     dof_names: ClassVar[tuple[str, ...]] = ()
+    #: What each degree of freedom is, in words (for figures and reports; may be empty).
+    dof_descriptions: ClassVar[tuple[str, ...]] = ()
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):

@@ -43,6 +43,7 @@ class Hoffmann2002(FrictionModel):
 
     kind: ClassVar[str] = "hoffmann"
     dof_names: ClassVar[tuple[str, ...]] = ("x", "y")
+    dof_descriptions: ClassVar[tuple[str, ...]] = ("along the belt", "normal to the belt")
 
     m: float = param(1.0, unit="kg", doc="mass")
     k1: float = param(1.0e6, unit="N/m", doc="first support spring")

@@ -67,6 +67,7 @@ class PinOnDisc3DOF(FrictionModel):
 
     kind: ClassVar[str] = "pin_on_disc"
     dof_names: ClassVar[tuple[str, ...]] = ("x1", "y1", "y2")
+    dof_descriptions: ClassVar[tuple[str, ...]] = ("pin, horizontal", "pin, vertical", "disc, vertical")
 
     m1: float = param(0.033, unit="kg", doc="pin mass (paper §3)")
     m2: float = param(4.35, unit="kg", doc="disc modal mass (paper §3)")

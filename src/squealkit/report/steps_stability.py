@@ -13,6 +13,8 @@ from ..stability import (
     critical_friction,
     critical_friction_curve,
     critical_friction_sensitivity,
+    mode_shapes,
+    onset_modes,
     runout_tolerance,
     stability_map,
     stability_summary,
@@ -152,7 +154,45 @@ def critical_step(model: FrictionModel, figures: Path, data: Path, *, wavelength
               ("parameter", "value", "unit", "d mu_crit / d p", "elasticity"),
               tuple((r["parameter"], r["value"], r["unit"], r["dmu_dp"], r["elasticity"]) for r in sens)),
     )
+    numbers = {"mu_crit": c0.mu_critical, "mu_crit_damped": cd.mu_critical,
+               "mu_e_spread": spread, "tan_theta_max": tol.tan_theta_max,
+               "q0_max": tol.q0_max or math.nan, "mu_e_crit": float(np.mean(mu_e))}
+    refs: tuple[FigureRef, ...] = ()
+    files: tuple[str, ...] = ()
+    if c0.status == "onset":
+        shape_text, shape_numbers = _onset_mode(model, figures, data)
+        paragraphs += (shape_text,)
+        numbers.update(shape_numbers)
+        refs = (FigureRef("onset_mode", "Shape of the mode that loses stability at mu_crit (undamped, flat "
+                                           "disc): amplitude and phase of each degree of freedom"),)
+        files = ("onset_modes.nc",)
     return Section("critical", "§3: critical friction and the run-out tolerance", paragraphs, comps, tables,
-                   numbers={"mu_crit": c0.mu_critical, "mu_crit_damped": cd.mu_critical,
-                            "mu_e_spread": spread, "tan_theta_max": tol.tan_theta_max,
-                            "q0_max": tol.q0_max or math.nan, "mu_e_crit": float(np.mean(mu_e))})
+                   refs, files, numbers=numbers)
+
+
+def _onset_mode(model: FrictionModel, figures: Path, data: Path) -> tuple[str, dict[str, float]]:
+    """The shape of the mode that loses stability on a flat disc (undamped, as Fig. 2): a figure,
+    its data and one sentence from its numbers."""
+    from ..plotting.modes import modes_plot
+
+    ds = onset_modes(model)
+    save_dataset(ds, data / "onset_modes.nc")
+    _save_fig(modes_plot(ds), figures, "onset_mode")
+    k = int(np.argmax(ds.loses_stability.values))
+    phi = mode_shapes(ds)[k]
+    amp, phase = np.abs(phi), np.degrees(np.angle(phi))
+    phase[phase <= -180.0 + 1e-6] = 180.0  # (-180, 180]
+    order = np.argsort(-amp)
+    names = [f"{n} ({d})" if d != n else str(n) for n, d in zip(ds.dof.values, ds.dof_description.values,
+                                                                  strict=True)]
+    lead = int(order[0])
+    moves = [f"{names[i]} moves {amp[i]:.3g} of it at {round(phase[i]):+d} deg" for i in order[1:] if amp[i] >= 1e-3]
+    share = ds.participation.values[k]
+    top = int(np.argmax(share))
+    freq = float(ds.frequency_hz[k])
+    text = (f"At onset (mu_crit = {ds.attrs['mu']:.5f}, undamped, flat disc) the mode that loses stability vibrates "
+            f"at {freq:.1f} Hz, mostly in {names[lead]}"
+            + (f"; {' and '.join(moves)}" if moves else "")
+            + f"; {ds.dof.values[top]} carries {100 * share[top]:.1f} % of the mode's "
+            "kinetic energy.")
+    return text, {"onset_mode_frequency_hz": freq, "onset_mode_top_energy_share": float(share[top])}

@@ -1,4 +1,5 @@
-"""Stability of friction-coupled systems: complex eigenvalues, critical friction, tolerances."""
+"""Stability of friction-coupled systems: complex eigenvalues, critical friction, tolerances,
+mode shapes and sensitivities."""
 
 from ._solve import IndeterminateWarning
 from .critical import (
@@ -7,7 +8,6 @@ from .critical import (
     RunoutTolerance,
     critical_friction,
     critical_friction_curve,
-    critical_friction_sensitivity,
     runout_tolerance,
 )
 from .eigen import (
@@ -20,6 +20,8 @@ from .eigen import (
     unstable_threshold,
 )
 from .ensemble import ModelEnsemble, ensemble_onset, ensemble_unstable
+from .modes import eigenvalue_sensitivity, mode_shapes, modes, modes_summary, onset_modes
+from .sensitivity import critical_friction_sensitivity
 from .tracking import lock_in, track_modes
 
 __all__ = [
@@ -33,10 +35,15 @@ __all__ = [
     "critical_friction",
     "critical_friction_curve",
     "critical_friction_sensitivity",
+    "eigenvalue_sensitivity",
     "eigenvalues",
     "ensemble_onset",
     "ensemble_unstable",
     "lock_in",
+    "mode_shapes",
+    "modes",
+    "modes_summary",
+    "onset_modes",
     "runout_tolerance",
     "stability_map",
     "stability_summary",

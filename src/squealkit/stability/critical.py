@@ -14,7 +14,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,7 +33,6 @@ __all__ = [
     "RunoutTolerance",
     "critical_friction",
     "critical_friction_curve",
-    "critical_friction_sensitivity",
     "runout_tolerance",
 ]
 
@@ -354,55 +352,3 @@ def runout_tolerance(
     s = sides[side]
     q0 = None if wavelength is None else s * wavelength / (2 * math.pi)
     return RunoutTolerance(mu, s, math.degrees(math.atan(s)), side, wavelength, q0, True, damped)
-
-
-def critical_friction_sensitivity(
-    model: FrictionModel,
-    theta: float = 0.0,
-    *,
-    damped: bool = False,
-    parameters: Sequence[str] | None = None,
-    rel_step: float = 1e-4,
-) -> list[dict[str, object]]:
-    """Sensitivity of the critical friction to each model parameter.
-
-    Central differences with a relative step. The elasticity
-    ``(p / mu_crit) d mu_crit / d p`` is the percent change of mu_crit per percent
-    change of p: the parameter with the largest positive elasticity buys the most margin
-    when raised. Rows are sorted by ``|elasticity|``.
-
-    Returns
-    -------
-    list of dict
-        ``parameter``, ``value``, ``unit``, ``dmu_dp`` (per unit of p) and ``elasticity``.
-    """
-    base = critical_friction(model, theta, damped=damped)
-    if base.status != "onset" or not math.isfinite(base.mu_critical):
-        raise InputError("The model has no friction onset at this theta; sensitivity is undefined.")
-    info = model.parameter_info()
-    names = list(parameters) if parameters is not None else [
-        k for k, v in info.items()
-        if v["kind"] in ("positive", "nonnegative", "angle", "finite")
-        and (damped or not v["unit"].startswith("N s/m"))
-    ]
-    rows = []
-    for name in names:
-        if name not in info:
-            raise InputError(f"Unknown parameter {name!r} for model {model.kind!r}.")
-        value = float(getattr(model, name))
-        h = rel_step * abs(value) if value != 0 else rel_step
-        try:
-            up = critical_friction(model.replace(**{name: value + h}), theta, damped=damped)
-            dn = critical_friction(model.replace(**{name: value - h}), theta, damped=damped)
-        except InputError:
-            continue  # a step outside the allowed range (e.g. a zero damping)
-        d = (up.mu_critical - dn.mu_critical) / (2 * h)
-        rows.append({
-            "parameter": name,
-            "value": value,
-            "unit": info[name]["unit"],
-            "dmu_dp": d,
-            "elasticity": d * value / base.mu_critical,
-        })
-    rows.sort(key=lambda r: -abs(float(r["elasticity"])))  # type: ignore[arg-type]
-    return rows
