@@ -55,10 +55,10 @@ _BISECT_STEPS = 64
 #: physical meaning, and above the ~1e-15 where every step near a lock-in point would
 #: need the 50-digit solver.
 _BISECT_RTOL = 1e-13
-#: A bisection point that double precision cannot decide ends its bracket when the bracket
-#: is narrower than this (relative): the boundary is then known to rounding; wider
-#: brackets (e.g. along a disc doublet) decide it in high precision.
-_ROUNDING_RTOL = 1e-9
+#: By default a bisection point that double precision cannot decide is decided exactly
+#: (about 0.3 ms); with ``rounding_rtol`` > 0 it ends its bracket instead once the bracket
+#: is narrower than that (relative), the boundary then being known to about that.
+_ROUNDING_RTOL = 0.0
 #: A local extremum of an indicator (relative to |lambda|_max) counts when it is deeper than this.
 _DEPTH = 1e-8
 _INV_PHI = (np.sqrt(5.0) - 1.0) / 2.0
@@ -129,7 +129,8 @@ def _indicators(lam: NDArray, thr: NDArray) -> NDArray[np.float64]:
     return np.stack(cols, axis=-1) / scale[:, None]
 
 
-def find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, *, scan: int = SCAN_POINTS) -> Windows:
+def find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, *, scan: int = SCAN_POINTS,
+                 rounding_rtol: float = _ROUNDING_RTOL) -> Windows:
     """All windows where the system is not stable on the paths ``x0[b] -> x1[b]``.
 
     Parameters
@@ -140,6 +141,9 @@ def find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, *, scan: int = S
         Start and end of each row's path (``x1 < x0`` searches downwards).
     scan : int
         Scan points per row (>= 3).
+    rounding_rtol : float
+        Accept a boundary to this relative width where double precision cannot decide
+        (0: always decide, exactly).
     """
     x0 = np.asarray(x0, dtype=float)
     x1 = np.asarray(x1, dtype=float)
@@ -187,7 +191,7 @@ def find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, *, scan: int = S
     same_row = sr_a[1:] == sr_a[:-1]
     change = same_row & (bad[1:] != bad[:-1])
     j = np.flatnonzero(change)
-    a, b = _bisect(evaluate, sr_a[j], sx_a[j], sx_a[j + 1], bad[j])
+    a, b = _bisect(evaluate, sr_a[j], sx_a[j], sx_a[j + 1], bad[j], rounding_rtol)
     # the boundary reported: the stable side's end of the rounding-level bracket
     boundary = np.where(bad[j], b, a)
 
@@ -263,7 +267,8 @@ def _golden(evaluate: Evaluator, rows: NDArray, kind: NDArray, a: NDArray, d: ND
     return found
 
 
-def _bisect(evaluate: Evaluator, rows: NDArray, a: NDArray, b: NDArray, a_bad: NDArray) -> tuple[NDArray, NDArray]:
+def _bisect(evaluate: Evaluator, rows: NDArray, a: NDArray, b: NDArray, a_bad: NDArray,
+            rounding_rtol: float) -> tuple[NDArray, NDArray]:
     """Narrow brackets ``[a, b]`` whose ends differ in stability to rounding level."""
     a = np.asarray(a, dtype=float).copy()
     b = np.asarray(b, dtype=float).copy()
@@ -279,7 +284,7 @@ def _bisect(evaluate: Evaluator, rows: NDArray, a: NDArray, b: NDArray, a_bad: N
         v, _, _ = evaluate(rows[idx], m, high_precision=False)
         und = v == INDETERMINATE
         scale = np.maximum(1.0, np.abs(m))
-        wide = und & (np.abs(b[idx] - a[idx]) > _ROUNDING_RTOL * scale)
+        wide = und & (np.abs(b[idx] - a[idx]) > rounding_rtol * scale)
         if wide.any():
             # the undecided zone around a boundary is tiny: split elsewhere in the bracket
             # first, and go to high precision only where that is undecided too
