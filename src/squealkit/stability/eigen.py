@@ -18,6 +18,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
+from .._threads import limit_threads, threads_for
 from .._validation import InputError, validate_array_finite
 from ..models import FrictionModel
 from ._kernels import derived_quantities, permutations_table, quadratic_eigvals
@@ -106,7 +107,8 @@ def _solve_grid(model, mu, tan_theta, damped, progress=None):
     for start in range(0, total, block):
         stop = min(total, start + block)
         sl = slice(start, stop)
-        lam[sl], err[sl], verdict[sl], thr[sl] = _solve_block(mats, g[sl], e[sl], row)
+        with limit_threads(threads_for(stop - start)):  # small blocks: no parallel start-up
+            lam[sl], err[sl], verdict[sl], thr[sl] = _solve_block(mats, g[sl], e[sl], row)
         if progress is not None:
             progress(stop, total)
     return (lam.reshape((*shape, n)), err.reshape((*shape, n)), verdict.reshape(shape), thr.reshape(shape))
@@ -253,11 +255,12 @@ def stability_map(
     if store is None and client is not None:
         raise InputError("A cluster run streams its result to zarr: pass store='....zarr' with client.")
     if store is None:
-        sol = _solve_grid(model, mu_a[:, None], tan_t[None, :], damped, progress)
-        # lowest frequency first; tracking keeps the order of the first grid point
-        if track:
-            sol = _tracked(sol, track_modes(sol[0]))
-        return _dataset(model, mu_a, th_a, sol, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol)
+        with limit_threads(threads_for(mu_a.size * th_a.size)):  # tracking and labels too
+            sol = _solve_grid(model, mu_a[:, None], tan_t[None, :], damped, progress)
+            # lowest frequency first; tracking keeps the order of the first grid point
+            if track:
+                sol = _tracked(sol, track_modes(sol[0]))
+            return _dataset(model, mu_a, th_a, sol, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol)
     if Path(store).suffix.lower() != ".zarr":
         raise InputError(f"Parameter store={str(store)!r} must be a zarr store ending in .zarr.")
     if isinstance(tile_points, bool) or not isinstance(tile_points, int) or tile_points < 1:
@@ -269,10 +272,11 @@ def stability_map(
 def _tile(arg: tuple) -> xr.Dataset:
     """One block of whole mu rows of a stability map (a task of a streamed sweep)."""
     model, mu, theta, first, damped, track, lock_in_rtol = arg
-    sol = _solve_grid(model, mu[:, None], np.tan(theta)[None, :], damped)
-    if track:
-        sol = _tracked(sol, track_rows(sol[0], first))
-    return _dataset(model, mu, theta, sol, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol)
+    with limit_threads(threads_for(mu.size * theta.size)):
+        sol = _solve_grid(model, mu[:, None], np.tan(theta)[None, :], damped)
+        if track:
+            sol = _tracked(sol, track_rows(sol[0], first))
+        return _dataset(model, mu, theta, sol, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol)
 
 
 def _tracked(sol, lam_tracked):

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._threads import limit_threads, threads_for
 from .._validation import InputError, validate_array_finite, validate_finite
 from ..models import FrictionModel
 from ._kernels import DIVERGENCE, FLUTTER, INDETERMINATE, quadratic_eigvals_stack
@@ -118,7 +119,8 @@ def _verdict_rows(ens: ModelEnsemble, mu: NDArray, tan_theta: float) -> NDArray[
 def _unstable_rows(ens: ModelEnsemble, mu: NDArray, tan_theta: float) -> NDArray[np.bool_]:
     """Whether model s is unstable (flutter, divergence, or indeterminate: never reported
     stable without proof) at mu[s, p]."""
-    v = _verdict_rows(ens, mu, tan_theta)
+    with limit_threads(threads_for(mu.size)):  # a bisection step of a few models: serial
+        v = _verdict_rows(ens, mu, tan_theta)
     return (v == FLUTTER) | (v == DIVERGENCE) | (v == INDETERMINATE)
 
 

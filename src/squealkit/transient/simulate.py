@@ -18,6 +18,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike
 
+from .._threads import limit_threads, threads_for
 from .._validation import InputError, validate_finite, validate_fs, validate_positive
 from ..models import FrictionModel
 from ..stability.eigen import eigenvalues
@@ -186,10 +187,11 @@ def _integrate(
                 qh[i], th[i] = run.profile.evaluate(x_start + run.speed * th_t)
             else:
                 qh[i], th[i] = qh[j], th[j]
-        _kernels.integrate_chunk(
-            X, V, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
-            qh, th, dt, m, stride, out_x, out_v, out_a, out_nc, out_me, done // stride, limit, status, n_valid,
-        )
+        with limit_threads(threads_for(R, serial_below=2)):  # parallel over runs: one run is serial
+            _kernels.integrate_chunk(
+                X, V, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+                qh, th, dt, m, stride, out_x, out_v, out_a, out_nc, out_me, done // stride, limit, status, n_valid,
+            )
         done += m
         if progress is not None:
             progress(done, n_steps)
