@@ -20,6 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import __version__
 from .._validation import InputError, validate_array_finite, validate_finite, validate_positive
 from ..models import FrictionModel
+from ..models.friction import Stribeck, validate_friction
 from .eigen import eigenvalues, unstable_threshold
 
 __all__ = [
@@ -35,13 +36,13 @@ _BISECT_STEPS = 64
 _SCAN_POINTS = 401
 
 
-def _unstable(model: FrictionModel, mu: NDArray, t: NDArray, damped: bool) -> NDArray[np.bool_]:
-    lam = eigenvalues(model, mu, t, damped=damped)
+def _unstable(model: FrictionModel, mu: NDArray, t: NDArray, damped: bool, **fr) -> NDArray[np.bool_]:
+    lam = eigenvalues(model, mu, t, damped=damped, **fr)
     return np.any(lam.real > unstable_threshold(lam)[..., None], axis=-1)
 
 
-def _onset_frequency(model: FrictionModel, mu: NDArray, t: NDArray, damped: bool) -> NDArray:
-    lam = eigenvalues(model, mu, t, damped=damped)
+def _onset_frequency(model: FrictionModel, mu: NDArray, t: NDArray, damped: bool, **fr) -> NDArray:
+    lam = eigenvalues(model, mu, t, damped=damped, **fr)
     idx = np.argmax(lam.real, axis=-1)
     return np.abs(np.take_along_axis(lam.imag, idx[..., None], axis=-1)[..., 0])
 
@@ -128,6 +129,8 @@ def critical_friction_curve(
     damped: bool = False,
     mu_max: float = 2.0,
     scan: int = _SCAN_POINTS,
+    friction: Stribeck | None = None,
+    speed: float | None = None,
 ) -> xr.Dataset:
     """Critical friction mu_crit(theta) and mu_e_crit = mu_crit + tan(theta) over theta.
 
@@ -146,6 +149,12 @@ def critical_friction_curve(
         Search range for |mu|.
     scan : int
         Points of the bracketing scan (a narrower unstable window could be missed).
+    friction : Stribeck, optional
+        Speed-dependent friction; ``mu_critical`` is then the kinetic coefficient and
+        ``mu_e_critical`` uses the coefficient at ``speed`` (see
+        :func:`~squealkit.stability.eigenvalues`).
+    speed : float, optional
+        Sliding speed V [m/s]; needed with ``friction``.
 
     Returns
     -------
@@ -154,6 +163,8 @@ def critical_friction_curve(
         ``frequency_hz`` and ``status`` (0 onset, 1 unstable without friction,
         2 stable in range).
     """
+    friction, speed = validate_friction(model, friction, speed)
+    fr = {} if friction is None else {"friction": friction, "speed": speed}
     th = np.atleast_1d(validate_array_finite("theta", theta)).astype(float)
     if th.ndim != 1:
         raise InputError("theta must be a number or a 1-D array.")
@@ -163,7 +174,7 @@ def critical_friction_curve(
     t = np.tan(th)
 
     def unstable_at(mu: NDArray) -> NDArray[np.bool_]:
-        return _unstable(model, mu, t, damped)
+        return _unstable(model, mu, t, damped, **fr)
 
     s0 = unstable_at(np.zeros_like(t))
     # stable at mu = 0: search upwards; unstable: search downwards for the boundary
@@ -179,11 +190,12 @@ def critical_friction_curve(
         # On the rounding-level bracket every growth rate is noise-sized; a step of 1e-6
         # into the unstable side (always towards larger mu) makes the onset mode stand out.
         step = 1e-6 * np.maximum(1.0, np.abs(mu_c[found]))
-        omega[found] = _onset_frequency(model, mu_c[found] + step, t[found], damped)
+        omega[found] = _onset_frequency(model, mu_c[found] + step, t[found], damped, **fr)
     ds = xr.Dataset(
         {
             "mu_critical": ("theta", mu_c, {"units": "1", "long_name": "critical friction coefficient"}),
-            "mu_e_critical": ("theta", mu_c + t, {"units": "1", "long_name": "critical mu + tan(theta) (eq. 6)"}),
+            "mu_e_critical": ("theta", (mu_c if friction is None else friction.mu(mu_c, speed)) + t,
+                              {"units": "1", "long_name": "critical mu + tan(theta) (eq. 6)"}),
             "omega_rad_s": ("theta", omega, {"units": "rad/s", "long_name": "frequency at onset"}),
             "frequency_hz": ("theta", omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency at onset"}),
             "status": ("theta", status.astype(np.int8),
@@ -197,6 +209,9 @@ def critical_friction_curve(
         attrs={"model": model.to_json(), "damped": int(damped), "mu_max": mu_max,
                "squealkit_version": __version__},
     )
+    if friction is not None:
+        ds.attrs.update(friction=friction.describe(), mu_static=friction.mu_static, v_stribeck=friction.v_stribeck,
+                        speed=speed, speed_units="m/s")
     return ds
 
 
@@ -209,8 +224,12 @@ def critical_friction(
     *,
     damped: bool = False,
     mu_max: float = 2.0,
+    friction: Stribeck | None = None,
+    speed: float | None = None,
 ) -> CriticalFriction:
     """Critical friction at one run-out incline ``theta`` [rad] (paper §3, eq. 6).
+
+    ``friction`` and ``speed`` as for :func:`critical_friction_curve`.
 
     Examples
     --------
@@ -222,7 +241,7 @@ def critical_friction(
     True
     """
     theta = validate_finite("theta", theta)
-    ds = critical_friction_curve(model, [theta], damped=damped, mu_max=mu_max)
+    ds = critical_friction_curve(model, [theta], damped=damped, mu_max=mu_max, friction=friction, speed=speed)
     r = ds.isel(theta=0)
     return CriticalFriction(
         theta=theta,
@@ -282,6 +301,8 @@ def runout_tolerance(
     wavelength: float | None = None,
     damped: bool = False,
     slope_max: float = math.tan(math.radians(80.0)),
+    friction: Stribeck | None = None,
+    speed: float | None = None,
 ) -> RunoutTolerance:
     """Run-out tolerance at friction ``mu``: the largest stable slope and amplitude (eq. 11).
 
@@ -296,6 +317,9 @@ def runout_tolerance(
         Include damping.
     slope_max : float
         Largest slope searched.
+    friction, speed : Stribeck and float, optional
+        Speed-dependent friction (``mu`` its kinetic coefficient) and the sliding speed [m/s];
+        see :func:`~squealkit.stability.eigenvalues`.
 
     Examples
     --------
@@ -306,12 +330,14 @@ def runout_tolerance(
     """
     mu = validate_finite("mu", mu)
     slope_max = validate_positive("slope_max", slope_max)
+    friction, speed = validate_friction(model, friction, speed)
+    fr = {} if friction is None else {"friction": friction, "speed": speed}
     if wavelength is not None:
         wavelength = validate_positive("wavelength", wavelength)
     mu_arr = np.array([mu])
 
     def unstable_at(t: NDArray) -> NDArray[np.bool_]:
-        return _unstable(model, mu_arr, t, damped)
+        return _unstable(model, mu_arr, t, damped, **fr)
 
     flat_unstable = bool(unstable_at(np.zeros(1))[0])
     if flat_unstable:
@@ -333,6 +359,8 @@ def critical_friction_sensitivity(
     damped: bool = False,
     parameters: Sequence[str] | None = None,
     rel_step: float = 1e-4,
+    friction: Stribeck | None = None,
+    speed: float | None = None,
 ) -> list[dict[str, object]]:
     """Sensitivity of the critical friction to each model parameter.
 
@@ -341,12 +369,15 @@ def critical_friction_sensitivity(
     change of p: the parameter with the largest positive elasticity buys the most margin
     when raised. Rows are sorted by ``|elasticity|``.
 
+    ``friction`` and ``speed`` as for :func:`critical_friction_curve`.
+
     Returns
     -------
     list of dict
         ``parameter``, ``value``, ``unit``, ``dmu_dp`` (per unit of p) and ``elasticity``.
     """
-    base = critical_friction(model, theta, damped=damped)
+    fr = {"friction": friction, "speed": speed}
+    base = critical_friction(model, theta, damped=damped, **fr)
     if base.status != "onset" or not math.isfinite(base.mu_critical):
         raise InputError("The model has no friction onset at this theta; sensitivity is undefined.")
     info = model.parameter_info()
@@ -362,8 +393,8 @@ def critical_friction_sensitivity(
         value = float(getattr(model, name))
         h = rel_step * abs(value) if value != 0 else rel_step
         try:
-            up = critical_friction(model.replace(**{name: value + h}), theta, damped=damped)
-            dn = critical_friction(model.replace(**{name: value - h}), theta, damped=damped)
+            up = critical_friction(model.replace(**{name: value + h}), theta, damped=damped, **fr)
+            dn = critical_friction(model.replace(**{name: value - h}), theta, damped=damped, **fr)
         except InputError:
             continue  # a step outside the allowed range (e.g. a zero damping)
         d = (up.mu_critical - dn.mu_critical) / (2 * h)
