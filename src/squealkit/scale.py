@@ -99,15 +99,16 @@ def cluster_client(scheduler: str | None, *, n_workers: int | None = None) -> It
 
 def _in_worker(fn: Callable[..., Any], item: Any) -> Any:
     """Run one task on a worker, with numba's threads limited to the worker's share."""
+    from ._threads import limit_threads
+
     try:
-        import numba
         from distributed import get_worker
 
         nthreads = get_worker().state.nthreads
-        numba.set_num_threads(max(1, min(nthreads, numba.config.NUMBA_NUM_THREADS)))
     except (ImportError, ValueError):  # pragma: no cover - outside a worker
-        pass
-    return fn(item)
+        return fn(item)
+    with limit_threads(max(1, nthreads)):
+        return fn(item)
 
 
 def map_tasks(

@@ -131,3 +131,54 @@ class progress_callback:
     def __exit__(self, *exc: object) -> None:
         if self._progress is not None:
             self._progress.stop()
+
+
+def friction_options(f: F) -> F:
+    """--stribeck MU_STATIC,V_STRIBECK and --speed V: speed-dependent friction at a sliding speed."""
+    f = click.option(
+        "--speed", type=float, default=0.02, show_default=True,
+        help="Sliding speed v [m/s] (paper: 0.02 m/s). In stability analysis it matters only with --stribeck.",
+    )(f)
+    f = click.option(
+        "--stribeck", "stribeck_spec", default=None, metavar="MU_STATIC,V_STRIBECK",
+        help="Stribeck friction mu(v) = mu + (MU_STATIC - mu) exp(-|v| / V_STRIBECK) [V_STRIBECK in m/s], "
+        "mu the kinetic coefficient; e.g. --stribeck 0.6,0.001.",
+    )(f)
+    return f
+
+
+def parse_stribeck(spec: str | None):
+    """The Stribeck law of ``--stribeck MU_STATIC,V_STRIBECK``, or None without it."""
+    from ..models.friction import Stribeck
+
+    if spec is None:
+        return None
+    parts = spec.split(",")
+    if len(parts) != 2:
+        raise InputError(f"--stribeck {spec!r} must be MU_STATIC,V_STRIBECK, e.g. 0.6,0.001.")
+    try:
+        mu_static, v_stribeck = (float(p) for p in parts)
+    except ValueError:
+        raise InputError(f"--stribeck {spec!r} must be two numbers MU_STATIC,V_STRIBECK, e.g. 0.6,0.001.") from None
+    return Stribeck(mu_static, v_stribeck)
+
+
+def friction_from_options(ctx: click.Context, stribeck_spec: str | None, speed: float) -> dict[str, Any]:
+    """Keyword arguments ``friction``/``speed`` for the stability functions ({} for constant friction).
+
+    A --speed given on the command line without --stribeck is an error: it would change nothing.
+    """
+    law = parse_stribeck(stribeck_spec)
+    if law is None:
+        if ctx.get_parameter_source("speed") == click.core.ParameterSource.COMMANDLINE:
+            raise InputError("--speed only matters with --stribeck (speed-dependent friction); add --stribeck.")
+        return {}
+    return {"friction": law, "speed": speed}
+
+
+def friction_json(fr: dict[str, Any]) -> dict[str, Any]:
+    """The --json keys describing the friction law: ``stribeck`` and ``speed`` (none for constant friction)."""
+    if not fr:
+        return {}
+    law = fr["friction"]
+    return {"stribeck": {"mu_static": law.mu_static, "v_stribeck": law.v_stribeck}, "speed": fr["speed"]}

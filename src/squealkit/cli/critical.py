@@ -6,7 +6,14 @@ import math
 
 import click
 
-from ._options import build_model_from_options, emit_json, model_options
+from ._options import (
+    build_model_from_options,
+    emit_json,
+    friction_from_options,
+    friction_json,
+    friction_options,
+    model_options,
+)
 
 
 @click.command()
@@ -14,12 +21,15 @@ from ._options import build_model_from_options, emit_json, model_options
 @click.option("--theta", "theta_spec", default="0", show_default=True, metavar="DEG|START:STOP:N",
               help="Run-out incline in DEGREES, or a range for a curve mu_crit(theta).")
 @click.option("--damped", is_flag=True, help="Include the damping matrix.")
+@friction_options
 @click.option("--mu-max", default=2.0, show_default=True, type=float, help="Search friction up to this value.")
 @click.option("--sensitivity", is_flag=True,
               help="Also report d mu_crit / d p and the elasticity for every model parameter "
               "(exact, from the eigenvectors at onset).")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON on stdout.")
-def critical(preset, config, sets, theta_spec, damped, mu_max, sensitivity, as_json) -> None:
+@click.pass_context
+def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed, mu_max, sensitivity,
+             as_json) -> None:
     """Critical friction: where the brake first loses stability (paper §3, eq. 6).
 
     Finds every friction window in [0, --mu-max] where the brake is unstable (a
@@ -37,6 +47,12 @@ def critical(preset, config, sets, theta_spec, damped, mu_max, sensitivity, as_j
       squealkit critical --theta -8:8:17
       squealkit critical --theta 0 --sensitivity
       squealkit critical --preset hoffmann2002
+      squealkit critical --damped --stribeck 0.6,0.001 --speed 0.0015
+
+    \b
+    With --stribeck MU_STATIC,V_STRIBECK friction depends on the sliding speed
+    (--speed, m/s) and mu_crit is the kinetic coefficient at onset; see
+    'squealkit stability --help'.
 
     \b
     --json keys (one theta): mu_critical, mu_e_critical, omega_rad_s,
@@ -47,25 +63,29 @@ def critical(preset, config, sets, theta_spec, damped, mu_max, sensitivity, as_j
     there), indeterminate_intervals (windows no verdict could be reached in,
     within rounding; usually empty), mu_max, damped;
     with --sensitivity a list "sensitivity" of {parameter, value, unit, dmu_dp,
-    elasticity}. A range of theta gives the same keys, each a list over theta.
+    elasticity}; with --stribeck also stribeck ({mu_static, v_stribeck}) and
+    speed [m/s]. A range of theta gives the same keys, each a list over theta.
     """
     from .._validation import InputError, parse_range
     from ..stability import critical_friction, critical_friction_curve, critical_friction_sensitivity
 
     model = build_model_from_options(preset, config, sets)
+    fr = friction_from_options(ctx, stribeck_spec, speed)
     theta_deg = parse_range("--theta", theta_spec)
     if any(abs(t) >= 90.0 for t in theta_deg):
         raise InputError(f"--theta {theta_spec!r}: angles must lie strictly between -90 and 90 deg.")
     if theta_deg.size == 1:
-        res = critical_friction(model, math.radians(float(theta_deg[0])), damped=damped, mu_max=mu_max)
-        out = res.to_dict()
+        res = critical_friction(model, math.radians(float(theta_deg[0])), damped=damped, mu_max=mu_max, **fr)
+        out = {**res.to_dict(), **friction_json(fr)}
         out.pop("theta")
         if sensitivity:
-            out["sensitivity"] = critical_friction_sensitivity(model, res.theta, damped=damped)
+            out["sensitivity"] = critical_friction_sensitivity(model, res.theta, damped=damped, **fr)
         if as_json:
             emit_json(out)
             return
         click.echo(f"theta = {res.theta_deg:g} deg ({'damped' if damped else 'undamped'}): {res.status}")
+        if fr:
+            click.echo(f"  friction: {fr['friction'].describe()} at sliding speed {fr['speed']:g} m/s")
         click.echo(f"  mu_crit   = {res.mu_critical:.8f}")
         click.echo(f"  mu_e_crit = {res.mu_e_critical:.8f}   (mu_crit + tan theta)")
         click.echo(f"  frequency = {res.omega_rad_s:.2f} rad/s = {res.frequency_hz:.2f} Hz at onset")
@@ -82,7 +102,7 @@ def critical(preset, config, sets, theta_spec, damped, mu_max, sensitivity, as_j
         return
     if sensitivity:
         raise InputError("--sensitivity needs a single --theta value.")
-    ds = critical_friction_curve(model, [math.radians(t) for t in theta_deg], damped=damped, mu_max=mu_max)
+    ds = critical_friction_curve(model, [math.radians(t) for t in theta_deg], damped=damped, mu_max=mu_max, **fr)
     from ..stability import ONSET_STATUS
 
     def pairs(a):
@@ -99,6 +119,7 @@ def critical(preset, config, sets, theta_spec, damped, mu_max, sensitivity, as_j
         "indeterminate_intervals": [pairs(w) for w in ds.indeterminate_intervals.values],
         "mu_max": mu_max,
         "damped": damped,
+        **friction_json(fr),
     }
     if as_json:
         emit_json(out)

@@ -88,7 +88,11 @@ class SquealkitGroup(click.Group):
 
 @click.group(cls=SquealkitGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="squealkit")
-def cli() -> None:
+@click.option("--threads", type=click.IntRange(min=1), default=None, metavar="N",
+              help="Use at most N threads for the compiled kernels (default: $SQUEALKIT_THREADS, else every "
+              "core). Small jobs run on one thread whatever N.")
+@click.pass_context
+def cli(ctx: click.Context, threads: int | None) -> None:
     """squealkit: predict and diagnose friction-induced disc brake squeal.
 
     \b
@@ -109,7 +113,18 @@ def cli() -> None:
 
     Every subcommand takes --help with an example. Units are SI; angles are
     in degrees on the command line and say so.
+
+    \b
+    Threads: --threads N (before the subcommand) or the environment variable
+    SQUEALKIT_THREADS=N caps the threads of the compiled kernels, e.g. on a
+    machine shared with other jobs; --threads wins over the variable:
+      squealkit --threads 1 critical --sensitivity
     """
+    from .._threads import env_threads, limit_threads
+
+    env_threads()  # a bad SQUEALKIT_THREADS is reported before any work
+    if threads is not None:
+        ctx.with_resource(limit_threads(threads))
 
 
 def main(argv: list[str] | None = None) -> int:

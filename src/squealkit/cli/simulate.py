@@ -12,8 +12,10 @@ from ._options import (
     build_model_from_options,
     check_output_suffix,
     emit_json,
+    friction_options,
     model_options,
     output_options,
+    parse_stribeck,
     progress_callback,
     scheduler_option,
 )
@@ -37,14 +39,15 @@ from ._options import (
 @click.option("--perturbation", type=float, default=0.0, show_default=True,
               help="RMS of a random initial displacement [m] (a flat disc needs one to leave equilibrium).")
 @click.option("--contact", type=click.Choice(["linear", "nonlinear"]), default="linear", show_default=True,
-              help="linear: the paper's eqs. 1-4; nonlinear: loss of contact and velocity-sign friction.")
-@click.option("--speed", type=float, default=0.02, show_default=True, help="Sliding speed v [m/s].")
+              help="linear: the paper's eqs. 1-4 (with --stribeck: permanent contact, friction mu(w) N); "
+              "nonlinear: loss of contact and velocity-sign friction.")
+@friction_options
 @click.option("--duration", type=float, default=0.15, show_default=True, help="Simulated time [s].")
 @click.option("--fs", type=float, default=40_000.0, show_default=True, help="Output sample rate [Hz].")
 @scheduler_option
 @output_options()
 def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, sro_file, seed, perturbation, contact,
-             speed, duration, fs, scheduler, as_json, out_path, plot_path) -> None:
+             stribeck_spec, speed, duration, fs, scheduler, as_json, out_path, plot_path) -> None:
     """Simulate the time response of a model driven by disc surface run-out.
 
     \b
@@ -55,6 +58,9 @@ def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, 
       squealkit simulate --sro none --perturbation 1e-9 --plot fig3.png
     A batch of 64 runs over mu, written run block by run block to zarr, on a cluster:
       squealkit simulate --mu 0.2:0.8:64 --out batch.zarr --scheduler local --json
+    Friction falling with speed (Stribeck) at a low sliding speed, smooth disc:
+      squealkit simulate --mu 0.2 --sro none --stribeck 0.6,0.001 --speed 0.0015 \\
+          --perturbation 1e-14 --duration 0.01 --json
 
     \b
     Batch --json keys: mu, status, max_growth_rate [1/s] (largest frozen-time
@@ -62,7 +68,7 @@ def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, 
     """
     import numpy as np
 
-    from ..transient import RandomRoughness, SampledProfile, SineRunOut, Smooth
+    from ..transient import Contact, RandomRoughness, SampledProfile, SineRunOut, Smooth
     from ..transient import simulate as run_simulation
     from ..transient.simulate import transient_summary
 
@@ -71,6 +77,10 @@ def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, 
     if duration is None or not duration > 0:
         raise InputError(f"Parameter duration={duration!r} s must be > 0.")
     model = build_model_from_options(preset, config, sets)
+    law = parse_stribeck(stribeck_spec)
+    if law is not None:
+        kw = {"mu_static": law.mu_static, "v_stribeck": law.v_stribeck}
+        contact = Contact(**kw) if contact == "linear" else Contact.nonlinear(**kw)
     rng = np.random.default_rng(seed)
     if sro == "sine":
         profile = SineRunOut(sro_amplitude, sro_wavelength)

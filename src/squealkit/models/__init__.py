@@ -2,6 +2,7 @@
 
 from ._base import FrictionModel, SystemMatrices
 from .config import PRESETS, build_model, get_preset, load_model, load_rig, model_from_dict, parse_assignments
+from .friction import Stribeck
 from .hoffmann import Hoffmann2002
 from .matrix import MatrixModel
 from .pin_on_disc import PinOnDisc3DOF
@@ -21,6 +22,7 @@ __all__ = [
     "MatrixModel",
     "PinOnDisc3DOF",
     "PinOnDiscRig",
+    "Stribeck",
     "SystemMatrices",
     "build_model",
     "cantilever_bending_frequency",

@@ -34,6 +34,7 @@ from .._validation import (
     validate_positive,
     validate_sign,
 )
+from .friction import Stribeck, require_point_contact
 
 __all__ = ["FrictionModel", "SystemMatrices", "param"]
 
@@ -180,6 +181,83 @@ class FrictionModel(ABC):
         K = self.stiffness_matrix(mu, tan_theta)
         F = self.load_vector(mu, tan_theta, q)
         return np.linalg.solve(K, F)
+
+    # -- speed-dependent friction (see models/friction.py) -------------------------------
+    def static_contact_force(
+        self, mu: ArrayLike, tan_theta: ArrayLike = 0.0, q: ArrayLike = 0.0
+    ) -> NDArray[np.float64]:
+        """Contact force ``N cos(theta) = -kc (b . x - q)`` [N] in the static equilibrium (eq. 2).
+
+        ``x`` solves ``K(mu, tan_theta) x = F(mu, tan_theta, q)``; the arguments broadcast.
+        This is the force that multiplies the friction terms of eq. (4).
+
+        Raises
+        ------
+        InputError
+            If the model has no single point contact (see :func:`~squealkit.models.friction.point_contact`).
+
+        Examples
+        --------
+        >>> from squealkit.models import get_preset
+        >>> round(float(get_preset("lv2013").static_contact_force(0.0)), 4)   # of P = 10 N
+        3.1484
+        """
+        pc = require_point_contact(self)
+        mu_a, t_a, q_a = np.broadcast_arrays(
+            np.asarray(mu, float), np.asarray(tan_theta, float), np.asarray(q, float)
+        )
+        K = self.stiffness_matrix(mu_a, t_a)
+        F = self.load_vector(mu_a, t_a, q_a)
+        x = np.linalg.solve(K, F[..., None])[..., 0]
+        return -pc.kc * (x @ pc.b - q_a)
+
+    def friction_damping_matrix(self, tan_theta: ArrayLike = 0.0) -> NDArray[np.float64]:
+        """Direction matrix D [1] of the friction force's velocity dependence.
+
+        With a speed-dependent friction coefficient ``mu(w)`` and the sliding speed
+        ``w = V - s fhat . x'``, the friction force of eq. (4) linearised about steady sliding
+        changes by ``-(dmu/dv) N0 D x'`` with ``D = (f - s tan_theta b) fhat^T``, ``N0`` the
+        :meth:`static_contact_force`. (The friction force is ``N0 mu s f`` and the slope's
+        share ``-N0 mu tan_theta b``, eq. 4; ``s fhat . x'`` is the contact's velocity along
+        the disc's motion.) Shape ``tan_theta.shape + (n, n)``.
+
+        Raises
+        ------
+        InputError
+            If the model has no single point contact: the law is undefined for it.
+
+        Examples
+        --------
+        >>> from squealkit.models import get_preset
+        >>> get_preset("lv2013").friction_damping_matrix(0.0)[0].tolist()   # along x1 only
+        [1.0, 0.0, 0.0]
+        """
+        pc = require_point_contact(self)
+        t = np.asarray(tan_theta, float)[..., None]
+        u = pc.f - self.sliding_direction * t * pc.b
+        return u[..., :, None] * pc.fhat[None, :] + 0.0  # + 0.0: no signed zeros
+
+    def friction_damping(
+        self, law: Stribeck, mu: ArrayLike, tan_theta: ArrayLike = 0.0, *, speed: float
+    ) -> NDArray[np.float64]:
+        """Damping matrix ``dmu/dv(speed) N0 D`` [N s/m] of linearised speed-dependent friction.
+
+        ``mu`` is the kinetic coefficient; ``N0`` is the static contact force at the
+        coefficient ``law.mu(mu, speed)`` the contact has while sliding at ``speed`` [m/s]
+        (on the mean surface, q = 0), ``D`` the :meth:`friction_damping_matrix`. Add it to C.
+        Shape ``broadcast(mu, tan_theta).shape + (n, n)``.
+
+        Examples
+        --------
+        >>> from squealkit.models import get_preset
+        >>> from squealkit.models.friction import Stribeck
+        >>> Cf = get_preset("lv2013").friction_damping(Stribeck(0.6, 0.01), 0.4, speed=0.02)
+        >>> round(float(Cf[0, 0]), 3)    # -(0.2 / 0.01) exp(-2) N0: negative damping on x1
+        -8.997
+        """
+        mu_a, t_a = np.broadcast_arrays(np.asarray(mu, float), np.asarray(tan_theta, float))
+        n0 = self.static_contact_force(law.mu(mu_a, speed), t_a)
+        return (law.slope(mu_a, speed) * n0)[..., None, None] * self.friction_damping_matrix(t_a)
 
     # -- parameters --------------------------------------------------------------------
     @classmethod

@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import __version__
 from .._validation import InputError, validate_array_finite, validate_finite, validate_positive
 from ..models import FrictionModel
+from ..models.friction import Stribeck, validate_friction
 from ._solve import IndeterminateWarning
 from ._windows import ONSET_STATUS, SCAN_POINTS, Windows, find_windows
 from .eigen import _solve_grid
@@ -39,20 +40,20 @@ __all__ = [
 _SCAN_POINTS = SCAN_POINTS
 
 
-def _evaluator(model: FrictionModel, damped: bool, mu: NDArray | None, t: NDArray | None):
+def _evaluator(model: FrictionModel, damped: bool, mu: NDArray | None, t: NDArray | None, fr: dict):
     """Path evaluator for :func:`find_windows`: rows index ``mu`` or ``t``, x is the other."""
 
     def evaluate(rows: NDArray, x: NDArray, high_precision: bool = True):
         mu_p = x if mu is None else mu[rows]
         t_p = x if t is None else t[rows]
-        lam, _err, verdict, thr = _solve_grid(model, mu_p, t_p, damped, high_precision=high_precision)
+        lam, _err, verdict, thr = _solve_grid(model, mu_p, t_p, damped, high_precision=high_precision, **fr)
         return verdict, lam, thr
 
     return evaluate
 
 
-def _onset_frequency(model: FrictionModel, mu: NDArray, t: NDArray, damped: bool) -> NDArray:
-    lam = _solve_grid(model, mu, t, damped)[0]
+def _onset_frequency(model: FrictionModel, mu: NDArray, t: NDArray, damped: bool, fr: dict) -> NDArray:
+    lam = _solve_grid(model, mu, t, damped, **fr)[0]
     idx = np.argmax(lam.real, axis=-1)
     return np.abs(np.take_along_axis(lam.imag, idx[..., None], axis=-1)[..., 0])
 
@@ -127,6 +128,8 @@ def critical_friction_curve(
     damped: bool = False,
     mu_max: float = 2.0,
     scan: int = _SCAN_POINTS,
+    friction: Stribeck | None = None,
+    speed: float | None = None,
 ) -> xr.Dataset:
     """Critical friction mu_crit(theta), mu_e_crit = mu_crit + tan(theta), and every unstable window.
 
@@ -147,6 +150,12 @@ def critical_friction_curve(
         Search range for |mu|.
     scan : int
         Points of the initial scan.
+    friction : Stribeck, optional
+        Speed-dependent friction; ``mu_critical`` is then the kinetic coefficient and
+        ``mu_e_critical`` uses the coefficient at ``speed`` (see
+        :func:`~squealkit.stability.eigenvalues`).
+    speed : float, optional
+        Sliding speed V [m/s]; needed with ``friction``.
 
     Returns
     -------
@@ -161,6 +170,8 @@ def critical_friction_curve(
     IndeterminateWarning
         When some window could not be decided within rounding.
     """
+    friction, speed = validate_friction(model, friction, speed)
+    fr = {} if friction is None else {"friction": friction, "speed": speed}
     th = np.atleast_1d(validate_array_finite("theta", theta)).astype(float)
     if th.ndim != 1:
         raise InputError("theta must be a number or a 1-D array.")
@@ -169,7 +180,7 @@ def critical_friction_curve(
     mu_max = validate_positive("mu_max", mu_max)
     t = np.tan(th)
     B = t.size
-    evaluate = _evaluator(model, damped, None, t)
+    evaluate = _evaluator(model, damped, None, t, fr)
     up = find_windows(evaluate, np.zeros(B), np.full(B, mu_max), scan=scan)
     near, far, first_unstable = up.first(B)
     s0 = up.start_unstable
@@ -179,7 +190,7 @@ def critical_friction_curve(
     if s0.any():
         # unstable at mu = 0: the first stable point going down is the (negative) mu_crit
         rows = np.flatnonzero(s0)
-        dn = find_windows(_evaluator(model, damped, None, t[rows]), np.zeros(rows.size),
+        dn = find_windows(_evaluator(model, damped, None, t[rows], fr), np.zeros(rows.size),
                           np.full(rows.size, -mu_max), scan=scan)
         _near, dn_far, _ = dn.first(rows.size)
         reached = np.isfinite(dn_far) & (dn_far > -mu_max)
@@ -189,11 +200,11 @@ def critical_friction_curve(
     if inside.any():
         # just inside the window, where the onset mode's growth stands out from rounding
         step = np.minimum(1e-6 * np.maximum(1.0, np.abs(mu_c)), 0.5 * (far - near))
-        omega[inside] = _onset_frequency(model, (mu_c + step)[inside], t[inside], damped)
+        omega[inside] = _onset_frequency(model, (mu_c + step)[inside], t[inside], damped, fr)
     back = np.flatnonzero(status == 1)
     if back.size and np.isfinite(mu_c[back]).any():
         ok = back[np.isfinite(mu_c[back])]
-        omega[ok] = _onset_frequency(model, mu_c[ok] + 1e-6 * np.maximum(1.0, np.abs(mu_c[ok])), t[ok], damped)
+        omega[ok] = _onset_frequency(model, mu_c[ok] + 1e-6 * np.maximum(1.0, np.abs(mu_c[ok])), t[ok], damped, fr)
     uns = _intervals_array(up, B, True)
     ind = _intervals_array(up, B, False)
     if np.isfinite(ind).any():
@@ -203,7 +214,8 @@ def critical_friction_curve(
     ds = xr.Dataset(
         {
             "mu_critical": ("theta", mu_c, {"units": "1", "long_name": "critical friction coefficient"}),
-            "mu_e_critical": ("theta", mu_c + t, {"units": "1", "long_name": "critical mu + tan(theta) (eq. 6)"}),
+            "mu_e_critical": ("theta", (mu_c if friction is None else friction.mu(mu_c, speed)) + t,
+                              {"units": "1", "long_name": "critical mu + tan(theta) (eq. 6)"}),
             "omega_rad_s": ("theta", omega, {"units": "rad/s", "long_name": "frequency at onset"}),
             "frequency_hz": ("theta", omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency at onset"}),
             "status": ("theta", status,
@@ -223,6 +235,9 @@ def critical_friction_curve(
         attrs={"model": model.to_json(), "damped": int(damped), "mu_max": mu_max,
                "squealkit_version": __version__},
     )
+    if friction is not None:
+        ds.attrs.update(friction=friction.describe(), mu_static=friction.mu_static, v_stribeck=friction.v_stribeck,
+                        speed=speed, speed_units="m/s")
     return ds
 
 
@@ -236,10 +251,12 @@ def critical_friction(
     *,
     damped: bool = False,
     mu_max: float = 2.0,
+    friction: Stribeck | None = None,
+    speed: float | None = None,
 ) -> CriticalFriction:
     """Critical friction and every unstable friction window at one run-out incline ``theta`` [rad].
 
-    See :func:`critical_friction_curve` (paper §3, eq. 6).
+    See :func:`critical_friction_curve` (paper §3, eq. 6); ``friction`` and ``speed`` as there.
 
     Examples
     --------
@@ -252,7 +269,7 @@ def critical_friction(
     (True, 1)
     """
     theta = validate_finite("theta", theta)
-    ds = critical_friction_curve(model, [theta], damped=damped, mu_max=mu_max)
+    ds = critical_friction_curve(model, [theta], damped=damped, mu_max=mu_max, friction=friction, speed=speed)
     r = ds.isel(theta=0)
     return CriticalFriction(
         theta=theta,
@@ -315,6 +332,8 @@ def runout_tolerance(
     wavelength: float | None = None,
     damped: bool = False,
     slope_max: float = math.tan(math.radians(80.0)),
+    friction: Stribeck | None = None,
+    speed: float | None = None,
 ) -> RunoutTolerance:
     """Run-out tolerance at friction ``mu``: the largest stable slope and amplitude (eq. 11).
 
@@ -329,6 +348,9 @@ def runout_tolerance(
         Include damping.
     slope_max : float
         Largest slope searched.
+    friction, speed : Stribeck and float, optional
+        Speed-dependent friction (``mu`` its kinetic coefficient) and the sliding speed [m/s];
+        see :func:`~squealkit.stability.eigenvalues`.
 
     Examples
     --------
@@ -341,7 +363,9 @@ def runout_tolerance(
     slope_max = validate_positive("slope_max", slope_max)
     if wavelength is not None:
         wavelength = validate_positive("wavelength", wavelength)
-    evaluate = _evaluator(model, damped, np.array([mu, mu]), None)
+    friction, speed = validate_friction(model, friction, speed)
+    fr = {} if friction is None else {"friction": friction, "speed": speed}
+    evaluate = _evaluator(model, damped, np.array([mu, mu]), None, fr)
     win = find_windows(evaluate, np.zeros(2), np.array([slope_max, -slope_max]))
     if win.start_unstable[0]:
         return RunoutTolerance(mu, 0.0, 0.0, "flat", wavelength, 0.0 if wavelength else None, False, damped)

@@ -18,9 +18,11 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
+from .._threads import limit_threads, threads_for
 from .._validation import InputError, validate_array_finite
 from ..models import FrictionModel
-from ._kernels import derived_quantities, permutations_table, quadratic_eigvals
+from ..models.friction import Stribeck, validate_friction
+from ._kernels import derived_quantities, permutations_table, quadratic_eigvals, quadratic_eigvals_stack
 from ._solve import VERDICTS, lapack_roots, solve_points
 from .tracking import carry_along, track_column, track_modes, track_rows
 
@@ -57,17 +59,35 @@ def unstable_threshold(lam: NDArray[np.complexfloating]) -> NDArray[np.float64]:
     return UNSTABLE_RTOL * np.max(np.abs(lam), axis=-1)
 
 
-def _matrices(model: FrictionModel, damped: bool) -> tuple[NDArray, ...]:
-    """The model's matrices stacked as one model: M, C, K0, Kn, Kf, each (1, n, n)."""
+def _matrices(
+    model: FrictionModel, damped: bool, friction: Stribeck | None = None, speed: float | None = None,
+    mu: NDArray | None = None, tan_theta: NDArray | None = None,
+) -> tuple[NDArray, ...]:
+    """The model's matrices stacked as models: M, C, K0, Kn, Kf, each (S, n, n).
+
+    S = 1, one model for every point, unless a speed-dependent ``friction`` law is given:
+    its linearisation adds the damping ``dmu/dv N0 D`` (``FrictionModel.friction_damping``)
+    at each point of the flat arrays ``mu`` (kinetic) and ``tan_theta``, whether or not
+    ``damped`` (it belongs to the friction law, not to the structure). Then S is the number
+    of points (broadcast views of the shared matrices), each point solved on its own.
+    """
     M = np.asarray(model.mass_matrix(), dtype=float)
     C = np.asarray(model.damping_matrix(), dtype=float) if damped else np.zeros_like(M)
     K0, Kn, Kf = (np.asarray(x, dtype=float) for x in model.stiffness_parts())
+    # The friction damping vanishes at every point when the law is flat at this speed or the
+    # model has no static load (N0 = 0); decided from the law and the model, never from the
+    # points, so that any split of a grid into blocks solves each point the same way.
+    if friction is not None and not friction.flat_at(speed) and np.any(model.load_parts()[0]):
+        Cf = model.friction_damping(friction, mu, tan_theta, speed=speed)
+        return (np.broadcast_to(M, Cf.shape), C + Cf, *(np.broadcast_to(a, Cf.shape) for a in (K0, Kn, Kf)))
     return tuple(np.ascontiguousarray(a[None]) for a in (M, C, K0, Kn, Kf))
 
 
 def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int, high_precision: bool = True):
     """Modes, error radii, verdicts and thresholds of flat arrays of contact factors g, e."""
     M, C, K0, Kn, Kf = mats
+    if M.shape[0] > 1:
+        return _solve_each(mats, g, e, high_precision)
     n = M.shape[-1]
     which = np.zeros(g.shape[0], dtype=np.int64)
     if n > _KERNEL_MAX_DOF:
@@ -86,14 +106,47 @@ def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int, hi
                         high_precision=high_precision)
 
 
-def _solve_grid(model, mu, tan_theta, damped, progress=None, *, high_precision=True):
+#: Points per sub-block when every point has its own model (bounds the stacked copies).
+_EACH_BLOCK = 1 << 15
+
+
+def _solve_each(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, high_precision: bool = True):
+    """:func:`_solve_block` for a stack of one model per point: each point solved on its own."""
+    n = mats[0].shape[-1]
+    out = [np.empty((g.shape[0], n), dtype=np.complex128), np.empty((g.shape[0], n)),
+           np.empty(g.shape[0], dtype=np.int8), np.empty(g.shape[0])]
+    for a in range(0, g.shape[0], _EACH_BLOCK):
+        sl = slice(a, min(g.shape[0], a + _EACH_BLOCK))
+        M, C, K0, Kn, Kf = (np.ascontiguousarray(x[sl]) for x in mats)
+        gs, es = g[sl], e[sl]
+        P = gs.shape[0]
+        if n > _KERNEL_MAX_DOF:
+            roots, radii = lapack_roots(M, C, K0 + gs[:, None, None] * Kn + es[:, None, None] * Kf)
+            roots, radii, even = np.ascontiguousarray(roots), np.ascontiguousarray(radii), None
+        else:
+            roots = np.empty((P, 1, 2 * n), dtype=np.complex128)
+            radii = np.empty((P, 1, 2 * n))
+            even = np.empty((P, 1), dtype=np.bool_)
+            perms, signs = _perms(n)
+            quadratic_eigvals_stack(M, C, K0, Kn, Kf, np.ascontiguousarray(gs[:, None]),
+                                    np.ascontiguousarray(es[:, None]), perms, signs, roots, radii, even)
+            roots, radii, even = roots.reshape(P, 2 * n), radii.reshape(P, 2 * n), even.reshape(P)
+        res = solve_points(M, C, K0, Kn, Kf, np.arange(P, dtype=np.int64), gs, es, roots, radii, even,
+                           UNSTABLE_RTOL, high_precision=high_precision)
+        for o, r in zip(out, res, strict=True):
+            o[sl] = r
+    return tuple(out)
+
+
+def _solve_grid(model, mu, tan_theta, damped, progress=None, friction=None, speed=None, *, high_precision=True):
     """``(lam, err, verdict, thr)`` over ``broadcast(mu, tan_theta)``; see :func:`eigenvalues`."""
     mu_a = validate_array_finite("mu", mu)
     t_a = validate_array_finite("tan_theta", tan_theta)
     mu_b, t_b = np.broadcast_arrays(mu_a, t_a)
     shape = mu_b.shape
-    g = np.ascontiguousarray((1.0 - mu_b * t_b).ravel())
-    e = np.ascontiguousarray((model.sliding_direction * (mu_b + t_b)).ravel())
+    mu_v = mu_b if friction is None else friction.mu(mu_b, speed)  # the coefficient while sliding
+    g = np.ascontiguousarray((1.0 - mu_v * t_b).ravel())
+    e = np.ascontiguousarray((model.sliding_direction * (mu_v + t_b)).ravel())
     n = model.n_dof
     total = g.shape[0]
     lam = np.empty((total, n), dtype=np.complex128)
@@ -107,7 +160,10 @@ def _solve_grid(model, mu, tan_theta, damped, progress=None, *, high_precision=T
     for start in range(0, total, block):
         stop = min(total, start + block)
         sl = slice(start, stop)
-        lam[sl], err[sl], verdict[sl], thr[sl] = _solve_block(mats, g[sl], e[sl], row, high_precision)
+        if friction is not None:
+            mats = _matrices(model, damped, friction, speed, mu_b.ravel()[sl], t_b.ravel()[sl])
+        with limit_threads(threads_for(stop - start)):  # small blocks: no parallel start-up
+            lam[sl], err[sl], verdict[sl], thr[sl] = _solve_block(mats, g[sl], e[sl], row, high_precision)
         if progress is not None:
             progress(stop, total)
     return (lam.reshape((*shape, n)), err.reshape((*shape, n)), verdict.reshape(shape), thr.reshape(shape))
@@ -119,6 +175,8 @@ def eigenvalues(
     tan_theta: ArrayLike = 0.0,
     *,
     damped: bool = False,
+    friction: Stribeck | None = None,
+    speed: float | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> NDArray[np.complex128]:
     """Complex eigenvalues lambda = sigma + j omega [1/s] of the model (paper eqs. 7-8).
@@ -138,6 +196,13 @@ def eigenvalues(
         Friction coefficient and run-out slope; broadcast against each other.
     damped : bool
         Include the damping matrix C. The paper's sweep (eq. 7) is undamped.
+    friction : Stribeck, optional
+        Speed-dependent friction (see :mod:`squealkit.models.friction`); ``mu`` is then the
+        kinetic coefficient. The system is linearised about steady sliding at ``speed``:
+        K uses ``mu(speed)`` and the friction force's slope adds the damping
+        ``dmu/dv N0 D`` (negative for falling friction), with or without ``damped``.
+    speed : float, optional
+        Sliding speed V [m/s] of the disc past the pin; needed with ``friction``.
     progress : callable, optional
         Called as ``progress(done, total)`` with point counts while working.
 
@@ -151,8 +216,16 @@ def eigenvalues(
     >>> lam = eigenvalues(get_preset("lv2013"), mu=0.0)
     >>> bool(np.all(lam.real == 0.0))   # undamped, no friction: on the imaginary axis
     True
+
+    Friction falling with speed is negative damping along the sliding direction:
+
+    >>> from squealkit.models.friction import Stribeck
+    >>> lam = eigenvalues(get_preset("lv2013"), 0.2, damped=True, friction=Stribeck(0.6, 1e-3), speed=1e-3)
+    >>> bool(lam.real.max() > 0)
+    True
     """
-    return _solve_grid(model, mu, tan_theta, damped, progress)[0]
+    friction, speed = validate_friction(model, friction, speed)
+    return _solve_grid(model, mu, tan_theta, damped, progress, friction, speed)[0]
 
 
 def stability_verdict(
@@ -161,6 +234,8 @@ def stability_verdict(
     tan_theta: ArrayLike = 0.0,
     *,
     damped: bool = False,
+    friction: Stribeck | None = None,
+    speed: float | None = None,
 ) -> NDArray[np.str_]:
     """The verdict at each point: ``"stable"``, ``"flutter"``, ``"divergence"`` or ``"indeterminate"``.
 
@@ -171,7 +246,8 @@ def stability_verdict(
     error radius; where a radius straddles the threshold (near-double roots: disc doublets,
     the lock-in point, rigid-body modes) the point is recomputed by LAPACK on the state
     matrix and then in 50-digit arithmetic. ``"indeterminate"`` means even that cannot
-    decide: the answer lies within the rounding of the model's own numbers.
+    decide: the answer lies within the rounding of the model's own numbers. ``friction`` and
+    ``speed`` as for :func:`eigenvalues`.
 
     Examples
     --------
@@ -179,7 +255,8 @@ def stability_verdict(
     >>> stability_verdict(get_preset("lv2013"), [0.0, 0.6]).tolist()
     ['stable', 'flutter']
     """
-    return np.asarray(VERDICTS)[_solve_grid(model, mu, tan_theta, damped)[2]]
+    friction, speed = validate_friction(model, friction, speed)
+    return np.asarray(VERDICTS)[_solve_grid(model, mu, tan_theta, damped, None, friction, speed)[2]]
 
 
 def stability_map(
@@ -188,6 +265,8 @@ def stability_map(
     theta: ArrayLike = 0.0,
     *,
     damped: bool = False,
+    friction: Stribeck | None = None,
+    speed: float | None = None,
     track: bool = True,
     lock_in_rtol: float = 1e-3,
     progress: Callable[[int, int], None] | None = None,
@@ -207,6 +286,10 @@ def stability_map(
         Incline angles of the disc surface run-out [rad]; ``tan(theta)`` enters the model.
     damped : bool
         Include damping (False reproduces the paper's undamped eq. 7).
+    friction : Stribeck, optional
+        Speed-dependent friction, ``mu`` its kinetic coefficient (see :func:`eigenvalues`).
+    speed : float, optional
+        Sliding speed V [m/s]; needed with ``friction``.
     track : bool
         Follow each mode across the grid (see :func:`~squealkit.stability.track_modes`);
         otherwise modes are ordered by frequency at each point.
@@ -233,6 +316,8 @@ def stability_map(
         grid point ``max_growth_rate`` [1/s], ``any_unstable`` and ``lock_in``.
         Coordinates: ``mu``, ``theta`` [rad], ``theta_deg``, ``tan_theta``, ``mu_e``
         (= mu + tan theta, eq. 6). Units in ``attrs``; the model as JSON in ``attrs``.
+        With ``friction``: coordinate ``mu_sliding`` (mu at ``speed``, which ``mu_e`` then
+        uses) and attributes ``friction`` and ``speed`` [m/s].
 
     Examples
     --------
@@ -242,6 +327,8 @@ def stability_map(
     >>> sorted(ds.sizes.items())
     [('mode', 3), ('mu', 9), ('theta', 5)]
     """
+    friction, speed = validate_friction(model, friction, speed)
+    fr = {"friction": friction, "speed": speed}
     mu_a = validate_array_finite("mu", mu)
     th_a = validate_array_finite("theta", theta)
     if mu_a.ndim > 1 or th_a.ndim > 1:
@@ -254,26 +341,28 @@ def stability_map(
     if store is None and client is not None:
         raise InputError("A cluster run streams its result to zarr: pass store='....zarr' with client.")
     if store is None:
-        sol = _solve_grid(model, mu_a[:, None], tan_t[None, :], damped, progress)
-        # lowest frequency first; tracking keeps the order of the first grid point
-        if track:
-            sol = _tracked(sol, track_modes(sol[0]))
-        return _dataset(model, mu_a, th_a, sol, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol)
+        with limit_threads(threads_for(mu_a.size * th_a.size)):  # tracking and labels too
+            sol = _solve_grid(model, mu_a[:, None], tan_t[None, :], damped, progress, friction, speed)
+            # lowest frequency first; tracking keeps the order of the first grid point
+            if track:
+                sol = _tracked(sol, track_modes(sol[0]))
+            return _dataset(model, mu_a, th_a, sol, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol, **fr)
     if Path(store).suffix.lower() != ".zarr":
         raise InputError(f"Parameter store={str(store)!r} must be a zarr store ending in .zarr.")
     if isinstance(tile_points, bool) or not isinstance(tile_points, int) or tile_points < 1:
         raise InputError(f"Parameter tile_points={tile_points!r} must be an integer >= 1.")
     return _stream_map(model, mu_a, th_a, damped=damped, track=track, lock_in_rtol=lock_in_rtol,
-                       progress=progress, store=store, client=client, tile_points=tile_points)
+                       progress=progress, store=store, client=client, tile_points=tile_points, **fr)
 
 
 def _tile(arg: tuple) -> xr.Dataset:
     """One block of whole mu rows of a stability map (a task of a streamed sweep)."""
-    model, mu, theta, first, damped, track, lock_in_rtol = arg
-    sol = _solve_grid(model, mu[:, None], np.tan(theta)[None, :], damped)
-    if track:
-        sol = _tracked(sol, track_rows(sol[0], first))
-    return _dataset(model, mu, theta, sol, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol)
+    model, mu, theta, first, damped, track, lock_in_rtol, fr = arg
+    with limit_threads(threads_for(mu.size * theta.size)):
+        sol = _solve_grid(model, mu[:, None], np.tan(theta)[None, :], damped, None, fr["friction"], fr["speed"])
+        if track:
+            sol = _tracked(sol, track_rows(sol[0], first))
+        return _dataset(model, mu, theta, sol, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol, **fr)
 
 
 def _tracked(sol, lam_tracked):
@@ -282,7 +371,7 @@ def _tracked(sol, lam_tracked):
     return lam_tracked, carry_along(lam, err, lam_tracked), verdict, thr
 
 
-def _stream_map(model, mu, theta, *, damped, track, lock_in_rtol, progress, store, client, tile_points):
+def _stream_map(model, mu, theta, *, damped, track, lock_in_rtol, progress, store, client, tile_points, **fr):
     from ..scale import lazy_template, stream_to_zarr
 
     n_th = theta.size
@@ -292,17 +381,17 @@ def _stream_map(model, mu, theta, *, damped, track, lock_in_rtol, progress, stor
         rows = max(1, min(rows, -(-mu.size // (4 * threads))))
     # the first column, tracked along mu: each point is the cold first point of its row,
     # so these are the same numbers the tiles compute for their column 0
-    first = eigenvalues(model, mu[:, None], np.tan(theta[:1])[None, :], damped=damped)[:, 0]
+    first = eigenvalues(model, mu[:, None], np.tan(theta[:1])[None, :], damped=damped, **fr)[:, 0]
     first = track_column(first) if track else first
-    sample = _tile((model, mu[:1], theta, first[:1], damped, track, lock_in_rtol))
+    sample = _tile((model, mu[:1], theta, first[:1], damped, track, lock_in_rtol, fr))
     template = lazy_template(sample, "mu", mu, rows)
-    pieces = [(_tile, (model, mu[a:a + rows], theta, first[a:a + rows], damped, track, lock_in_rtol),
+    pieces = [(_tile, (model, mu[a:a + rows], theta, first[a:a + rows], damped, track, lock_in_rtol, fr),
                a, min(mu.size, a + rows)) for a in range(0, mu.size, rows)]
     return stream_to_zarr(store, template, "mu", pieces, client=client, progress=progress,
                           weights=[(b - a) * n_th for *_, a, b in pieces], name="squealkit-stability")
 
 
-def _dataset(model, mu, theta, sol, *, damped, tracked, lock_in_rtol) -> xr.Dataset:
+def _dataset(model, mu, theta, sol, *, damped, tracked, lock_in_rtol, friction=None, speed=None) -> xr.Dataset:
     lam, err, verdict, thr = sol
     n = lam.shape[-1]
     grid = lam.shape[:-1]
@@ -352,6 +441,13 @@ def _dataset(model, mu, theta, sol, *, damped, tracked, lock_in_rtol) -> xr.Data
             "squealkit_version": __version__,
         },
     )
+    if friction is not None:
+        mu_v = friction.mu(mu, speed)
+        ds = ds.assign_coords(
+            mu_sliding=("mu", mu_v, {"units": "1", "long_name": "friction coefficient at the sliding speed"}),
+            mu_e=(("mu", "theta"), mu_v[:, None] + tan_t[None, :], ds["mu_e"].attrs))
+        ds.attrs.update(friction=friction.describe(), mu_static=friction.mu_static,
+                        v_stribeck=friction.v_stribeck, speed=speed, speed_units="m/s")
     return ds
 
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._threads import limit_threads, threads_for
 from .._validation import InputError, validate_array_finite, validate_finite
 from ..models import FrictionModel
 from ._kernels import DIVERGENCE, FLUTTER, INDETERMINATE, quadratic_eigvals_stack
@@ -88,6 +89,11 @@ def _solve_rows(ens: ModelEnsemble, which: NDArray, mu: NDArray, tan_theta: NDAr
                 high_precision: bool = True) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """``(lam, err, verdict, thr)`` of model ``which[p]`` at ``mu[p]`` (flat arrays), as
     :func:`~squealkit.stability.eigen._solve_grid` does for one model."""
+    with limit_threads(threads_for(np.size(which))):  # a search step of a few models: serial
+        return _solve_rows_now(ens, which, mu, tan_theta, high_precision)
+
+
+def _solve_rows_now(ens, which, mu, tan_theta, high_precision):
     n = ens.n_dof
     which = np.ascontiguousarray(which, dtype=np.int64)
     mu = np.asarray(mu, dtype=float)

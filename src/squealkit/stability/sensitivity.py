@@ -35,6 +35,7 @@ from numpy.typing import NDArray
 
 from .._validation import InputError, validate_positive
 from ..models import FrictionModel
+from ..models.friction import Stribeck
 from .critical import CriticalFriction, critical_friction
 from .modes import _dlambda, _matrix_derivatives, _parts, _quadratic_eig, _stiffness, _unit_largest
 
@@ -66,6 +67,8 @@ def critical_friction_sensitivity(
     parameters: Sequence[str] | None = None,
     rel_step: float = 1e-4,
     method: str = "exact",
+    friction: Stribeck | None = None,
+    speed: float | None = None,
 ) -> list[dict[str, object]]:
     """Sensitivity of the critical friction to each model parameter.
 
@@ -88,6 +91,10 @@ def critical_friction_sensitivity(
         ``"exact"``: derivatives at the onset from its eigenvectors (module notes), one
         critical-friction search in all. ``"fd"``: central differences of two more searches
         per parameter (a parameter whose step leaves its range is skipped).
+    friction, speed : Stribeck and float, optional
+        Speed-dependent friction and the sliding speed [m/s], as for
+        :func:`~squealkit.stability.critical_friction`; with them the derivatives are central
+        differences (``"fd"``): the exact formulas cover speed-independent friction.
 
     Returns
     -------
@@ -106,12 +113,15 @@ def critical_friction_sensitivity(
     """
     if method not in _METHODS:
         raise InputError(f"Parameter method={method!r} must be one of {', '.join(map(repr, _METHODS))}.")
-    base = critical_friction(model, theta, damped=damped)
+    fr = {} if friction is None else {"friction": friction, "speed": speed}
+    if fr:
+        method = "fd"
+    base = critical_friction(model, theta, damped=damped, **fr)
     if base.status != "onset" or not math.isfinite(base.mu_critical):
         raise InputError("The model has no friction onset at this theta; sensitivity is undefined.")
     names = _parameter_names(model, parameters, damped)
     if method == "fd":
-        derivs = _fd_derivatives(model, base, names, validate_positive("rel_step", rel_step))
+        derivs = _fd_derivatives(model, base, names, validate_positive("rel_step", rel_step), fr)
     else:
         derivs = _exact_derivatives(model, base, names)
     info = model.parameter_info()
@@ -129,14 +139,15 @@ def critical_friction_sensitivity(
     return rows
 
 
-def _fd_derivatives(model: FrictionModel, base: CriticalFriction, names: list[str], rel_step: float) -> dict:
+def _fd_derivatives(model: FrictionModel, base: CriticalFriction, names: list[str], rel_step: float,
+                    fr: dict) -> dict:
     out: dict[str, float] = {}
     for name in names:
         value = float(getattr(model, name))
         h = rel_step * abs(value) if value != 0 else rel_step
         try:
-            up = critical_friction(model.replace(**{name: value + h}), base.theta, damped=base.damped)
-            dn = critical_friction(model.replace(**{name: value - h}), base.theta, damped=base.damped)
+            up = critical_friction(model.replace(**{name: value + h}), base.theta, damped=base.damped, **fr)
+            dn = critical_friction(model.replace(**{name: value - h}), base.theta, damped=base.damped, **fr)
         except InputError:
             continue  # a step outside the allowed range (e.g. a zero damping)
         out[name] = (up.mu_critical - dn.mu_critical) / (2 * h)

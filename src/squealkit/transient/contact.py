@@ -16,11 +16,13 @@ With them an unstable run settles on a limit cycle.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from .._validation import InputError, validate_positive
+from ..models.friction import Stribeck, point_contact
 
 __all__ = ["Contact", "contact_geometry"]
 
@@ -74,6 +76,17 @@ class Contact:
     def is_linear(self) -> bool:
         return not (self.separation or self.sign_friction or self.mu_static is not None)
 
+    @property
+    def friction_law(self) -> Stribeck | None:
+        """The Stribeck law (for :func:`squealkit.stability.eigenvalues`), or None for constant mu."""
+        return None if self.mu_static is None else Stribeck(self.mu_static, self.v_stribeck)
+
+    def sliding_mu(self, mu: float, speed: float) -> float:
+        """Friction coefficient in steady sliding at ``speed`` [m/s]: ``mu(speed) tanh(speed / v_reg)``
+        with the Stribeck and sign laws this contact includes (``mu`` with neither)."""
+        out = float(mu) if self.mu_static is None else float(self.friction_law.mu(mu, speed))
+        return out * math.tanh(speed / self.v_reg) if self.sign_friction else out
+
     def describe(self) -> str:
         if self.is_linear:
             return "linear (paper eqs. 1-4)"
@@ -120,17 +133,8 @@ def contact_geometry(model) -> tuple[bool, float, np.ndarray, np.ndarray]:
     b = [0, 1, -1], f = [-1, 0, 0]). ``ok`` is False when the model's contact terms do not
     have this structure (then only the linear law is available).
     """
-    _, Kn, Kf = (np.asarray(a, float) for a in model.stiffness_parts())
-    _, fn, ff = (np.asarray(a, float) for a in model.load_parts())
-    n = fn.shape[0]
-    tr = float(np.trace(Kn))
-    if tr <= 0 or not np.any(fn):
+    pc = point_contact(model)
+    if pc is None:
+        n = model.n_dof
         return False, 0.0, np.zeros(n), np.zeros(n)
-    kc = float(fn @ fn) / tr
-    b, f = fn / kc, ff / kc
-    scale = max(np.abs(Kn).max(), np.abs(Kf).max(), 1e-300)
-    ok = bool(
-        np.allclose(Kn, kc * np.outer(b, b), rtol=0, atol=1e-9 * scale)
-        and np.allclose(Kf, kc * np.outer(f, b), rtol=0, atol=1e-9 * scale)
-    )
-    return ok, kc, b, f
+    return True, pc.kc, pc.b, pc.f

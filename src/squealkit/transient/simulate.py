@@ -18,6 +18,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike
 
+from .._threads import limit_threads, threads_for
 from .._validation import InputError, validate_finite, validate_fs, validate_positive
 from ..models import FrictionModel
 from ..stability.eigen import eigenvalues
@@ -66,12 +67,15 @@ def _step_size(runs: Sequence[_Run], fs: float, dt: float | None) -> tuple[float
     return 1.0 / (fs * stride), stride
 
 
-def _initial_state(run: _Run, x0, v0, perturbation: float, noise, x_start: float) -> tuple[np.ndarray, np.ndarray]:
+def _initial_state(
+    run: _Run, contact: Contact, x0, v0, perturbation: float, noise, x_start: float
+) -> tuple[np.ndarray, np.ndarray]:
     n = run.model.n_dof
     q0, t0 = (float(a[0]) for a in run.profile.evaluate(np.array([x_start])))
     if x0 is None:
-        # At rest in the static equilibrium of t = 0: K(0) x = F(0) (paper eq. 4).
-        x = run.model.static_equilibrium(run.mu, t0, q0)
+        # At rest in the static equilibrium of t = 0: K(0) x = F(0) (paper eq. 4), with the
+        # friction coefficient of steady sliding at the run's speed (Stribeck: mu(v), not mu).
+        x = run.model.static_equilibrium(contact.sliding_mu(run.mu, run.speed), t0, q0)
     else:
         x = np.array(x0, dtype=float).reshape(-1)
         if x.shape != (n,) or not np.all(np.isfinite(x)):
@@ -163,7 +167,7 @@ def _integrate(
     V = np.empty((R, n))
     noise = _perturbation_noise(perturbation, rng, R, n)
     for i, run in enumerate(runs):
-        X[i], V[i] = _initial_state(run, x0, v0, perturbation, noise[i], x_start)
+        X[i], V[i] = _initial_state(run, contact, x0, v0, perturbation, noise[i], x_start)
     out_x = np.full((R, n_out, n), np.nan)
     out_v = np.full((R, n_out, n), np.nan)
     out_a = np.full((R, n_out, n), np.nan)
@@ -186,10 +190,11 @@ def _integrate(
                 qh[i], th[i] = run.profile.evaluate(x_start + run.speed * th_t)
             else:
                 qh[i], th[i] = qh[j], th[j]
-        _kernels.integrate_chunk(
-            X, V, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
-            qh, th, dt, m, stride, out_x, out_v, out_a, out_nc, out_me, done // stride, limit, status, n_valid,
-        )
+        with limit_threads(threads_for(R, serial_below=2)):  # parallel over runs: one run is serial
+            _kernels.integrate_chunk(
+                X, V, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+                qh, th, dt, m, stride, out_x, out_v, out_a, out_nc, out_me, done // stride, limit, status, n_valid,
+            )
         done += m
         if progress is not None:
             progress(done, n_steps)
@@ -217,7 +222,9 @@ def _run_dataset(run: _Run, raw: dict, i: int, n_keep: int) -> xr.Dataset:
     normal = nc * np.sqrt(1.0 + tan_theta**2)  # eq. (2): N = -kc (y1 - y2 - q) / cos(theta)
     # sigma depends on tan(theta) only (mu fixed): solve once per distinct slope (to 1e-12).
     slopes, inverse = np.unique(np.round(tan_theta, 12), return_inverse=True)
-    sigma = eigenvalues(model, run.mu, slopes, damped=True).real.max(axis=-1)[inverse.reshape(-1)]
+    law = raw["contact"].friction_law
+    fr = {"friction": law, "speed": run.speed} if law is not None and run.speed > 0 else {}
+    sigma = eigenvalues(model, run.mu, slopes, damped=True, **fr).real.max(axis=-1)[inverse.reshape(-1)]
     data: dict[str, tuple] = {}
     for j, name in enumerate(model.dof_names):
         data[name] = ("time", raw["x"][i, :n_keep, j], {"units": "m", "long_name": f"displacement {name}"})
@@ -356,7 +363,10 @@ def simulate(
         ``y1``, ``y2`` for the paper's model), velocity (``x1_dot``...) and acceleration
         (``x1_ddot``...), ``normal_force`` and ``friction_force`` [N], ``q`` [m],
         ``tan_theta``, ``mu_e`` and the frozen-time ``growth_rate`` sigma(t) [1/s] of the
-        damped linear model at (mu, tan_theta(t)). Attribute ``status`` is ``"completed"``
+        damped linear model at (mu, tan_theta(t)) (with a Stribeck contact, linearised about
+        sliding at ``speed``: see :func:`~squealkit.stability.eigenvalues`). A run starts at rest
+        in the static equilibrium of steady sliding (friction ``mu(speed)`` for a Stribeck
+        contact) unless ``x0`` is given. Attribute ``status`` is ``"completed"``
         or ``"diverged"``; a diverged run is cut at its last finite sample (``t_stop``).
 
     Examples
