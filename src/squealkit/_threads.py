@@ -17,9 +17,11 @@ gets a core. So:
   (``numba.set_num_threads``, which makes ``prange`` loops serial at 1).
 
 numba's thread count is per calling thread, so a limit set in one thread (or one Dask
-task) never changes another's. The kernels call LAPACK only on tiny matrices (companion
-matrices of degree <= 8, one 2n x 2n state matrix per point), which OpenBLAS never splits
-across threads, so BLAS threads are left alone.
+task) never changes another's. BLAS threads are left alone: the stability engine calls
+LAPACK one small matrix at a time (companion matrices of degree <= 8, 2n x 2n state
+matrices of the small models), sizes at which OpenBLAS does not start threads; capping
+BLAS too (threadpoolctl) would matter only for large FE models, which squealkit does not
+solve yet.
 
 Examples
 --------

@@ -47,7 +47,7 @@ def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed
       squealkit critical --theta -8:8:17
       squealkit critical --theta 0 --sensitivity
       squealkit critical --preset hoffmann2002
-      squealkit critical --damped --stribeck 0.6,0.001 --speed 0.0015
+      squealkit critical --damped --stribeck 0.6,0.01 --speed 0.02
 
     \b
     With --stribeck MU_STATIC,V_STRIBECK friction depends on the sliding speed
@@ -87,7 +87,7 @@ def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed
         if fr:
             click.echo(f"  friction: {fr['friction'].describe()} at sliding speed {fr['speed']:g} m/s")
         click.echo(f"  mu_crit   = {res.mu_critical:.8f}")
-        click.echo(f"  mu_e_crit = {res.mu_e_critical:.8f}   (mu_crit + tan theta)")
+        click.echo(f"  mu_e_crit = {res.mu_e_critical:.8f}   ({'mu(speed)' if fr else 'mu_crit'} + tan theta)")
         click.echo(f"  frequency = {res.omega_rad_s:.2f} rad/s = {res.frequency_hz:.2f} Hz at onset")
         windows = ", ".join(f"[{a:.6f}, {b:.6f}]" for a, b in res.unstable_intervals) or "none"
         click.echo(f"  unstable for mu in {windows}   (searched 0 to {mu_max:g})")

@@ -257,7 +257,7 @@ class FrictionModel(ABC):
         """
         mu_a, t_a = np.broadcast_arrays(np.asarray(mu, float), np.asarray(tan_theta, float))
         n0 = self.static_contact_force(law.mu(mu_a, speed), t_a)
-        return (law.slope(mu_a, speed) * n0)[..., None, None] * self.friction_damping_matrix(t_a)
+        return (law.slope(mu_a, speed) * n0)[..., None, None] * self.friction_damping_matrix(t_a) + 0.0
 
     # -- parameters --------------------------------------------------------------------
     @classmethod
