@@ -185,7 +185,7 @@ def _coalescence(model, M, C, K0, Kn, Kf, mu_c, t, lam, grow, names) -> dict[str
     out = {}
     for name in names:
         num = along(*_matrix_derivatives(model, name, mu_c, t, False)[:3])
-        out[name] = -(num / den).real  # real: Q(lambda_c) is real on the axis
+        out[name] = -(num / den).real + 0.0  # real: Q(lambda_c) is real on the axis; + 0.0: no -0
     return out
 
 
@@ -207,5 +207,5 @@ def _hopf(model, M, C, K0, Kn, Kf, mu_c, t, lam, phi, psi, grow, names) -> dict[
     out = {}
     for name in names:
         dM, dC, dK, _, _ = _matrix_derivatives(model, name, mu0, t, True)
-        out[name] = -float(_dlambda(M, C, dM, dC, dK, lam_k, phi_k, psi_k)[0].real) / dsig_dmu
+        out[name] = -float(_dlambda(M, C, dM, dC, dK, lam_k, phi_k, psi_k)[0].real) / dsig_dmu + 0.0
     return out
