@@ -4,20 +4,9 @@ import json
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
 
-from squealkit.cli.main import cli, main
+from squealkit.cli.main import main
 from squealkit.io import load_dataset
-
-
-@pytest.fixture()
-def run():
-    runner = CliRunner()
-
-    def invoke(*args):
-        return runner.invoke(cli, list(args))
-
-    return invoke
 
 
 def test_stability_json_reports_paper_band(run):

@@ -12,12 +12,10 @@ import math
 import numpy as np
 import pytest
 import xarray as xr
-from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from squealkit import InputError
-from squealkit.cli.main import cli
 from squealkit.io import load_dataset
 from squealkit.models import Hoffmann2002, MatrixModel, get_preset
 from squealkit.stability import (
@@ -301,16 +299,6 @@ def test_dataset_round_trip_and_summary(tmp_path):
 
 
 # -- CLI --------------------------------------------------------------------------------------
-
-
-@pytest.fixture()
-def run():
-    runner = CliRunner()
-
-    def invoke(*args):
-        return runner.invoke(cli, list(args))
-
-    return invoke
 
 
 def test_cli_modes_json(run):

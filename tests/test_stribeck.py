@@ -233,12 +233,6 @@ def test_bad_friction_input_is_rejected_with_a_clear_message():
 # -- command line ---------------------------------------------------------------------------
 
 
-@pytest.fixture()
-def run():
-    runner = CliRunner()
-    return lambda *args: runner.invoke(cli, list(args))
-
-
 def test_cli_stability_and_simulate_agree_with_the_api(run):
     args = ["--stribeck", "0.6,0.001", "--speed", "0.0015"]
     r = run("stability", "--damped", "--mu", "0.2", "--theta", "0", "--json", *args)

@@ -7,11 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
-from click.testing import CliRunner
 from scipy import stats
 
 from squealkit._validation import InputError
-from squealkit.cli.main import cli
 from squealkit.io import load_dataset, save_dataset
 from squealkit.models import Hoffmann2002, PinOnDisc3DOF, get_preset, load_model
 from squealkit.stability import critical_friction, critical_friction_sensitivity
@@ -270,12 +268,6 @@ def test_plots(hoff):
     assert len(uncertainty_plot(no_sens).axes) == 1
     with pytest.raises(InputError, match="no Sobol' indices"):
         sensitivity_plot(no_sens)
-
-
-@pytest.fixture()
-def run():
-    runner = CliRunner()
-    return lambda *args: runner.invoke(cli, list(args))
 
 
 @pytest.fixture()
