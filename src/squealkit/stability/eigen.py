@@ -110,6 +110,29 @@ def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int, hi
 _EACH_BLOCK = 1 << 15
 
 
+def _solve_models(mats: tuple[NDArray, ...], which: NDArray, g: NDArray, e: NDArray,
+                  high_precision: bool = True):
+    """:func:`_solve_block` for a stack of models ``mats`` (S, n, n): point p is model
+    ``which[p]`` at contact factors ``g[p]``, ``e[p]``, each point solved on its own."""
+    n = mats[0].shape[-1]
+    P = g.shape[0]
+    M, C, K0, Kn, Kf = mats
+    if n > _KERNEL_MAX_DOF:
+        K = K0[which] + g[:, None, None] * Kn[which] + e[:, None, None] * Kf[which]
+        roots, radii = lapack_roots(M[which], C[which], K)
+        roots, radii, even = np.ascontiguousarray(roots), np.ascontiguousarray(radii), None
+    else:
+        roots = np.empty((P, 1, 2 * n), dtype=np.complex128)
+        radii = np.empty((P, 1, 2 * n))
+        even = np.empty((P, 1), dtype=np.bool_)
+        perms, signs = _perms(n)
+        quadratic_eigvals_stack(*(np.ascontiguousarray(a[which]) for a in mats), np.ascontiguousarray(g[:, None]),
+                                np.ascontiguousarray(e[:, None]), perms, signs, roots, radii, even)
+        roots, radii, even = roots.reshape(P, 2 * n), radii.reshape(P, 2 * n), even.reshape(P)
+    return solve_points(M, C, K0, Kn, Kf, which, g, e, roots, radii, even, UNSTABLE_RTOL,
+                        high_precision=high_precision)
+
+
 def _solve_each(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, high_precision: bool = True):
     """:func:`_solve_block` for a stack of one model per point: each point solved on its own."""
     n = mats[0].shape[-1]
@@ -117,22 +140,9 @@ def _solve_each(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, high_precisio
            np.empty(g.shape[0], dtype=np.int8), np.empty(g.shape[0])]
     for a in range(0, g.shape[0], _EACH_BLOCK):
         sl = slice(a, min(g.shape[0], a + _EACH_BLOCK))
-        M, C, K0, Kn, Kf = (np.ascontiguousarray(x[sl]) for x in mats)
-        gs, es = g[sl], e[sl]
-        P = gs.shape[0]
-        if n > _KERNEL_MAX_DOF:
-            roots, radii = lapack_roots(M, C, K0 + gs[:, None, None] * Kn + es[:, None, None] * Kf)
-            roots, radii, even = np.ascontiguousarray(roots), np.ascontiguousarray(radii), None
-        else:
-            roots = np.empty((P, 1, 2 * n), dtype=np.complex128)
-            radii = np.empty((P, 1, 2 * n))
-            even = np.empty((P, 1), dtype=np.bool_)
-            perms, signs = _perms(n)
-            quadratic_eigvals_stack(M, C, K0, Kn, Kf, np.ascontiguousarray(gs[:, None]),
-                                    np.ascontiguousarray(es[:, None]), perms, signs, roots, radii, even)
-            roots, radii, even = roots.reshape(P, 2 * n), radii.reshape(P, 2 * n), even.reshape(P)
-        res = solve_points(M, C, K0, Kn, Kf, np.arange(P, dtype=np.int64), gs, es, roots, radii, even,
-                           UNSTABLE_RTOL, high_precision=high_precision)
+        sub = tuple(np.ascontiguousarray(x[sl]) for x in mats)
+        which = np.arange(sub[0].shape[0], dtype=np.int64)
+        res = _solve_models(sub, which, g[sl], e[sl], high_precision)
         for o, r in zip(out, res, strict=True):
             o[sl] = r
     return tuple(out)
@@ -245,7 +255,8 @@ def stability_verdict(
     It is stable when no eigenvalue can reach the threshold. Each computed root carries an
     error radius; where a radius straddles the threshold (near-double roots: disc doublets,
     the lock-in point, rigid-body modes) the point is recomputed by LAPACK on the state
-    matrix and then in 50-digit arithmetic. ``"indeterminate"`` means even that cannot
+    matrix and then decided exactly, in rational arithmetic (50-digit arithmetic where
+    that meets a root exactly on the threshold). ``"indeterminate"`` means even that cannot
     decide: the answer lies within the rounding of the model's own numbers. ``friction`` and
     ``speed`` as for :func:`eigenvalues`.
 

@@ -19,13 +19,11 @@ from numpy.typing import ArrayLike, NDArray
 from .._threads import limit_threads, threads_for
 from .._validation import InputError, validate_array_finite, validate_finite
 from ..models import FrictionModel
-from ._kernels import DIVERGENCE, FLUTTER, INDETERMINATE, quadratic_eigvals_stack
-from ._solve import lapack_roots, solve_points
+from ._kernels import DIVERGENCE, FLUTTER, INDETERMINATE
 from ._windows import ONSET_STATUS, SCAN_POINTS, find_windows
-from .eigen import _KERNEL_MAX_DOF, UNSTABLE_RTOL, _perms
+from .eigen import _solve_models
 
 __all__ = ["ONSET_STATUS", "ModelEnsemble", "ensemble_onset", "ensemble_unstable"]
-
 
 
 @dataclass(frozen=True)
@@ -89,32 +87,13 @@ def _solve_rows(ens: ModelEnsemble, which: NDArray, mu: NDArray, tan_theta: NDAr
                 high_precision: bool = True) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """``(lam, err, verdict, thr)`` of model ``which[p]`` at ``mu[p]`` (flat arrays), as
     :func:`~squealkit.stability.eigen._solve_grid` does for one model."""
-    with limit_threads(threads_for(np.size(which))):  # a search step of a few models: serial
-        return _solve_rows_now(ens, which, mu, tan_theta, high_precision)
-
-
-def _solve_rows_now(ens, which, mu, tan_theta, high_precision):
-    n = ens.n_dof
     which = np.ascontiguousarray(which, dtype=np.int64)
     mu = np.asarray(mu, dtype=float)
     g = np.ascontiguousarray(1.0 - mu * tan_theta)
     e = np.ascontiguousarray(ens.sliding[which] * (mu + tan_theta))
     mats = tuple(np.ascontiguousarray(a) for a in (ens.M, ens.C, ens.K0, ens.Kn, ens.Kf))
-    if n > _KERNEL_MAX_DOF:
-        K = ens.K0[which] + g[:, None, None] * ens.Kn[which] + e[:, None, None] * ens.Kf[which]
-        roots, radii = lapack_roots(ens.M[which], ens.C[which], K)
-        even = None
-    else:
-        sub = tuple(np.ascontiguousarray(a[which]) for a in mats)
-        roots = np.empty((which.size, 1, 2 * n), dtype=np.complex128)
-        radii = np.empty((which.size, 1, 2 * n))
-        even = np.empty((which.size, 1), dtype=np.bool_)
-        perms, signs = _perms(n)
-        quadratic_eigvals_stack(*sub, g[:, None], e[:, None], perms, signs, roots, radii, even)
-        even = even.reshape(-1)
-    return solve_points(*mats, which, g, e, np.ascontiguousarray(roots.reshape(which.size, 2 * n)),
-                        np.ascontiguousarray(radii.reshape(which.size, 2 * n)), even, UNSTABLE_RTOL,
-                        high_precision=high_precision)
+    with limit_threads(threads_for(which.size)):  # a search step of a few models: serial
+        return _solve_models(mats, which, g, e, high_precision)
 
 
 def _verdict_rows(ens: ModelEnsemble, mu: NDArray, tan_theta: float) -> NDArray[np.int8]:
