@@ -79,8 +79,6 @@ class Windows:
     unstable : ndarray of bool, shape (W,)
         True when some point of the window is unstable for sure (flutter or divergence);
         False when all its points are indeterminate.
-    divergence : ndarray of bool, shape (W,)
-        True when some point of the window has a growing real root.
     """
 
     start_unstable: NDArray[np.bool_]
@@ -88,7 +86,6 @@ class Windows:
     near: NDArray[np.float64]
     far: NDArray[np.float64]
     unstable: NDArray[np.bool_]
-    divergence: NDArray[np.bool_]
 
     def of_row(self, b: int) -> list[tuple[float, float, bool]]:
         """The windows of row ``b`` as ``(low, high, unstable)``, ascending in value."""
@@ -171,16 +168,13 @@ def find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, *, scan: int = S
     pos = top[cb, cj]
     ci = pos // ind.shape[-1] + 1  # scan index of the candidate
     ck = pos % ind.shape[-1]  # indicator
-    found_x = _golden(evaluate, cb.astype(np.int64), ck, xs[cb, ci - 1], xs[cb, ci + 1])
+    found_x, found_v = _golden(evaluate, cb.astype(np.int64), ck, xs[cb, ci - 1], xs[cb, ci + 1])
 
     # 3. samples: the scan plus the non-stable points found by the golden search
     hit = np.isfinite(found_x)
     sx = [xs.ravel(), found_x[hit]]
     sr = [rows, cb[hit].astype(np.int64)]
-    sv = [verdict.ravel(), np.full(int(hit.sum()), FLUTTER, dtype=verdict.dtype)]
-    if hit.any():
-        v_hit, _, _ = evaluate(cb[hit].astype(np.int64), found_x[hit])
-        sv[1] = v_hit.astype(verdict.dtype)
+    sv = [verdict.ravel(), found_v[hit].astype(verdict.dtype)]
     sx_a, sr_a, sv_a = np.concatenate(sx), np.concatenate(sr), np.concatenate(sv)
     sign = np.where(x1 >= x0, 1.0, -1.0)
     order = np.lexsort((sign[sr_a] * sx_a, sr_a))  # by row, then along the path
@@ -196,7 +190,7 @@ def find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, *, scan: int = S
     boundary = np.where(bad[j], b, a)
 
     # 5. assemble windows: runs of not-stable samples, bounded by the boundaries found
-    w_row, w_near, w_far, w_uns, w_div = [], [], [], [], []
+    w_row, w_near, w_far, w_uns = [], [], [], []
     starts = np.flatnonzero(np.concatenate([[True], ~same_row | (bad[1:] != bad[:-1])]))
     ends = np.concatenate([starts[1:], [sx_a.size]])
     bnd = dict(zip(j.tolist(), boundary.tolist(), strict=True))
@@ -211,7 +205,6 @@ def find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, *, scan: int = S
         w_near.append(near)
         w_far.append(far)
         w_uns.append(bool(np.any((v == FLUTTER) | (v == DIVERGENCE))))
-        w_div.append(bool(np.any(v == DIVERGENCE)))
     start_unstable = verdict[:, 0] != STABLE
     return Windows(
         start_unstable,
@@ -219,18 +212,19 @@ def find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, *, scan: int = S
         np.asarray(w_near, dtype=float),
         np.asarray(w_far, dtype=float),
         np.asarray(w_uns, dtype=bool),
-        np.asarray(w_div, dtype=bool),
     )
 
 
 def _golden(evaluate: Evaluator, rows: NDArray, kind: NDArray, a: NDArray, d: NDArray) -> NDArray:
     """Golden-section minimisation of indicator ``kind`` of each row on ``[a, d]``.
 
-    Returns, per candidate, the first visited point that is not stable (NaN if none).
+    Returns, per candidate, the first visited point that is not stable (NaN if none) and
+    its verdict code.
     """
     found = np.full(rows.shape[0], np.nan)
+    found_v = np.full(rows.shape[0], STABLE, dtype=np.int8)
     if rows.size == 0:
-        return found
+        return found, found_v
     a, d = np.minimum(a, d).astype(float), np.maximum(a, d).astype(float)
     pick = np.arange(rows.size)
 
@@ -240,6 +234,7 @@ def _golden(evaluate: Evaluator, rows: NDArray, kind: NDArray, a: NDArray, d: ND
         bad = v != STABLE
         new = bad & np.isnan(found[idx])
         found[idx[new]] = x[new]
+        found_v[idx[new]] = v[new]
         return val
 
     x1 = d - _INV_PHI * (d - a)
@@ -264,7 +259,7 @@ def _golden(evaluate: Evaluator, rows: NDArray, kind: NDArray, a: NDArray, d: ND
         f1[idx] = np.where(left, new_f, keep_f)
         x2[idx] = np.where(left, keep_x, new_x)
         f2[idx] = np.where(left, keep_f, new_f)
-    return found
+    return found, found_v
 
 
 def _bisect(evaluate: Evaluator, rows: NDArray, a: NDArray, b: NDArray, a_bad: NDArray,

@@ -37,9 +37,6 @@ __all__ = [
     "runout_tolerance",
 ]
 
-_SCAN_POINTS = SCAN_POINTS
-
-
 def _evaluator(model: FrictionModel, damped: bool, mu: NDArray | None, t: NDArray | None, fr: dict):
     """Path evaluator for :func:`find_windows`: rows index ``mu`` or ``t``, x is the other."""
 
@@ -127,7 +124,7 @@ def critical_friction_curve(
     *,
     damped: bool = False,
     mu_max: float = 2.0,
-    scan: int = _SCAN_POINTS,
+    scan: int = SCAN_POINTS,
     friction: Stribeck | None = None,
     speed: float | None = None,
 ) -> xr.Dataset:
