@@ -4,7 +4,8 @@ For ``(M s^2 + C s + K) x = 0`` with small n the eigenvalues are the 2n roots of
 characteristic polynomial ``det(M s^2 + C s + K)``. Per grid point we
 
 1. expand the determinant (Leibniz formula over the n! permutations; each entry is a
-   quadratic in s),
+   quadratic in s). Over a grid of one model the expansion is done once, as a polynomial in
+   s and the contact factors g, e (:func:`charpoly_table`), and evaluated per point,
 2. scale s by the geometric mean of the root moduli so the monic polynomial has O(1) roots,
 3. find all roots at once by the Aberth-Ehrlich iteration (cubically convergent, Gauss-
    Seidel updates), warm-started from the neighbouring grid point's roots,
@@ -86,6 +87,73 @@ def _charpoly(M, C, K, perms, signs, out, tmp_a, tmp_b):
 
 
 @nb.njit(cache=True, nogil=True)
+def charpoly_table(M, C, K0, Kn, Kf, perms, signs):
+    """det(M s^2 + C s + K0 + g Kn + e Kf) as a polynomial in (s, g, e), once per model.
+
+    Returns ``T`` of shape (2n+1, n+1, n+1) with ``det = sum T[d, i, j] s^d g^i e^j``
+    (``i + j <= n``), by the Leibniz formula on entries that are polynomials in all three
+    variables. A grid of contact factors (g, e) then costs (n+1)(n+2)/2 (2n+1) multiply-adds
+    per point instead of a Leibniz expansion per point. Rounding: every coefficient is a
+    signed sum of products of entries, so its error is bounded by a few eps times the same
+    sum in absolute values, which :func:`_radii_range` accounts for.
+    """
+    n = M.shape[0]
+    deg = 2 * n
+    T = np.zeros((deg + 1, n + 1, n + 1))
+    ta = np.zeros((deg + 3, n + 2, n + 2))
+    tb = np.zeros((deg + 3, n + 2, n + 2))
+    for p in range(perms.shape[0]):
+        ta[:, :, :] = 0.0
+        ta[0, 0, 0] = 1.0
+        for r in range(n):
+            c = perms[p, r]
+            m2 = M[r, c]
+            c1 = C[r, c]
+            k0 = K0[r, c]
+            kn = Kn[r, c]
+            kf = Kf[r, c]
+            tb[:, :, :] = 0.0
+            # degrees so far: s <= 2r, g + e <= r
+            for d in range(2 * r + 1):
+                for i in range(r + 1):
+                    for j in range(r + 1 - i):
+                        a = ta[d, i, j]
+                        if a == 0.0:
+                            continue
+                        tb[d, i, j] += a * k0
+                        tb[d + 1, i, j] += a * c1
+                        tb[d + 2, i, j] += a * m2
+                        tb[d, i + 1, j] += a * kn
+                        tb[d, i, j + 1] += a * kf
+            ta[:, :, :] = tb
+        sg = signs[p]
+        for d in range(deg + 1):
+            for i in range(n + 1):
+                for j in range(n + 1 - i):
+                    T[d, i, j] += sg * ta[d, i, j]
+    return T
+
+
+@nb.njit(cache=True, nogil=True, inline="always")
+def _eval_table(T, gi, ei, gp, ep, out):
+    """Coefficients (ascending powers of s) of the table ``T`` at contact factors (gi, ei)."""
+    n = gp.shape[0] - 1
+    gp[0] = 1.0
+    ep[0] = 1.0
+    for i in range(1, n + 1):
+        gp[i] = gp[i - 1] * gi
+        ep[i] = ep[i - 1] * ei
+    for d in range(T.shape[0]):
+        acc = 0.0
+        for i in range(n + 1):
+            row = 0.0
+            for j in range(n + 1 - i):
+                row += T[d, i, j] * ep[j]
+            acc += row * gp[i]
+        out[d] = acc
+
+
+@nb.njit(cache=True, nogil=True)
 def _companion_roots(b, roots):
     """Roots of the monic polynomial sum b[k] z^k (b[deg] = 1) by LAPACK on its companion."""
     deg = b.shape[0] - 1
@@ -158,6 +226,15 @@ def _aberth(b, z):
     return False
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def _div(a, d):
+    """a / d for complex numbers, without the overflow guards of the general division: the
+    kernel's numbers are O(1) (scaled polynomial), and an underflowing |d|^2 gives a
+    non-finite result that the callers treat as failure."""
+    den = d.real * d.real + d.imag * d.imag
+    return complex((a.real * d.real + a.imag * d.imag) / den, (a.imag * d.real - a.real * d.imag) / den)
+
+
 @nb.njit(cache=True, nogil=True)
 def _aberth_conj(b, u):
     """Aberth-Ehrlich on the n upper-half-plane roots ``u`` of a real polynomial of degree 2n.
@@ -165,12 +242,15 @@ def _aberth_conj(b, u):
     The other n roots are the conjugates, so only n polynomial evaluations are needed per
     sweep; the conjugates enter the Aberth sum directly. Returns False (caller falls back
     to the general iteration) if a root approaches the real axis or anything goes wrong.
+    The same stopping rule as :func:`_aberth`, on squared magnitudes (no square roots in
+    the loop: this is the kernel's hot path).
     """
     n = u.shape[0]
-    prev = np.inf
+    prev2 = np.inf
+    one = 1.0 + 0.0j
     for _ in range(_MAX_ITER):
-        worst = 0.0
-        newton = 0.0
+        worst2 = 0.0
+        newton2 = 0.0
         for k in range(n):
             zk = u[k]
             p, dp = _horner(b, zk)
@@ -178,32 +258,32 @@ def _aberth_conj(b, u):
                 continue
             if dp == 0j:
                 return False
-            ratio = p / dp
-            acc = 1.0 / (zk - zk.conjugate())
+            ratio = _div(p, dp)
+            acc = _div(one, complex(0.0, 2.0 * zk.imag))
             for j in range(n):
-                acc += 1.0 / (zk - u[j].conjugate())
+                acc += _div(one, zk - u[j].conjugate())
                 if j != k:
                     diff = zk - u[j]
                     if diff == 0j:
                         return False
-                    acc += 1.0 / diff
-            w = ratio / (1.0 - ratio * acc)
+                    acc += _div(one, diff)
+            w = _div(ratio, 1.0 - ratio * acc)
             if not (np.isfinite(w.real) and np.isfinite(w.imag)):
                 return False
             znew = zk - w
-            mag = abs(znew)
-            if not znew.imag > 1e-9 * mag:
+            mag2 = znew.real * znew.real + znew.imag * znew.imag
+            if not (znew.imag > 0.0 and znew.imag * znew.imag > 1e-18 * mag2):
                 return False
             u[k] = znew
-            rel = abs(w) / mag
-            if rel > worst:
-                worst = rel
-            rel_newton = abs(ratio) / mag
-            if rel_newton > newton:
-                newton = rel_newton
-        if worst <= _TOL_ROUNDING or (worst <= _TOL_FAST and worst <= prev * prev):
-            return newton <= _NEWTON_RATIO * worst + _TOL_NEWTON
-        prev = worst
+            rel2 = (w.real * w.real + w.imag * w.imag) / mag2
+            if rel2 > worst2:
+                worst2 = rel2
+            rn2 = (ratio.real * ratio.real + ratio.imag * ratio.imag) / mag2
+            if rn2 > newton2:
+                newton2 = rn2
+        if worst2 <= _TOL_ROUNDING * _TOL_ROUNDING or (worst2 <= _TOL_FAST * _TOL_FAST and worst2 <= prev2 * prev2):
+            return np.sqrt(newton2) <= _NEWTON_RATIO * np.sqrt(worst2) + _TOL_NEWTON
+        prev2 = worst2
     return False
 
 
@@ -236,8 +316,13 @@ def _vieta_ok(b, z, m, conj):
 
 
 @nb.njit(cache=True, nogil=True)
-def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop):
+def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, table, roots, start, stop):
+    """Roots of points ``start:stop``; the polynomial from ``table`` (see
+    :func:`charpoly_table`) when it is not empty, else by the Leibniz formula per point."""
     n = M.shape[0]
+    use_table = table.shape[0] > 0
+    gp = np.empty(n + 1)
+    ep = np.empty(n + 1)
     deg = 2 * n
     K = np.empty((n, n))
     a = np.empty(deg + 1)
@@ -255,10 +340,13 @@ def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop):
     for idx in range(start, stop):
         gi = g[idx]
         ei = e[idx]
-        for r in range(n):
-            for c in range(n):
-                K[r, c] = K0[r, c] + gi * Kn[r, c] + ei * Kf[r, c]
-        _charpoly(M, C, K, perms, signs, a, tmp_a, tmp_b)
+        if use_table:
+            _eval_table(table, gi, ei, gp, ep, a)
+        else:
+            for r in range(n):
+                for c in range(n):
+                    K[r, c] = K0[r, c] + gi * Kn[r, c] + ei * Kf[r, c]
+            _charpoly(M, C, K, perms, signs, a, tmp_a, tmp_b)
         lead = a[deg]
         if not have_scale:
             # scale s = w0 z so that the monic polynomial in z has unit geometric-mean
@@ -319,7 +407,7 @@ def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop):
 
 
 @nb.njit(cache=True, parallel=True)
-def quadratic_eigvals(M, C, K0, Kn, Kf, g, e, perms, signs, roots, radii, even, chunk, row):
+def quadratic_eigvals(M, C, K0, Kn, Kf, g, e, perms, signs, table, roots, radii, even, chunk, row):
     """All 2n eigenvalues of ``M s^2 + C s + K`` with ``K = K0 + g[i] Kn + e[i] Kf``.
 
     Fills ``roots`` (shape (len(g), 2n)), their error radii ``radii`` and the flag ``even``
@@ -339,8 +427,8 @@ def quadratic_eigvals(M, C, K0, Kn, Kf, g, e, perms, signs, roots, radii, even, 
         start = r0 + (c % per_row) * chunk
         stop = min(npts, r0 + row, start + chunk)
         if start < stop:
-            counts[c] = _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, roots, start, stop)
-            _radii_range(M, C, K0, Kn, Kf, g, e, perms, signs, roots, radii, even, start, stop)
+            counts[c] = _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, table, roots, start, stop)
+            _radii_range(M, C, K0, Kn, Kf, g, e, perms, signs, table, roots, radii, even, start, stop)
     return counts.sum()
 
 
@@ -366,8 +454,26 @@ def inclusion_radii(z, lead, err_at, radius, member, pairs=False):
     """
     deg = z.shape[0]
     half = deg // 2
+    alead = abs(lead)
     for k in range(half if pairs else deg):
         zk = z[k]
+        # the common case first: a simple root, no other root within twice its radius
+        prod2 = 1.0
+        near2 = np.inf
+        for j in range(deg):
+            if j != k:
+                d = zk - z[j]
+                d2 = d.real * d.real + d.imag * d.imag
+                prod2 *= d2
+                near2 = min(near2, d2)
+        prod = alead * np.sqrt(prod2)
+        if prod > 0.0 and err_at[k] < np.inf:
+            r = err_at[k] / prod
+            if 4.0 * r * r < near2:
+                radius[k] = r
+                if pairs:
+                    radius[half + k] = r
+                continue
         for j in range(deg):
             member[j] = j == k
         m = 1
@@ -400,7 +506,7 @@ def inclusion_radii(z, lead, err_at, radius, member, pairs=False):
 
 
 @nb.njit(cache=True, nogil=True)
-def _radii_range(M, C, K0, Kn, Kf, g, e, perms, signs, roots, radii, even, start, stop):
+def _radii_range(M, C, K0, Kn, Kf, g, e, perms, signs, table, roots, radii, even, start, stop):
     """Error radius of every root of points ``start:stop`` from the kernel's own rounding.
 
     Each coefficient of ``det(M s^2 + C s + K)`` is a signed sum of Leibniz terms; its
@@ -409,13 +515,21 @@ def _radii_range(M, C, K0, Kn, Kf, g, e, perms, signs, roots, radii, even, start
     ``|M| |s|^2 + |C| |s| + |K|``, which is at most the product of its row sums. So
     ``gamma prod_i (m_i |s|^2 + c_i |s| + k_i)`` (row sums of absolute entries) bounds the
     polynomial's error at s, and :func:`inclusion_radii` turns it into a radius per root.
+    Where the polynomial came from :func:`charpoly_table` (``table`` not empty), each
+    coefficient is a signed sum of products of entries of M, C, K0, Kn, Kf and the powers
+    of g and e, so the same argument holds with ``|K0| + |g| |Kn| + |e| |Kf|`` in place of
+    ``|K|`` and a gamma that also counts the table's longer sums and its evaluation.
     Roots stored as conjugate pairs (the kernel's fast path) share one radius.
     ``even[i]`` is set where the polynomial is even in s (C = 0, or C skew and K symmetric:
     roots in pairs +-s).
     """
     n = M.shape[0]
     deg = 2 * n
-    gamma = 4.0 * (4 * n + perms.shape[0] + 8) * _EPS
+    use_table = table.shape[0] > 0
+    if use_table:
+        gamma = 4.0 * (11 * n + perms.shape[0] + 8) * _EPS
+    else:
+        gamma = 4.0 * (4 * n + perms.shape[0] + 8) * _EPS
     a = np.empty(deg + 1)
     tmp_a = np.empty(deg + 3)
     tmp_b = np.empty(deg + 3)
@@ -424,6 +538,9 @@ def _radii_range(M, C, K0, Kn, Kf, g, e, perms, signs, roots, radii, even, start
     rm = np.zeros(n)
     rc = np.zeros(n)
     rk = np.empty(n)
+    ak0 = np.zeros(n)
+    akn = np.zeros(n)
+    akf = np.zeros(n)
     # the leading coefficient, det(M), does not depend on the point
     _charpoly(M, C, K0, perms, signs, a, tmp_a, tmp_b)
     lead = a[deg]
@@ -433,6 +550,9 @@ def _radii_range(M, C, K0, Kn, Kf, g, e, perms, signs, roots, radii, even, start
         for c in range(n):
             rm[r] += abs(M[r, c])
             rc[r] += abs(C[r, c])
+            ak0[r] += abs(K0[r, c])
+            akn[r] += abs(Kn[r, c])
+            akf[r] += abs(Kf[r, c])
             if C[r, c] != 0.0:
                 c_zero = False
             if C[r, c] != -C[c, r]:
@@ -441,16 +561,22 @@ def _radii_range(M, C, K0, Kn, Kf, g, e, perms, signs, roots, radii, even, start
         gi = g[i]
         ei = e[i]
         k_sym = True
-        for r in range(n):
-            acc = 0.0
-            for c in range(n):
-                kij = K0[r, c] + gi * Kn[r, c] + ei * Kf[r, c]
-                acc += abs(kij)
-                if c_skew and not c_zero and c > r:
-                    kji = K0[c, r] + gi * Kn[c, r] + ei * Kf[c, r]
-                    if kij != kji:
-                        k_sym = False
-            rk[r] = acc
+        if use_table:
+            for r in range(n):
+                rk[r] = ak0[r] + abs(gi) * akn[r] + abs(ei) * akf[r]
+        check_sym = c_skew and not c_zero
+        if check_sym or not use_table:
+            for r in range(n):
+                acc = 0.0
+                for c in range(n):
+                    kij = K0[r, c] + gi * Kn[r, c] + ei * Kf[r, c]
+                    acc += abs(kij)
+                    if check_sym and c > r:
+                        kji = K0[c, r] + gi * Kn[c, r] + ei * Kf[c, r]
+                        if kij != kji:
+                            k_sym = False
+                if not use_table:
+                    rk[r] = acc
         pairs = True
         for k in range(n):
             if roots[i, n + k] != roots[i, k].conjugate():
@@ -648,7 +774,9 @@ def quadratic_eigvals_stack(M, C, K0, Kn, Kf, g, e, perms, signs, roots, radii, 
     # start as a plain int64 (a literal 0 would compile a second specialization of
     # _solve_chunk beside the one quadratic_eigvals uses)
     start = npts - npts
+    # one point per model, mostly: the Leibniz formula per point beats a table per model
+    no_table = np.empty((0, 0, 0))
     for s in nb.prange(nmod):
-        _solve_chunk(M[s], C[s], K0[s], Kn[s], Kf[s], g[s], e[s], perms, signs, roots[s], start, npts)
-        _radii_range(M[s], C[s], K0[s], Kn[s], Kf[s], g[s], e[s], perms, signs, roots[s], radii[s], even[s],
-                     start, npts)
+        _solve_chunk(M[s], C[s], K0[s], Kn[s], Kf[s], g[s], e[s], perms, signs, no_table, roots[s], start, npts)
+        _radii_range(M[s], C[s], K0[s], Kn[s], Kf[s], g[s], e[s], perms, signs, no_table, roots[s], radii[s],
+                     even[s], start, npts)

@@ -151,7 +151,7 @@ def mp_roots(M: NDArray, C: NDArray, K: NDArray, scale: float, dps: int = _MP_DP
 def solve_points(
     M: NDArray, C: NDArray, K0: NDArray, Kn: NDArray, Kf: NDArray, which: NDArray,
     g: NDArray, e: NDArray, roots: NDArray, radii: NDArray, even: NDArray | None, rtol: float,
-    *, high_precision: bool = True,
+    *, high_precision: bool = True, out: tuple[NDArray, NDArray, NDArray, NDArray] | None = None,
 ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """Verdict of every point from its roots, refining where the roots cannot decide.
 
@@ -171,6 +171,9 @@ def solve_points(
         A point is unstable when a growth rate exceeds ``rtol |lambda|_max``.
     high_precision : bool
         Run the exact and 50-digit stages; without, what LAPACK cannot decide is indeterminate.
+    out : tuple of ndarray, optional
+        ``(lam, err, verdict, thr)`` to write the results into (C-contiguous, shapes as
+        returned), so that a grid's blocks land in place without copies.
 
     Returns
     -------
@@ -187,15 +190,14 @@ def solve_points(
     from_kernel = even is not None
     if not from_kernel:
         even = _even_structure(M, C, K0, Kn, Kf, which, g, e)
-    verdict = np.empty(P, dtype=np.int8)
-    thr = np.empty(P)
+    if out is None:
+        out = (np.empty((P, n), dtype=np.complex128), np.empty((P, n)), np.empty(P, dtype=np.int8), np.empty(P))
+    lam, err, verdict, thr = out
     classify_points(roots, radii, even, rtol, verdict, thr)
     todo = np.flatnonzero(verdict == UNDECIDED)
     if todo.size:
         _refine(M, C, K0, Kn, Kf, which, g, e, roots, radii, even, rtol, verdict, thr, todo,
                 lapack=from_kernel, high_precision=high_precision)
-    lam = np.empty((P, n), dtype=np.complex128)
-    err = np.empty((P, n))
     select_modes(roots, radii, lam, err)
     return lam, err, verdict, thr
 

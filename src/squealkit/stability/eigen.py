@@ -22,7 +22,13 @@ from .._threads import limit_threads, threads_for
 from .._validation import InputError, validate_array_finite
 from ..models import FrictionModel
 from ..models.friction import Stribeck, validate_friction
-from ._kernels import derived_quantities, permutations_table, quadratic_eigvals, quadratic_eigvals_stack
+from ._kernels import (
+    charpoly_table,
+    derived_quantities,
+    permutations_table,
+    quadratic_eigvals,
+    quadratic_eigvals_stack,
+)
 from ._solve import VERDICTS, lapack_roots, solve_points
 from .tracking import carry_along, track_column, track_modes, track_rows
 
@@ -83,13 +89,24 @@ def _matrices(
     return tuple(np.ascontiguousarray(a[None]) for a in (M, C, K0, Kn, Kf))
 
 
-def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int, high_precision: bool = True):
-    """Modes, error radii, verdicts and thresholds of flat arrays of contact factors g, e."""
+def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int, high_precision: bool = True,
+                 out: tuple[NDArray, ...] | None = None, work: dict | None = None):
+    """Modes, error radii, verdicts and thresholds of flat arrays of contact factors g, e.
+
+    ``out`` receives the results (see :func:`~squealkit.stability._solve.solve_points`);
+    ``work`` is a dict that keeps the kernel's root buffers from one block to the next of a
+    grid (fresh buffers of this size cost more in page faults than the roots themselves).
+    """
     M, C, K0, Kn, Kf = mats
     if M.shape[0] > 1:
-        return _solve_each(mats, g, e, high_precision)
+        res = _solve_each(mats, g, e, high_precision)
+        if out is not None:
+            for o, r in zip(out, res, strict=True):
+                o[...] = r
+        return res
     n = M.shape[-1]
-    which = np.zeros(g.shape[0], dtype=np.int64)
+    P = g.shape[0]
+    which = np.zeros(P, dtype=np.int64)
     if n > _KERNEL_MAX_DOF:
         K = K0[0] + g[:, None, None] * Kn[0] + e[:, None, None] * Kf[0]
         roots, radii = lapack_roots(np.broadcast_to(M[0], K.shape), np.broadcast_to(C[0], K.shape), K)
@@ -97,13 +114,16 @@ def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int, hi
         radii = np.ascontiguousarray(radii)
         even = None
     else:
-        roots = np.empty((g.shape[0], 2 * n), dtype=np.complex128)
-        radii = np.empty((g.shape[0], 2 * n))
-        even = np.empty(g.shape[0], dtype=np.bool_)
+        work = {} if work is None else work
+        if work.get("size", 0) < P:
+            work.update(size=P, roots=np.empty((P, 2 * n), dtype=np.complex128), radii=np.empty((P, 2 * n)),
+                        even=np.empty(P, dtype=np.bool_))
+        roots, radii, even = work["roots"][:P], work["radii"][:P], work["even"][:P]
         perms, signs = _perms(n)
-        quadratic_eigvals(M[0], C[0], K0[0], Kn[0], Kf[0], g, e, perms, signs, roots, radii, even, _CHUNK, row)
+        table = charpoly_table(M[0], C[0], K0[0], Kn[0], Kf[0], perms, signs)
+        quadratic_eigvals(M[0], C[0], K0[0], Kn[0], Kf[0], g, e, perms, signs, table, roots, radii, even, _CHUNK, row)
     return solve_points(M, C, K0, Kn, Kf, which, g, e, roots, radii, even, UNSTABLE_RTOL,
-                        high_precision=high_precision)
+                        high_precision=high_precision, out=out)
 
 
 #: Points per sub-block when every point has its own model (bounds the stacked copies).
@@ -164,6 +184,7 @@ def _solve_grid(model, mu, tan_theta, damped, progress=None, friction=None, spee
     verdict = np.empty(total, dtype=np.int8)
     thr = np.empty(total)
     mats = _matrices(model, damped)
+    work: dict = {}
     # the last axis is a row: solved on its own, so a row's numbers never depend on the others
     row = max(1, shape[-1]) if shape else 1
     block = max(1, _BLOCK // row) * row
@@ -173,7 +194,7 @@ def _solve_grid(model, mu, tan_theta, damped, progress=None, friction=None, spee
         if friction is not None:
             mats = _matrices(model, damped, friction, speed, mu_b.ravel()[sl], t_b.ravel()[sl])
         with limit_threads(threads_for(stop - start)):  # small blocks: no parallel start-up
-            lam[sl], err[sl], verdict[sl], thr[sl] = _solve_block(mats, g[sl], e[sl], row, high_precision)
+            _solve_block(mats, g[sl], e[sl], row, high_precision, (lam[sl], err[sl], verdict[sl], thr[sl]), work)
         if progress is not None:
             progress(stop, total)
     return (lam.reshape((*shape, n)), err.reshape((*shape, n)), verdict.reshape(shape), thr.reshape(shape))
