@@ -38,14 +38,20 @@ def test_unstable_flags_equal_the_one_model_engine(damped):
 
 def test_onset_equals_critical_friction_and_hoffmann_closed_form():
     models = _lv_models()
-    mu_c, status = ensemble_onset(ModelEnsemble.from_models(models), np.linspace(0.0, 2.0, 41))
+    ens = ModelEnsemble.from_models(models)
+    exact, status = ensemble_onset(ens, np.linspace(0.0, 2.0, 41), rtol=0.0)
     assert (status == 0).all()
-    for m, x in zip(models, mu_c, strict=True):
+    for m, x in zip(models, exact, strict=True):
         assert x == pytest.approx(critical_friction(m).mu_critical, abs=1e-9)
+    # by default located to 1e-6 (of max(1, mu)) where rounding blurs the boundary (the lock-in)
+    fast, _ = ensemble_onset(ens, np.linspace(0.0, 2.0, 41))
+    np.testing.assert_allclose(fast, exact, rtol=0, atol=1e-6)
     # Hoffmann et al. (2002): mu_crit = ((a - d)^2 + 4 b^2) / (4 b k3), closed form
-    hoff = [Hoffmann2002(k3=k, k1=k1) for k, k1 in [(6e5, 1e6), (8e5, 1.1e6), (1e6, 0.9e6)]]
-    mu_c, _ = ensemble_onset(ModelEnsemble.from_models(hoff), np.linspace(0.0, 1.0, 11))
-    np.testing.assert_allclose(mu_c, [m.mu_critical_closed_form() for m in hoff], atol=1e-9)
+    hoff = ModelEnsemble.from_models(
+        [Hoffmann2002(k3=k, k1=k1) for k, k1 in [(6e5, 1e6), (8e5, 1.1e6), (1e6, 0.9e6)]])
+    closed = [Hoffmann2002(k3=k, k1=k1).mu_critical_closed_form() for k, k1 in [(6e5, 1e6), (8e5, 1.1e6), (1e6, 0.9e6)]]
+    np.testing.assert_allclose(ensemble_onset(hoff, np.linspace(0.0, 1.0, 11), rtol=0.0)[0], closed, atol=1e-9)
+    np.testing.assert_allclose(ensemble_onset(hoff, np.linspace(0.0, 1.0, 11))[0], closed, rtol=0, atol=1e-6)
 
 
 def test_each_model_independent_of_the_rest_of_the_stack():

@@ -127,7 +127,7 @@ def _indicators(lam: NDArray, thr: NDArray) -> NDArray[np.float64]:
 
 
 def find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, *, scan: int = SCAN_POINTS,
-                 rounding_rtol: float = _ROUNDING_RTOL) -> Windows:
+                 rounding_rtol: float = _ROUNDING_RTOL, first_only: bool = False) -> Windows:
     """All windows where the system is not stable on the paths ``x0[b] -> x1[b]``.
 
     Parameters
@@ -141,6 +141,10 @@ def find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, *, scan: int = S
     rounding_rtol : float
         Accept a boundary to this relative width where double precision cannot decide
         (0: always decide, exactly).
+    first_only : bool
+        Only the first window of each row is wanted (an onset): candidates past the first
+        scan point that is not stable are not searched, and the first window's far end is
+        its last sample that is not stable, not a located boundary.
     """
     x0 = np.asarray(x0, dtype=float)
     x1 = np.asarray(x1, dtype=float)
@@ -168,6 +172,12 @@ def find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, *, scan: int = S
     pos = top[cb, cj]
     ci = pos // ind.shape[-1] + 1  # scan index of the candidate
     ck = pos % ind.shape[-1]  # indicator
+    if first_only:
+        # a window past the first non-stable scan point cannot come first
+        not_stable = verdict != STABLE
+        first_bad = np.where(not_stable.any(axis=1), np.argmax(not_stable, axis=1), N)
+        before = ci + 1 < first_bad[cb]
+        cb, ci, ck = cb[before], ci[before], ck[before]
     found_x, found_v = _golden(evaluate, cb.astype(np.int64), ck, xs[cb, ci - 1], xs[cb, ci + 1])
 
     # 3. samples: the scan plus the non-stable points found by the golden search
@@ -180,6 +190,18 @@ def find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, *, scan: int = S
     order = np.lexsort((sign[sr_a] * sx_a, sr_a))  # by row, then along the path
     sx_a, sr_a, sv_a = sx_a[order], sr_a[order], sv_a[order]
     bad = sv_a != STABLE
+    if first_only:
+        # keep each row's samples up to the end of its first run of non-stable ones
+        row_start = np.concatenate([[True], sr_a[1:] != sr_a[:-1]])
+        grp = np.cumsum(row_start) - 1
+
+        def row_cumsum(x: NDArray) -> NDArray:
+            c = np.cumsum(x)
+            return c - (c - x)[row_start][grp]
+
+        seen_bad = row_cumsum(bad) > 0
+        keep_s = row_cumsum(seen_bad & ~bad) == 0
+        sx_a, sr_a, sv_a, bad = sx_a[keep_s], sr_a[keep_s], sv_a[keep_s], bad[keep_s]
 
     # 4. bisect every stable <-> not-stable change between consecutive samples of a row
     same_row = sr_a[1:] == sr_a[:-1]

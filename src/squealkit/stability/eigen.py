@@ -142,15 +142,31 @@ def _solve_models(mats: tuple[NDArray, ...], which: NDArray, g: NDArray, e: NDAr
         roots, radii = lapack_roots(M[which], C[which], K)
         roots, radii, even = np.ascontiguousarray(roots), np.ascontiguousarray(radii), None
     else:
-        roots = np.empty((P, 1, 2 * n), dtype=np.complex128)
-        radii = np.empty((P, 1, 2 * n))
-        even = np.empty((P, 1), dtype=np.bool_)
+        # points of one model in a run (a scan of each model) form a row: warm starts along
+        # it; single points are each solved cold
+        L = _run_length(which)
+        R = P // L
+        roots = np.empty((R, L, 2 * n), dtype=np.complex128)
+        radii = np.empty((R, L, 2 * n))
+        even = np.empty((R, L), dtype=np.bool_)
         perms, signs = _perms(n)
-        quadratic_eigvals_stack(*(np.ascontiguousarray(a[which]) for a in mats), np.ascontiguousarray(g[:, None]),
-                                np.ascontiguousarray(e[:, None]), perms, signs, roots, radii, even)
+        quadratic_eigvals_stack(*(np.ascontiguousarray(a[which[::L]]) for a in mats),
+                                np.ascontiguousarray(g.reshape(R, L)), np.ascontiguousarray(e.reshape(R, L)),
+                                perms, signs, roots, radii, even)
         roots, radii, even = roots.reshape(P, 2 * n), radii.reshape(P, 2 * n), even.reshape(P)
     return solve_points(M, C, K0, Kn, Kf, which, g, e, roots, radii, even, UNSTABLE_RTOL,
                         high_precision=high_precision)
+
+
+def _run_length(which: NDArray) -> int:
+    """L when ``which`` is runs of L equal entries each (L consecutive points per model),
+    else 1."""
+    P = which.size
+    starts = np.flatnonzero(np.concatenate([[True], which[1:] != which[:-1]]))
+    L = P // max(1, starts.size)
+    if L > 1 and starts.size * L == P and np.array_equal(starts, np.arange(0, P, L)):
+        return L
+    return 1
 
 
 def _solve_each(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, high_precision: bool = True):
