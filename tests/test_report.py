@@ -11,7 +11,7 @@ import pytest
 from click.testing import CliRunner
 
 from squealkit.cli.main import cli
-from squealkit.io import load_dataset
+from squealkit.io import MANIFEST, load_dataset
 from squealkit.report import Comparison, reproduce
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -99,6 +99,7 @@ def test_interrupted_run_leaves_nothing_half_written(tmp_path):
     out = tmp_path / "report"
     out.mkdir()
     (out / "report.html").write_text("previous good report")
+    (out / MANIFEST).write_text('{"files": ["report.html"]}')  # squealkit wrote it
 
     def interrupt(done, total, name):
         if done == 1:

@@ -1,16 +1,21 @@
-"""Saving and loading results: written completely or not at all.
+"""Saving and loading results: written completely or not at all, and nothing else touched.
 
 Every file squealkit writes goes first to a temporary sibling and is moved into place only
 when complete (``os.replace``), so an interrupted run or a failure never leaves a
-half-written file over a good one.
+half-written file over a good one. A new file gets the permissions the umask gives; an
+overwritten one keeps its own. Folders squealkit writes (reports, zarr stores) carry a
+manifest of their files, and a folder holding files squealkit did not write is never
+replaced or emptied: see :func:`output_folder`.
 """
 
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import shutil
 import tempfile
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -19,9 +24,129 @@ import xarray as xr
 
 from ._validation import InputError
 
-__all__ = ["atomic_path", "load_dataset", "save_dataset", "save_figure", "write_text"]
+__all__ = ["atomic_path", "check_output", "load_dataset", "output_folder", "save_dataset", "save_figure",
+           "write_text"]
 
 _DATASET_SUFFIXES = {".nc": "h5netcdf", ".zarr": "zarr"}
+#: Written into every folder squealkit fills: the files it wrote there.
+MANIFEST = ".squealkit-manifest.json"
+_ZARR_MARKERS = (".zgroup", ".zarray", "zarr.json")
+_umask_lock = threading.Lock()
+#: Set by the CLI's signal handlers (:func:`note_interrupt`): an interrupt arrived, even if
+#: a library caught the exception, so no staged output may be moved into place.
+_interrupted = threading.Event()
+
+
+_state = {"deferred": 0, "signal": None}
+
+
+def note_interrupt(signum: int | None = None) -> None:
+    """Record that the run was interrupted (SIGINT/SIGTERM): staged outputs are discarded."""
+    _state["signal"] = signum
+    _interrupted.set()
+
+
+def interrupt_signal() -> int | None:
+    """The signal that interrupted the run, if one did."""
+    return _state["signal"] if _interrupted.is_set() else None
+
+
+def interrupts_deferred() -> bool:
+    """Whether a library write is in progress (see :func:`deferred_interrupts`)."""
+    return _state["deferred"] > 0
+
+
+@contextlib.contextmanager
+def deferred_interrupts() -> Iterator[None]:
+    """Hold an interrupt until the library write inside has returned, then raise it.
+
+    Writers such as zarr's work in background threads: interrupted mid-write, they would
+    go on writing into the staging folder after it was removed. The CLI's signal handlers
+    only record the signal while this is active (one write of one output, or one piece of
+    a streamed result), and the run stops right after it, cleaning up as always.
+    """
+    _state["deferred"] += 1
+    try:
+        yield
+    finally:
+        _state["deferred"] -= 1
+    _check_not_interrupted()
+
+
+def _check_not_interrupted() -> None:
+    if _interrupted.is_set():
+        raise KeyboardInterrupt
+
+
+def _umask() -> int:
+    with _umask_lock:
+        mask = os.umask(0o022)
+        os.umask(mask)
+    return mask
+
+
+def _final_mode(final: Path, directory: bool) -> int:
+    """An overwritten output keeps its permissions; a new one gets those the umask gives."""
+    try:
+        return final.stat().st_mode & 0o7777
+    except OSError:
+        return (0o777 if directory else 0o666) & ~_umask()
+
+
+def _where(path: Path) -> Path:
+    return path.parent if str(path.parent) else Path(".")
+
+
+def _owned_folder(folder: Path) -> tuple[bool, list[str]]:
+    """(squealkit's, foreign files) of an existing folder: empty, a zarr store, or listed
+    in squealkit's manifest."""
+    names = sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if not p.is_dir())
+    if not names or any((folder / m).exists() for m in _ZARR_MARKERS):
+        return True, []
+    listed = set(_read_manifest(folder)) | {MANIFEST}
+    foreign = [n for n in names if n not in listed]
+    return not foreign, foreign
+
+
+def _read_manifest(folder: Path) -> list[str]:
+    try:
+        doc = json.loads((folder / MANIFEST).read_text(encoding="utf-8"))
+        return [str(x) for x in doc.get("files", [])]
+    except (OSError, ValueError, AttributeError):
+        return []
+
+
+def check_output(path: str | Path, *, directory: bool = False, force: bool = False) -> Path:
+    """Check, before any work, that ``path`` can be written; one-line ``InputError`` if not.
+
+    The folder must exist and take a new file (tried for real, so permissions, read-only
+    file systems and full quotas show up now, not after the computation); a file output
+    must not name a folder, a folder output not a file; an existing folder must hold only
+    what squealkit wrote there (its manifest, or a zarr store), unless ``force``.
+    """
+    final = Path(path)
+    parent = _where(final)
+    if not parent.is_dir():
+        raise InputError(f"Output folder {str(parent)!r} does not exist.")
+    if final.is_dir() and not directory:
+        raise InputError(f"Output {str(final)!r} is a folder; give a file name.")
+    if final.exists() and not final.is_dir() and directory:
+        raise InputError(f"Output {str(final)!r} is a file; give a folder name.")
+    if directory and final.is_dir() and not force:
+        ok, foreign = _owned_folder(final)
+        if not ok:
+            shown = ", ".join(foreign[:3]) + (f" and {len(foreign) - 3} more" if len(foreign) > 3 else "")
+            raise InputError(
+                f"Output folder {str(final)!r} holds files squealkit did not write ({shown}); choose a new "
+                "or empty folder, or pass --force to write beside them (they are never deleted).")
+    probe_dir = final if directory and final.is_dir() else parent
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".squealkit-probe.", dir=probe_dir)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as e:
+        raise InputError(f"Cannot write in {str(probe_dir)!r}: {e.strerror or e}.") from e
+    return final
 
 
 @contextlib.contextmanager
@@ -45,9 +170,11 @@ def atomic_path(path: str | Path, *, directory: bool = False) -> Iterator[Path]:
     'done'
     """
     final = Path(path)
-    parent = final.parent if str(final.parent) else Path(".")
+    parent = _where(final)
     if not parent.is_dir():
         raise InputError(f"Output folder {str(parent)!r} does not exist.")
+    if directory and final.is_dir() and not _owned_folder(final)[0]:
+        raise InputError(f"Output folder {str(final)!r} holds files squealkit did not write; it is not replaced.")
     fd, tmp_name = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".part", dir=parent)
     os.close(fd)
     tmp = Path(tmp_name)
@@ -55,7 +182,10 @@ def atomic_path(path: str | Path, *, directory: bool = False) -> Iterator[Path]:
         tmp.unlink()
     try:
         yield tmp
+        _check_not_interrupted()
+        mode = _final_mode(final, directory)
         if directory:
+            tmp.chmod(mode)
             backup = None
             if final.exists():
                 backup = final.with_name(f".{final.name}.old-{os.getpid()}")
@@ -64,6 +194,7 @@ def atomic_path(path: str | Path, *, directory: bool = False) -> Iterator[Path]:
             if backup is not None:
                 shutil.rmtree(backup, ignore_errors=True)
         else:
+            tmp.chmod(mode)
             os.replace(tmp, final)
     except BaseException:
         if tmp.is_dir():
@@ -71,6 +202,45 @@ def atomic_path(path: str | Path, *, directory: bool = False) -> Iterator[Path]:
         else:
             tmp.unlink(missing_ok=True)
         raise
+
+
+@contextlib.contextmanager
+def output_folder(path: str | Path, *, force: bool = False) -> Iterator[Path]:
+    """Yield a staging folder; on success its files land in ``path``, listed in a manifest.
+
+    A new folder, an empty one or one squealkit filled before is replaced as a whole (the
+    files of the previous run that this run does not write go with it). With ``force`` a
+    folder holding other files (even ``.``) gets the new files one by one, each moved into
+    place complete; its other files are left alone. On failure or interrupt nothing
+    changes.
+    """
+    final = Path(path)
+    check_output(final, directory=True, force=force)
+    if final.is_dir() and not _owned_folder(final)[0]:
+        stage = Path(tempfile.mkdtemp(prefix=".squealkit-stage.", dir=final))
+        try:
+            yield stage
+            _check_not_interrupted()
+            files = sorted(p.relative_to(stage).as_posix() for p in stage.rglob("*") if not p.is_dir())
+            _write_manifest(stage, files)
+            for name in [*files, MANIFEST]:
+                (final / name).parent.mkdir(parents=True, exist_ok=True)
+                os.replace(stage / name, final / name)
+        finally:
+            shutil.rmtree(stage, ignore_errors=True)
+        return
+    with atomic_path(final, directory=True) as stage:
+        stage.mkdir()
+        yield stage
+        _check_not_interrupted()
+        _write_manifest(stage, sorted(p.relative_to(stage).as_posix() for p in stage.rglob("*") if not p.is_dir()))
+
+
+def _write_manifest(folder: Path, files: list[str]) -> None:
+    from . import __version__
+
+    doc = {"written_by": f"squealkit {__version__}", "files": files}
+    (folder / MANIFEST).write_text(json.dumps(doc, indent=1), encoding="utf-8")
 
 
 def _engine_for(path: Path) -> str:
@@ -86,7 +256,7 @@ def save_dataset(ds: xr.Dataset, path: str | Path) -> Path:
     """Write ``ds`` to netCDF (``.nc``, h5netcdf) or zarr (``.zarr``), atomically."""
     final = Path(path)
     engine = _engine_for(final)
-    with atomic_path(final, directory=engine == "zarr") as tmp:
+    with atomic_path(final, directory=engine == "zarr") as tmp, deferred_interrupts():
         if engine == "zarr":
             ds.to_zarr(tmp, mode="w", consolidated=False)
         else:
@@ -115,7 +285,7 @@ def save_figure(fig: Any, path: str | Path, **kwargs: Any) -> Path:
         raise InputError(f"Figure {str(final)!r} needs a .png, .svg, .pdf or .jpg suffix.")
     kwargs.setdefault("dpi", 150)
     kwargs.setdefault("bbox_inches", "tight")
-    with atomic_path(final) as tmp:
+    with atomic_path(final) as tmp, deferred_interrupts():
         fig.savefig(tmp, format=fmt, **kwargs)
     return final
 

@@ -26,7 +26,7 @@ import numpy as np
 import xarray as xr
 
 from ._validation import InputError
-from .io import atomic_path
+from .io import atomic_path, deferred_interrupts
 
 __all__ = ["cluster_client", "get_client", "lazy_template", "map_tasks", "stream_to_zarr"]
 
@@ -217,7 +217,8 @@ def _write_region(item: tuple) -> int:
     fn, arg, path, dim, start, stop = item
     piece: xr.Dataset = fn(arg)
     drop = [k for k, v in piece.variables.items() if dim not in v.dims]
-    piece.drop_vars(drop).to_zarr(path, region={dim: slice(start, stop)}, consolidated=False)
+    with deferred_interrupts():  # no background writer outlives an interrupt
+        piece.drop_vars(drop).to_zarr(path, region={dim: slice(start, stop)}, consolidated=False)
     return stop - start
 
 
@@ -256,7 +257,8 @@ def stream_to_zarr(
     """
     final = Path(store)
     with atomic_path(final, directory=True) as tmp:
-        template.to_zarr(tmp, mode="w", compute=False, consolidated=False)
+        with deferred_interrupts():
+            template.to_zarr(tmp, mode="w", compute=False, consolidated=False)
         path = str(tmp.resolve())
         items = [(fn, arg, path, dim, a, b) for fn, arg, a, b in pieces]
         w = weights if weights is not None else [b - a for *_, a, b in pieces]

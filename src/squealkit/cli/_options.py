@@ -34,6 +34,28 @@ def model_options(f: F) -> F:
     return f
 
 
+def writable(ctx: click.Context, param: click.Parameter, value: Path | None) -> Path | None:
+    """Option callback: an output path is checked before any work (folder exists and takes
+    a file, not a folder where a file is wanted; see :func:`squealkit.io.check_output`)."""
+    if value is not None and not ctx.resilient_parsing:
+        from ..io import check_output
+
+        check_output(value, directory=value.suffix.lower() == ".zarr")
+    return value
+
+
+def writable_folder(ctx: click.Context, param: click.Parameter, value: Path | None) -> Path | None:
+    """Option callback for an output folder: its parent takes a folder (the folder's own
+    contents are checked by the command, which knows about ``--force``)."""
+    if value is not None and not ctx.resilient_parsing:
+        from ..io import check_output
+
+        if value.exists() and not value.is_dir():
+            raise InputError(f"Output {str(value)!r} is a file; give a folder name.")
+        check_output(value, directory=True, force=True)
+    return value
+
+
 def output_options(*, dataset: bool = True, plot: bool = True) -> Callable[[F], F]:
     """--json, --out FILE (.nc or .zarr) and --plot FILE.png."""
 
@@ -41,11 +63,11 @@ def output_options(*, dataset: bool = True, plot: bool = True) -> Callable[[F], 
         if plot:
             f = click.option(
                 "--plot", "plot_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
-                help="Write a figure (.png, .svg or .pdf).",
+                callback=writable, help="Write a figure (.png, .svg or .pdf).",
             )(f)
         if dataset:
             f = click.option(
-                "--out", "out_path", type=click.Path(path_type=Path), default=None,
+                "--out", "out_path", type=click.Path(path_type=Path), default=None, callback=writable,
                 help="Write the full result as netCDF (.nc) or zarr (.zarr).",
             )(f)
         f = click.option(

@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from .._validation import InputError, validate_finite
-from ._options import check_output_suffix, emit_json, progress_callback, scheduler_option
+from ._options import check_output_suffix, emit_json, progress_callback, scheduler_option, writable, writable_folder
 
 #: Show a progress bar for recordings longer than this [s].
 _PROGRESS_ABOVE_S = 60.0
@@ -46,10 +46,13 @@ def _band(text: str) -> tuple[float, float]:
 @click.option("--unit", "units", multiple=True, metavar="CHANNEL=UNIT", help="Unit of a channel. Repeatable.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result (or the campaign) as JSON.")
 @click.option("--plot", "plot_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              callback=writable_folder,
               help="Write the figures (paper Figs. 6-13 equivalents, polar plot) into this folder.")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=writable,
               help="Write the labelled result of one file as netCDF (.nc).")
 @click.option("--summary", "summary_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=writable,
               help="Write the campaign summary (one row per recording) as CSV.")
 @scheduler_option
 def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float, radius: float, band: str,

@@ -2,12 +2,17 @@
 
 Each subcommand lives in its own module and is imported only when it runs, so
 ``squealkit --help`` is instant. User errors (bad options, bad values, bad files) end the
-run with one line on stderr and exit code 2; Ctrl-C exits with 130.
+run with one line on stderr and exit code 2, operating-system errors (permissions, a full
+disk, a read-only folder) too; Ctrl-C exits with 130 and SIGTERM with 143, both removing
+every staged output.
 """
 
 from __future__ import annotations
 
+import errno
 import importlib
+import os
+import signal
 import sys
 import warnings
 from typing import Any
@@ -38,6 +43,34 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
     click.echo(f"squealkit: warning: {message}", err=True)
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C so that every staged output is cleaned up on the way out."""
+
+
+def _on_signal(signum, frame) -> None:
+    from ..io import interrupts_deferred, note_interrupt
+
+    note_interrupt(signum)  # even if a library swallows the exception, nothing staged is kept
+    if interrupts_deferred():  # a library write is under way: it stops right after (io.deferred_interrupts)
+        return
+    raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+
+def _by_sigterm(e: BaseException | None) -> bool:
+    from ..io import interrupt_signal
+
+    return isinstance(e, Terminated) or interrupt_signal() == signal.SIGTERM
+
+
+def _os_error(e: OSError) -> str:
+    """One line for an operating-system error: what failed, on which file."""
+    what = e.strerror or str(e)
+    if e.errno == errno.ENOSPC and what == os.strerror(errno.ENOSPC):
+        what = "no space left on the device"
+    name = e.filename if e.filename is not None else None
+    return f"{what}: {name!r}" if name else what
+
+
 class SquealkitGroup(click.Group):
     """A click group with lazily imported subcommands and one-line error reports."""
 
@@ -61,11 +94,21 @@ class SquealkitGroup(click.Group):
     ) -> int:
         shown = warnings.showwarning
         warnings.showwarning = _one_line_warning
+        handlers = {}
+        if standalone_mode:  # the real command line, not an in-process call
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                handlers[sig] = signal.signal(sig, _on_signal)
         try:
             rv = super().main(
                 args, prog_name or "squealkit", complete_var, standalone_mode=False, **extra
             )
             code = rv if isinstance(rv, int) and not isinstance(rv, bool) else 0
+            try:
+                sys.stdout.flush()  # a full or closed stdout fails here, inside the handlers
+            except BrokenPipeError:
+                raise
+            except OSError as e:
+                raise OSError(e.errno, f"cannot write to standard output ({e.strerror})") from e
         except click.UsageError as e:
             hint = f" (see '{e.ctx.command_path} --help')" if e.ctx is not None else ""
             click.echo(f"squealkit: error: {e.format_message()}{hint}", err=True)
@@ -76,11 +119,24 @@ class SquealkitGroup(click.Group):
         except InputError as e:
             click.echo(f"squealkit: error: {e}", err=True)
             code = 2
-        except click.Abort:
-            click.echo("squealkit: interrupted", err=True)
-            code = 130
+        except (click.Abort, KeyboardInterrupt) as e:
+            term = _by_sigterm(e.__cause__ if isinstance(e, click.Abort) else e)
+            click.echo("squealkit: terminated" if term else "squealkit: interrupted", err=True)
+            code = 143 if term else 130
+        except BrokenPipeError:
+            # the reader went away (e.g. '| head'): quietly, as other tools do
+            _silence_stdout()
+            code = 1
+        except OSError as e:
+            named = "standard output" in (e.strerror or "")
+            where = "cannot write to standard output: " if not named and e.filename is None and _on_stdout(e) else ""
+            _silence_stdout()
+            click.echo(f"squealkit: error: {where}{_os_error(e)}", err=True)
+            code = 2
         finally:
             warnings.showwarning = shown
+            for sig, h in handlers.items():
+                signal.signal(sig, h)
         if standalone_mode:
             sys.exit(code)
         return code
@@ -125,6 +181,32 @@ def cli(ctx: click.Context, threads: int | None) -> None:
     env_threads()  # a bad SQUEALKIT_THREADS is reported before any work
     if threads is not None:
         ctx.with_resource(limit_threads(threads))
+
+
+def _on_stdout(e: OSError) -> bool:
+    """Whether ``e`` arose writing to stdout (click.echo's stream, or the final flush)."""
+    tb = e.__traceback__
+    while tb is not None:
+        frame = tb.tb_frame
+        if frame.f_code.co_name == "echo" and "click" in frame.f_code.co_filename:
+            stream = frame.f_locals.get("file")
+            fd = getattr(stream, "fileno", None)
+            try:
+                return stream is sys.stdout or (fd is not None and fd() == 1)
+            except (OSError, ValueError):
+                return False
+        tb = tb.tb_next
+    return False
+
+
+def _silence_stdout() -> None:
+    """After stdout failed, point it at /dev/null so that the exit's own flush is quiet."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):
+        pass
 
 
 def main(argv: list[str] | None = None) -> int:

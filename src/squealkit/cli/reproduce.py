@@ -9,16 +9,18 @@ import click
 from ._options import emit_json, model_options
 
 
-def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = False, as_json: bool) -> None:
+def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = False, as_json: bool,
+         force: bool = False) -> None:
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     from .._validation import InputError
+    from ..io import check_output
     from ..report import reproduce
 
-    parent = out_dir.parent if str(out_dir.parent) else Path(".")
-    if not parent.is_dir():  # before the progress bar starts: the error stays one line
-        raise InputError(f"Output folder {str(parent)!r} does not exist.")
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InputError(f"Output {str(out_dir)!r} is a file; give a folder name.")
+    check_output(out_dir, directory=True, force=force)  # before the progress bar: the error stays one line
     progress = Progress(TextColumn("{task.description:<28}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
                         TimeElapsedColumn(), console=Console(stderr=True), disable=as_json)
     with progress:
@@ -27,7 +29,8 @@ def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = F
         def update(done: int, total: int, name: str) -> None:
             progress.update(task, completed=done, total=total, description=name)
 
-        result = reproduce(out_dir, model=model, rig=rig, recording=recording, quick=quick, progress=update)
+        result = reproduce(out_dir, model=model, rig=rig, recording=recording, quick=quick, progress=update,
+                           force=force)
     if as_json:
         emit_json({"out_dir": str(result.out_dir), "report": str(result.report), "seconds": result.seconds,
                    "numbers": result.numbers()})
@@ -38,17 +41,21 @@ def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = F
 
 @click.command()
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=Path("squealkit-report"),
-              show_default=True, help="Output folder (replaced as a whole when the run succeeds).")
+              show_default=True, help="Output folder (replaced as a whole when the run succeeds; a folder "
+              "holding files squealkit did not write is refused).")
+@click.option("--force", is_flag=True, help="Write into a folder that holds other files, leaving them alone.")
 @click.option("--quick", is_flag=True, help="Coarser grids and shorter runs: a preview in seconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print the computed numbers as JSON on stdout.")
-def reproduce(out_dir: Path, quick: bool, as_json: bool) -> None:
+def reproduce(out_dir: Path, force: bool, quick: bool, as_json: bool) -> None:
     """Rebuild every result of the paper, with a report, on the paper's rig.
 
     Recomputes Table 1 and §3's parameters from the rig, Fig. 2 (eigenvalues over
     mu and theta, the lock-in band), the critical friction and run-out tolerance,
     and writes report.html (self-contained, each published number beside the
     computed one), figures/ (PNG and SVG) and data/ (netCDF behind every figure).
-    An interrupted or failed run leaves no half-written file in the folder.
+    An interrupted or failed run leaves no half-written file in the folder, and
+    squealkit never deletes a file it did not write: a folder holding other files
+    is refused unless --force (then they are left alone).
 
     \b
     Example:
@@ -59,13 +66,15 @@ def reproduce(out_dir: Path, quick: bool, as_json: bool) -> None:
     --json keys: out_dir, report, seconds, and numbers (by section: the
     computed values, e.g. numbers.fig2.band_low / band_high in rad/s).
     """
-    _run(out_dir, quick=quick, as_json=as_json)
+    _run(out_dir, quick=quick, as_json=as_json, force=force)
 
 
 @click.command()
 @model_options
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=Path("squealkit-report"),
-              show_default=True, help="Output folder (replaced as a whole when the run succeeds).")
+              show_default=True, help="Output folder (replaced as a whole when the run succeeds; a folder "
+              "holding files squealkit did not write is refused).")
+@click.option("--force", is_flag=True, help="Write into a folder that holds other files, leaving them alone.")
 @click.option("--recording", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Your rig recording (CSV, WAV, netCDF, TDMS), analysed for §5 instead of a synthetic one.")
 @click.option("--mic", default="mic", show_default=True, help="Microphone channel (name or index) in --recording.")
@@ -76,8 +85,8 @@ def reproduce(out_dir: Path, quick: bool, as_json: bool) -> None:
 @click.option("--fs", type=float, default=None, help="Sample rate [Hz] of a CSV --recording without a time column.")
 @click.option("--quick", is_flag=True, help="Coarser grids and shorter runs: a preview in seconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print the computed numbers as JSON on stdout.")
-def report(preset, config, sets, out_dir: Path, recording, mic, displacement, rpm, radius, fs, quick: bool,
-           as_json: bool) -> None:
+def report(preset, config, sets, out_dir: Path, force: bool, recording, mic, displacement, rpm, radius, fs,
+           quick: bool, as_json: bool) -> None:
     """The paper's analysis for your own rig or model, as one report.
 
     Takes the model from --config (a TOML model file; with a [rig] table the
@@ -106,4 +115,4 @@ def report(preset, config, sets, out_dir: Path, recording, mic, displacement, rp
         if not recording.is_file():
             raise InputError(f"Recording {str(recording)!r} does not exist.")
         spec = RecordingSpec(recording, mic, displacement, rpm, radius, fs)
-    _run(out_dir, model=model, rig=rig, recording=spec, quick=quick, as_json=as_json)
+    _run(out_dir, model=model, rig=rig, recording=spec, quick=quick, as_json=as_json, force=force)

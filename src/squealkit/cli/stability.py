@@ -18,6 +18,7 @@ from ._options import (
     output_options,
     progress_callback,
     scheduler_option,
+    writable,
 )
 
 
@@ -30,6 +31,7 @@ from ._options import (
 @click.option("--damped", is_flag=True, help="Include the damping matrix (the paper's sweep, eq. 7, is undamped).")
 @friction_options
 @click.option("--plot-map", "map_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=writable,
               help="Also write a stability map with the critical-friction curve (.png/.svg/.pdf).")
 @scheduler_option
 @output_options()

@@ -6,11 +6,11 @@ from pathlib import Path
 
 import click
 
-from ._options import check_output_suffix, emit_json
+from ._options import check_output_suffix, emit_json, writable
 
 
 @click.command()
-@click.argument("out", type=click.Path(dir_okay=False, path_type=Path))
+@click.argument("out", type=click.Path(dir_okay=False, path_type=Path), callback=writable)
 @click.option("--seed", type=int, default=1, show_default=True, help="Random seed (run-out phases, noise).")
 @click.option("--duration", type=float, default=2.0, show_default=True, help="Length [s].")
 @click.option("--fs", type=float, default=40000.0, show_default=True, help="Sample rate [Hz].")

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .._validation import InputError
-from ..io import atomic_path
+from ..io import check_output, output_folder
 from ..models import FrictionModel, PinOnDiscRig, get_preset
 from .document import Section
 from .html import render_html
@@ -95,13 +95,18 @@ def reproduce(
     quick: bool = False,
     recording: RecordingSpec | None = None,
     progress: Callable[[int, int, str], None] | None = None,
+    force: bool = False,
 ) -> ReproduceResult:
     """Recompute the paper's figures and numbers and write a self-contained report.
 
     Parameters
     ----------
     out_dir : path-like
-        Output folder; created, or replaced as a whole when the run succeeds.
+        Output folder; created, or replaced as a whole when the run succeeds. A folder
+        holding files squealkit did not write is refused, unless ``force``.
+    force : bool
+        Write into a folder that holds other files: the report's files are moved in one
+        by one, complete, and the other files are left alone.
     model : FrictionModel, optional
         The model (default: the paper's rig, preset ``lv2013``). With a model of your own
         the published numbers are still shown for reference.
@@ -124,14 +129,15 @@ def reproduce(
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise InputError(f"Output {str(out)!r} exists and is not a folder.")
+    check_output(out, directory=True, force=force)  # before the work, not after
     default = model is None
     model = get_preset("lv2013") if model is None else model
     if rig is None and default:
         rig = PinOnDiscRig()
     steps = _paper_steps(model, rig, published=True, quick=quick, recording=recording)
     start = time.perf_counter()
-    # staged beside out_dir and moved into place only when complete (io.atomic_path)
-    with atomic_path(out, directory=True) as stage:
+    # staged and moved into place only when complete; never deletes what squealkit did not write
+    with output_folder(out, force=force) as stage:
         figures, data = stage / "figures", stage / "data"
         figures.mkdir(parents=True)
         data.mkdir()

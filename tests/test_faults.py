@@ -1,0 +1,154 @@
+"""Faults on the output side: every one a single line and exit code 2, checked before the work;
+nothing half-written, nothing deleted that squealkit did not write, permissions as the user
+expects (issue #15, "Faults on the output side")."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import stat
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from squealkit import io
+from squealkit.io import MANIFEST, atomic_path, output_folder, save_dataset, write_text
+
+SQUEALKIT = [sys.executable, "-c", "from squealkit.cli.main import main; main()"]
+
+
+def _one_line(r) -> str:
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1, r.stderr
+    return lines[0]
+
+
+def test_out_naming_a_folder_is_refused_before_the_work(run, tmp_path):
+    (tmp_path / "x").mkdir()
+    r = run("stability", "--mu", "0:0.8:5", "--theta", "0", "--out", str(tmp_path / "x"))
+    assert r.exit_code == 2 and "is a folder" in _one_line(r)
+    r = run("stability", "--mu", "0:0.8:5", "--theta", "0", "--plot", str(tmp_path / "no" / "f.png"))
+    assert r.exit_code == 2 and "does not exist" in _one_line(r)
+
+
+def test_unwritable_folder_is_one_line(run, tmp_path, monkeypatch):
+    # as root a chmod cannot deny writing, so the OS's answer is injected where it arrives
+    def denied(*a, **k):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(io.tempfile, "mkstemp", denied)
+    r = run("stability", "--mu", "0:0.8:5", "--theta", "0", "--out", str(tmp_path / "m.nc"))
+    assert r.exit_code == 2 and "Permission denied" in _one_line(r)
+    r = run("critical", "--theta", "0", "--json")  # no output file: unaffected
+    assert r.exit_code == 0
+
+
+def test_os_error_during_the_run_is_one_line(run, tmp_path, monkeypatch):
+    def full(*a, **k):
+        raise OSError(28, "No space left on device", str(tmp_path / "m.nc"))
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", full)
+    r = run("stability", "--mu", "0:0.8:5", "--theta", "0", "--out", str(tmp_path / "m.nc"))
+    assert r.exit_code == 2 and "no space left" in _one_line(r)
+    assert os.listdir(tmp_path) == []  # the staged file went with the failure
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+def test_stdout_to_a_full_device_is_one_line():
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([*SQUEALKIT, "presets", "--json"], stdout=full, stderr=subprocess.PIPE, text=True,
+                           timeout=120)
+    assert r.returncode == 2 and "standard output" in _one_line(r)
+
+
+def test_sigterm_leaves_no_staging_files_and_exits_143(tmp_path):
+    out = tmp_path / "map.zarr"
+    p = subprocess.Popen([*SQUEALKIT, "stability", "--mu", "0:0.8:3000", "--theta", "-8:8:3000", "--out", str(out)],
+                         stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    deadline = time.monotonic() + 60
+    while not any(n.startswith(".map.zarr") for n in os.listdir(tmp_path)) and time.monotonic() < deadline:
+        if p.poll() is not None:
+            pytest.fail(f"finished before the signal: {p.stderr.read()}")
+        time.sleep(0.05)
+    p.send_signal(signal.SIGTERM)
+    err = p.communicate(timeout=60)[1]
+    assert p.returncode == 143, err
+    assert "terminated" in err and "Traceback" not in err
+    assert os.listdir(tmp_path) == []
+
+
+def test_interrupt_swallowed_by_a_library_still_discards_the_output(tmp_path):
+    out = tmp_path / "a.txt"
+    try:
+        with pytest.raises(KeyboardInterrupt), atomic_path(out) as tmp:
+            tmp.write_text("half")
+            io.note_interrupt()  # the handler ran, but the exception was caught inside a library
+    finally:
+        io._interrupted.clear()
+    assert os.listdir(tmp_path) == []
+
+
+def test_new_outputs_follow_the_umask_and_overwritten_keep_their_mode(tmp_path):
+    old = os.umask(0o022)
+    try:
+        f = write_text(tmp_path / "a.json", "{}")
+        assert stat.S_IMODE(f.stat().st_mode) == 0o644
+        ds = xr.Dataset({"x": ("t", np.arange(3.0))})
+        z = save_dataset(ds, tmp_path / "a.zarr")
+        assert stat.S_IMODE(z.stat().st_mode) == 0o755
+        f.chmod(0o640)
+        write_text(f, "[]")
+        assert stat.S_IMODE(f.stat().st_mode) == 0o640
+        os.umask(0o077)
+        assert stat.S_IMODE(write_text(tmp_path / "b.json", "{}").stat().st_mode) == 0o600
+    finally:
+        os.umask(old)
+
+
+def test_output_folder_never_deletes_foreign_files(tmp_path, monkeypatch):
+    folder = tmp_path / "report"
+    folder.mkdir()
+    (folder / "notes.txt").write_text("mine")
+    with pytest.raises(io.InputError, match=r"did not write.*notes\.txt"):
+        with output_folder(folder):
+            pass
+    # with force the new files go in beside them, and a manifest lists only squealkit's
+    with output_folder(folder, force=True) as stage:
+        (stage / "figures").mkdir()
+        (stage / "figures" / "f.png").write_text("png")
+        (stage / "report.html").write_text("new")
+    assert (folder / "notes.txt").read_text() == "mine"
+    assert (folder / "report.html").read_text() == "new"
+    assert json.loads((folder / MANIFEST).read_text())["files"] == ["figures/f.png", "report.html"]
+    assert sorted(p.name for p in folder.iterdir()) == [MANIFEST, "figures", "notes.txt", "report.html"]
+    # '.' works too (no rename of the working directory)
+    monkeypatch.chdir(folder)
+    with output_folder(".", force=True) as stage:
+        (stage / "report.html").write_text("newer")
+    assert (folder / "report.html").read_text() == "newer" and (folder / "notes.txt").exists()
+
+
+def test_output_folder_replaces_what_squealkit_wrote(tmp_path):
+    folder = tmp_path / "report"
+    with output_folder(folder) as stage:
+        (stage / "old.png").write_text("1")
+        (stage / "report.html").write_text("first")
+    with output_folder(folder) as stage:  # a squealkit folder: replaced as a whole
+        (stage / "report.html").write_text("second")
+    assert sorted(p.name for p in folder.iterdir()) == [MANIFEST, "report.html"]
+    assert (folder / "report.html").read_text() == "second"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]  # no staging left
+
+
+def test_zarr_output_over_a_foreign_folder_is_refused(run, tmp_path):
+    folder = tmp_path / "keep.zarr"
+    folder.mkdir()
+    (folder / "precious.txt").write_text("x")
+    r = run("stability", "--mu", "0:0.8:5", "--theta", "0", "--out", str(folder))
+    assert r.exit_code == 2 and "did not write" in _one_line(r)
+    assert (folder / "precious.txt").exists()
