@@ -152,3 +152,33 @@ def test_zarr_output_over_a_foreign_folder_is_refused(run, tmp_path):
     r = run("stability", "--mu", "0:0.8:5", "--theta", "0", "--out", str(folder))
     assert r.exit_code == 2 and "did not write" in _one_line(r)
     assert (folder / "precious.txt").exists()
+
+
+def test_scheduler_that_is_not_dask_times_out_in_one_line(run, tmp_path, monkeypatch):
+    import socket
+    import threading
+
+    from squealkit import scale
+
+    # a service that accepts the connection and never answers (the silent hang)
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+    held = []
+    threading.Thread(target=lambda: held.append(server.accept()), daemon=True).start()
+    monkeypatch.setattr(scale, "CONNECT_TIMEOUT", 2.0)
+    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    t0 = time.monotonic()
+    r = run("stability", "--mu", "0:0.8:5", "--theta", "0", "--scheduler", address, "--out", str(tmp_path / "s.zarr"))
+    assert r.exit_code == 2 and "No Dask scheduler answered" in _one_line(r)
+    assert time.monotonic() - t0 < 30
+    server.close()
+
+
+def test_scheduler_file_that_is_not_one_is_one_line(run, tmp_path):
+    bad = tmp_path / "sched.json"
+    for text in ('{"address": 5}', "not json", "[1, 2]"):
+        bad.write_text(text)
+        r = run("stability", "--mu", "0:0.8:5", "--theta", "0", "--scheduler", str(bad),
+                "--out", str(tmp_path / "s.zarr"))
+        assert r.exit_code == 2 and "is not a Dask scheduler file" in _one_line(r)

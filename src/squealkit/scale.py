@@ -16,8 +16,10 @@ Install the optional part with ``pip install "squealkit[distributed]"``.
 from __future__ import annotations
 
 import contextlib
+import json
 import logging
 import os
+import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
@@ -71,14 +73,49 @@ def get_client(scheduler: str, *, n_workers: int | None = None):
                                            dashboard_address=None, silence_logs=logging.CRITICAL)
         client = distributed.Client(cluster)
         return client
-    if scheduler.endswith(".json") and not os.path.isfile(scheduler):
-        raise InputError(f"Scheduler file {scheduler!r} does not exist (dask scheduler --scheduler-file writes it).")
-    try:
-        if scheduler.endswith(".json"):
-            return distributed.Client(scheduler_file=scheduler, timeout="10s")
-        return distributed.Client(scheduler, timeout="10s")
-    except (OSError, TimeoutError, ValueError) as e:
-        raise InputError(f"Cannot reach the Dask scheduler {scheduler!r}: {e}") from e
+    if scheduler.endswith(".json"):
+        if not os.path.isfile(scheduler):
+            raise InputError(f"Scheduler file {scheduler!r} does not exist "
+                             "(dask scheduler --scheduler-file writes it).")
+        try:
+            with open(scheduler, encoding="utf-8") as f:
+                address = json.load(f).get("address")
+        except (OSError, ValueError, AttributeError) as e:
+            raise InputError(f"Scheduler file {scheduler!r} is not a Dask scheduler file: {e}") from e
+        if not isinstance(address, str) or "://" not in address:
+            raise InputError(f"Scheduler file {scheduler!r} is not a Dask scheduler file: its 'address' is "
+                             f"{address!r}, not an address like tcp://HOST:8786.")
+        scheduler = address
+    return _connect(distributed, scheduler)
+
+
+#: Seconds to wait for a scheduler's answer. A service that accepts the connection but is
+#: not a Dask scheduler would otherwise keep the handshake waiting forever.
+CONNECT_TIMEOUT = 20.0
+
+
+def _connect(distributed, address: str):
+    """A client of the scheduler at ``address``, or a one-line InputError within the timeout."""
+    result: dict[str, Any] = {}
+
+    def attempt() -> None:
+        try:
+            result["client"] = distributed.Client(address, timeout=f"{CONNECT_TIMEOUT / 2:g}s")
+        except BaseException as e:  # reported below, in the caller's thread
+            result["error"] = e
+
+    worker = threading.Thread(target=attempt, name="squealkit-connect", daemon=True)
+    worker.start()
+    worker.join(CONNECT_TIMEOUT)
+    if worker.is_alive():
+        raise InputError(f"No Dask scheduler answered at {address!r} within {CONNECT_TIMEOUT:g} s "
+                         "(is a Dask scheduler listening there?).")
+    error = result.get("error")
+    if error is not None:
+        if isinstance(error, OSError | TimeoutError | ValueError | TypeError):
+            raise InputError(f"Cannot reach the Dask scheduler {address!r}: {error}") from error
+        raise error
+    return result["client"]
 
 
 @contextlib.contextmanager
