@@ -182,3 +182,32 @@ def test_scheduler_file_that_is_not_one_is_one_line(run, tmp_path):
         r = run("stability", "--mu", "0:0.8:5", "--theta", "0", "--scheduler", str(bad),
                 "--out", str(tmp_path / "s.zarr"))
         assert r.exit_code == 2 and "is not a Dask scheduler file" in _one_line(r)
+
+
+def test_work_that_will_not_fit_in_memory_is_refused_before_allocating(run, tmp_path, monkeypatch):
+    from squealkit import _validation
+
+    monkeypatch.setattr(_validation, "available_memory", lambda: 1 << 30)  # a 1 GiB machine
+    # the grid itself: 1e8 points of mu
+    r = run("stability", "--mu", "0:1:100000000", "--theta", "0")
+    assert r.exit_code == 2 and "needs about" in _one_line(r) and "available" in r.stderr
+    # a map of 2e7 points in memory (about 8 GB): refused, with the way out
+    r = run("stability", "--mu", "0:1:2000000", "--theta", "-8:8:10")
+    assert r.exit_code == 2 and "--out FILE.zarr" in _one_line(r)
+    # streamed, the first column (3e6 points) must still fit
+    r = run("stability", "--mu", "0:1:3000000", "--theta", "0", "--out", str(tmp_path / "m.zarr"))
+    assert r.exit_code == 2 and "first column" in _one_line(r)
+    r = run("critical", "--theta", "0:1:100000000")
+    assert r.exit_code == 2 and "needs about" in _one_line(r)
+    assert os.listdir(tmp_path) == []
+
+
+def test_monte_carlo_too_big_is_refused_before_sampling(run, monkeypatch, tmp_path):
+    from squealkit import _validation
+
+    unc = tmp_path / "unc.toml"
+    unc.write_text('[uncertain]\nk3 = {dist = "normal", mean = 9e5, std = 1e5}\n')
+    monkeypatch.setattr(_validation, "available_memory", lambda: 1 << 30)
+    r = run("montecarlo", "--preset", "hoffmann2002", "--uncertain", str(unc), "--samples", "100000000",
+            "--mu", "0:1:11")
+    assert r.exit_code == 2 and "Monte Carlo of 100000000 samples" in _one_line(r)

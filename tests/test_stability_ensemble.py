@@ -98,3 +98,15 @@ def test_bad_input():
         ModelEnsemble.from_models([Hoffmann2002(), get_preset("lv2013")])
     with pytest.raises(InputError, match="at least one model"):
         ModelEnsemble.from_models([])
+
+
+def test_onsets_identical_when_the_search_runs_in_batches_of_rows(monkeypatch):
+    # many rows are searched in batches (bounded memory); each row's result is unchanged
+    from squealkit.stability import _windows
+
+    ens = ModelEnsemble.from_models([Hoffmann2002(k3=k) for k in np.linspace(6e5, 1.2e6, 40)])
+    whole = ensemble_onset(ens, np.linspace(0.0, 1.0, 51))
+    monkeypatch.setattr(_windows, "_BATCH_POINTS", 51 * 7)
+    batched = ensemble_onset(ens, np.linspace(0.0, 1.0, 51))
+    np.testing.assert_array_equal(batched[0], whole[0])
+    np.testing.assert_array_equal(batched[1], whole[1])

@@ -8,6 +8,7 @@ these into one line on stderr and exit code 2.
 from __future__ import annotations
 
 import math
+import os
 import re
 from collections.abc import Sequence
 from numbers import Real
@@ -17,6 +18,8 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "InputError",
+    "available_memory",
+    "check_memory",
     "parse_range",
     "validate_angle",
     "validate_array_finite",
@@ -97,6 +100,38 @@ def validate_array_finite(name: str, values: ArrayLike) -> NDArray[np.float64]:
     return arr
 
 
+def available_memory() -> int:
+    """Bytes of memory available to a new allocation now (Linux: ``MemAvailable``)."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
+        return 1 << 62
+
+
+def _gib(nbytes: float) -> str:
+    return f"{nbytes / 2**30:.1f} GiB" if nbytes >= 2**30 else f"{nbytes / 2**20:.0f} MiB"
+
+
+def check_memory(nbytes: float, what: str, hint: str = "") -> None:
+    """Refuse, before allocating, work that will not fit in the memory available now.
+
+    ``nbytes`` is an estimate of the peak; work above 80 % of what is available is refused
+    with one line naming it, the estimate and what is available (and ``hint``, how to
+    make it fit).
+    """
+    avail = available_memory()
+    if nbytes > 0.8 * avail:
+        tail = f" {hint}" if hint else ""
+        raise InputError(f"{what} needs about {_gib(nbytes)} of memory; {_gib(avail)} is available.{tail}")
+
+
 _RANGE_RE = re.compile(r"^\s*([^:]+):([^:]+):([^:]+)\s*$")
 
 
@@ -134,4 +169,5 @@ def parse_range(name: str, text: str | Sequence[float] | float) -> NDArray[np.fl
         raise InputError(f"Parameter {name}={text!r}: the point count N={n} must be >= 1.")
     if n == 1 and start != stop:
         raise InputError(f"Parameter {name}={text!r}: one point needs START == STOP.")
+    check_memory(32.0 * n, f"Parameter {name}={text!r} ({n} points)")  # the grid and its derived coordinates
     return np.linspace(start, stop, n)

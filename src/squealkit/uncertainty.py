@@ -44,7 +44,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from . import __version__
-from ._validation import InputError, validate_angle, validate_finite
+from ._validation import InputError, check_memory, validate_angle, validate_finite
 from .models import FrictionModel, load_model
 from .models.config import _read_toml
 from .stability import ONSET_STATUS
@@ -497,6 +497,11 @@ def squeal_propensity(
     tan_t = math.tan(theta)
     d = len(unc)
 
+    # before drawing: the samples and their results, and one batch's eigenvalues over the grid
+    n_rows = samples + (d * (1 << ((samples // 2).bit_length() - 1)) if sensitivity else 0)
+    check_memory(n_rows * (d + 4) * 24.0 + min(batch_size, n_rows) * mu_a.size * (48.0 * model.n_dof + 40.0),
+                 f"Monte Carlo of {samples} samples over {mu_a.size} mu points",
+                 "Use fewer samples or mu points (or a smaller batch_size).")
     sample_seq, boot_seq = np.random.SeedSequence(seed).spawn(2)
     X = sample_parameters(unc, samples, np.random.default_rng(sample_seq))
     _check_samples(unc, X, model)

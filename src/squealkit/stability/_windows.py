@@ -126,6 +126,10 @@ def _indicators(lam: NDArray, thr: NDArray) -> NDArray[np.float64]:
     return np.stack(cols, axis=-1) / scale[:, None]
 
 
+#: Scan points per batch of rows: bounds the memory of a search over very many rows.
+_BATCH_POINTS = 1 << 20
+
+
 def find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, *, scan: int = SCAN_POINTS,
                  rounding_rtol: float = _ROUNDING_RTOL, first_only: bool = False) -> Windows:
     """All windows where the system is not stable on the paths ``x0[b] -> x1[b]``.
@@ -150,6 +154,26 @@ def find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, *, scan: int = S
     x1 = np.asarray(x1, dtype=float)
     B = x0.shape[0]
     N = max(3, int(scan))
+    rows_per = max(1, _BATCH_POINTS // N)
+    if B <= rows_per:
+        return _find_windows(evaluate, x0, x1, N, rounding_rtol, first_only)
+    parts = []
+    for a in range(0, B, rows_per):
+        b = min(B, a + rows_per)
+
+        def sub(rows, x, high_precision=True, a=a):
+            return evaluate(rows + a, x, high_precision=high_precision)
+
+        w = _find_windows(sub, x0[a:b], x1[a:b], N, rounding_rtol, first_only)
+        parts.append(Windows(w.start_unstable, w.row + a, w.near, w.far, w.unstable))
+    return Windows(*(np.concatenate([getattr(w, f) for w in parts])
+                     for f in ("start_unstable", "row", "near", "far", "unstable")))
+
+
+def _find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, N: int, rounding_rtol: float,
+                  first_only: bool) -> Windows:
+    """:func:`find_windows` for one batch of rows."""
+    B = x0.shape[0]
     u = np.linspace(0.0, 1.0, N)
     xs = x0[:, None] + (x1 - x0)[:, None] * u[None, :]
     rows = np.repeat(np.arange(B, dtype=np.int64), N)

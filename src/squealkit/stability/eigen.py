@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
 from .._threads import limit_threads, threads_for
-from .._validation import InputError, validate_array_finite
+from .._validation import InputError, check_memory, validate_array_finite
 from ..models import FrictionModel
 from ..models.friction import Stribeck, validate_friction
 from ._kernels import (
@@ -190,6 +190,9 @@ def _solve_grid(model, mu, tan_theta, damped, progress=None, friction=None, spee
     t_a = validate_array_finite("tan_theta", tan_theta)
     mu_b, t_b = np.broadcast_arrays(mu_a, t_a)
     shape = mu_b.shape
+    # the results (modes, radii, verdicts) and the kernel's buffers, before allocating them
+    check_memory(mu_b.size * (48.0 * model.n_dof + 32.0), f"Eigenvalues at {mu_b.size} points",
+                 "Use a coarser grid, or stream a map to zarr (--out FILE.zarr, store=...).")
     mu_v = mu_b if friction is None else friction.mu(mu_b, speed)  # the coefficient while sliding
     g = np.ascontiguousarray((1.0 - mu_v * t_b).ravel())
     e = np.ascontiguousarray((model.sliding_direction * (mu_v + t_b)).ravel())
@@ -386,6 +389,17 @@ def stability_map(
     if np.any(np.abs(th_a) >= math.pi / 2):
         raise InputError("Parameter theta must lie strictly between -90 and 90 deg.")
     tan_t = np.tan(th_a)
+    n = model.n_dof
+    if store is None:
+        # measured peak about 230-450 bytes per point for 3 DOF (results, tracking, labels)
+        check_memory(mu_a.size * th_a.size * (110.0 * n + 64.0), f"A stability map of {mu_a.size} x {th_a.size} points",
+                     "Stream it to zarr (--out FILE.zarr, store=...) or use a coarser grid.")
+    else:
+        # the first theta column is solved and tracked whole before the tiles, and a tile
+        # holds at least one whole mu row
+        check_memory((mu_a.size + th_a.size) * (110.0 * n + 64.0),
+                     f"A streamed map of {mu_a.size} x {th_a.size} points (its first column and one row)",
+                     "Use fewer points along each axis.")
     if store is None and client is not None:
         raise InputError("A cluster run streams its result to zarr: pass store='....zarr' with client.")
     if store is None:
