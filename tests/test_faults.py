@@ -211,3 +211,19 @@ def test_monte_carlo_too_big_is_refused_before_sampling(run, monkeypatch, tmp_pa
     r = run("montecarlo", "--preset", "hoffmann2002", "--uncertain", str(unc), "--samples", "100000000",
             "--mu", "0:1:11")
     assert r.exit_code == 2 and "Monte Carlo of 100000000 samples" in _one_line(r)
+
+
+@pytest.mark.parametrize(("setting", "says"), [("m1=1e-300", "below 1e-30 kg"), ("kc=1e300", "above 1e+30 N/m"),
+                                               ("m1=1e300", "above 1e+30 kg")])
+def test_meaningless_magnitudes_are_one_line(run, setting, says):
+    # a numba SystemError (an overflow in the characteristic polynomial) before
+    for cmd in (["stability", "--mu", "0:0.8:5", "--theta", "0"], ["critical"], ["modes", "--mu", "0.3"]):
+        r = run(*cmd, "--set", setting)
+        assert r.exit_code == 2 and says in _one_line(r), (cmd, r.output)
+
+
+def test_meaningless_scatter_is_one_line(run, tmp_path):
+    unc = tmp_path / "unc.toml"
+    unc.write_text('[uncertain]\nkc = {dist = "lognormal", mean = 4.6e7, std = 1e300}\n')
+    r = run("montecarlo", "--uncertain", str(unc), "--samples", "64", "--mu", "0:1:11")
+    assert r.exit_code == 2 and "times its mean" in _one_line(r)

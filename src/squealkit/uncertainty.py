@@ -137,6 +137,16 @@ class UncertainParameter:
                     raise InputError(
                         f"Uncertain parameter {self.name}: a lognormal {k}={values[k]!r} must be > 0."
                     )
+            # sigma of the log beyond 10 spans e^20 ~ 1e9 between -1 and +1 sigma: no scatter a
+            # real part has, and its samples would overflow
+            if "std" in values and values["std"] / values["mean"] > 1e4:
+                raise InputError(
+                    f"Uncertain parameter {self.name}: a lognormal std={values['std']!r} is "
+                    f"{values['std'] / values['mean']:.3g} times its mean; a physical scatter is far below 1e4 times.")
+            if "sigma" in values and values["sigma"] > 10.0:
+                raise InputError(f"Uncertain parameter {self.name}: a lognormal sigma={values['sigma']!r} (of the "
+                                 "log) above 10 spans more than 1e8 within one sigma; no physical scatter is that "
+                                 "wide.")
         object.__setattr__(self, "params", values)
 
     @property

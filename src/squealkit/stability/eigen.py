@@ -89,6 +89,28 @@ def _matrices(
     return tuple(np.ascontiguousarray(a[None]) for a in (M, C, K0, Kn, Kf))
 
 
+#: Entries of a model's matrices beyond this (SI units) are no physical brake's, and the
+#: characteristic polynomial of a few DOFs would overflow double precision.
+_MAX_MAGNITUDE = 1e30
+
+
+def check_magnitudes(M: NDArray, C: NDArray, K0: NDArray, Kn: NDArray, Kf: NDArray) -> None:
+    """One-line error for matrices whose magnitudes no physical model has (e.g. a mass of
+    1e-300 kg or a stiffness of 1e300 N/m, usually a unit mistake), instead of an overflow
+    deep in the solver."""
+    diag = np.abs(np.diagonal(M, axis1=-2, axis2=-1))
+    small = diag[(diag > 0) & (diag < 1.0 / _MAX_MAGNITUDE)]
+    if small.size:
+        raise InputError(f"The model's mass matrix has a diagonal entry of {small.min():.3g} kg, below "
+                         f"{1 / _MAX_MAGNITUDE:g} kg: no physical model has it (check the parameters' units).")
+    for name, a, unit in (("mass", M, "kg"), ("damping", C, "N s/m"), ("stiffness", K0, "N/m"),
+                          ("normal-contact stiffness", Kn, "N/m"), ("friction stiffness", Kf, "N/m")):
+        big = float(np.max(np.abs(a))) if a.size else 0.0
+        if big > _MAX_MAGNITUDE:
+            raise InputError(f"The model's {name} matrix has an entry of {big:.3g} {unit}, above "
+                             f"{_MAX_MAGNITUDE:g} {unit}: no physical model has it (check the parameters' units).")
+
+
 def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int, high_precision: bool = True,
                  out: tuple[NDArray, ...] | None = None, work: dict | None = None):
     """Modes, error radii, verdicts and thresholds of flat arrays of contact factors g, e.
@@ -203,6 +225,7 @@ def _solve_grid(model, mu, tan_theta, damped, progress=None, friction=None, spee
     verdict = np.empty(total, dtype=np.int8)
     thr = np.empty(total)
     mats = _matrices(model, damped)
+    check_magnitudes(*mats)
     work: dict = {}
     # the last axis is a row: solved on its own, so a row's numbers never depend on the others
     row = max(1, shape[-1]) if shape else 1

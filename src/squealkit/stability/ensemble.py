@@ -21,7 +21,7 @@ from .._validation import InputError, validate_array_finite, validate_finite
 from ..models import FrictionModel
 from ._kernels import DIVERGENCE, FLUTTER, INDETERMINATE
 from ._windows import ONSET_STATUS, SCAN_POINTS, find_windows
-from .eigen import _solve_models
+from .eigen import _solve_models, check_magnitudes
 
 #: Default relative width to which :func:`ensemble_onset` locates onsets that double
 #: precision cannot decide.
@@ -72,6 +72,7 @@ class ModelEnsemble:
         parts = [m.stiffness_parts() for m in models]
         K0, Kn, Kf = (np.stack([p[i] for p in parts]).astype(float) for i in range(3))
         sliding = np.array([m.sliding_direction for m in models], dtype=np.int64)
+        check_magnitudes(M, C, K0, Kn, Kf)
         return cls(M, C, K0, Kn, Kf, sliding)
 
     def __len__(self) -> int:

@@ -227,8 +227,8 @@ def modes(model: FrictionModel, mu: float, theta: float = 0.0, *, damped: bool =
     """
     mu, theta = _validate_point(mu, theta)
     t = math.tan(theta)
+    verdict, thr = _point_verdict(model, mu, t, damped)  # validates the model's magnitudes first
     M, C, K, lam, phi, psi = _solve(model, mu, t, damped)
-    verdict, thr = _point_verdict(model, mu, t, damped)
     w_f, w_d, m_modal = _work_per_cycle(M, C, K, lam, phi)
     mag = np.abs(lam)
     zeta = np.divide(-lam.real, mag, out=np.zeros_like(mag), where=mag > 0) + 0.0
