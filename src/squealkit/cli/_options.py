@@ -163,7 +163,7 @@ def friction_options(f: F) -> F:
     )(f)
     f = click.option(
         "--stribeck", "stribeck_spec", default=None, metavar="MU_STATIC,V_STRIBECK",
-        help="Stribeck friction mu(v) = mu + (MU_STATIC - mu) exp(-|v| / V_STRIBECK) [V_STRIBECK in m/s], "
+        help="Stribeck friction mu(v) = mu + (MU_STATIC - mu) exp(-abs(v) / V_STRIBECK) [V_STRIBECK in m/s], "
         "mu the kinetic coefficient; e.g. --stribeck 0.6,0.001.",
     )(f)
     return f

@@ -144,7 +144,7 @@ def critical_friction_curve(
     damped : bool
         Include damping.
     mu_max : float
-        Search range for |mu|.
+        Search range for ``|mu|``.
     scan : int
         Points of the initial scan.
     friction : Stribeck, optional

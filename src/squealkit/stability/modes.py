@@ -196,7 +196,7 @@ def modes(model: FrictionModel, mu: float, theta: float = 0.0, *, damped: bool =
     xarray.Dataset
         Dims ``mode`` (real roots first, then by frequency) and ``dof`` (the model's
         ``dof_names``). Per mode: ``growth_rate`` sigma [1/s], ``omega`` [rad/s],
-        ``frequency_hz`` = omega / 2 pi, ``damping_ratio`` = -sigma / |lambda| (0 at
+        ``frequency_hz`` = omega / 2 pi, ``damping_ratio`` = ``-sigma / |lambda|`` (0 at
         lambda = 0), ``unstable``, ``real_root``, ``modal_mass`` phi^H M phi [kg],
         ``friction_work``, ``damping_work`` and ``net_work`` per cycle [J] for the shape
         as stored (largest amplitude 1 m; they scale with amplitude squared; NaN for real
