@@ -491,7 +491,7 @@ def _batch_dataset(runs: Sequence[_Run], *, duration, fs, contact, x0, perturbat
 
 
 def response_envelope(ds: xr.Dataset, var: str, *, freq_lower: float = 1000.0) -> xr.DataArray:
-    """Envelope of the vibration of ``var``: high-pass above ``freq_lower`` [Hz], then the magnitude of the analytic signal (Hilbert).
+    """Envelope of the vibration of ``var``: high-pass above ``freq_lower`` [Hz], then ``|Hilbert|``.
 
     The high-pass (4th-order Butterworth, zero phase) removes the quasi-static response to the
     run-out so that what remains is the self-excited vibration (paper section 5 does the same
