@@ -123,6 +123,21 @@ def check_output(path: str | Path, *, directory: bool = False, force: bool = Fal
     file systems and full quotas show up now, not after the computation); a file output
     must not name a folder, a folder output not a file; an existing folder must hold only
     what squealkit wrote there (its manifest, or a zarr store), unless ``force``.
+
+    Parameters
+    ----------
+    path : path-like
+        The output file, or folder with ``directory=True``.
+    directory : bool
+        Whether the output is a folder (a report, a zarr store).
+    force : bool
+        Accept an existing folder holding files squealkit did not write (they are left
+        alone).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path`` as a ``Path``.
     """
     final = Path(path)
     parent = _where(final)
@@ -213,6 +228,19 @@ def output_folder(path: str | Path, *, force: bool = False) -> Iterator[Path]:
     folder holding other files (even ``.``) gets the new files one by one, each moved into
     place complete; its other files are left alone. On failure or interrupt nothing
     changes.
+
+    Parameters
+    ----------
+    path : path-like
+        The output folder; its parent must exist.
+    force : bool
+        Write into an existing folder that holds files squealkit did not write (see
+        :func:`check_output`).
+
+    Yields
+    ------
+    pathlib.Path
+        The staging folder to write the files into.
     """
     final = Path(path)
     check_output(final, directory=True, force=force)
@@ -253,7 +281,21 @@ def _engine_for(path: Path) -> str:
 
 
 def save_dataset(ds: xr.Dataset, path: str | Path) -> Path:
-    """Write ``ds`` to netCDF (``.nc``, h5netcdf) or zarr (``.zarr``), atomically."""
+    """Write ``ds`` to netCDF (``.nc``, h5netcdf) or zarr (``.zarr``), atomically.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The dataset to write.
+    path : path-like
+        The output file (``.nc``) or store (``.zarr``, a folder); the suffix picks the
+        format.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path`` as a ``Path``.
+    """
     final = Path(path)
     engine = _engine_for(final)
     with atomic_path(final, directory=engine == "zarr") as tmp, deferred_interrupts():
@@ -265,7 +307,18 @@ def save_dataset(ds: xr.Dataset, path: str | Path) -> Path:
 
 
 def load_dataset(path: str | Path) -> xr.Dataset:
-    """Load a dataset written by :func:`save_dataset` fully into memory."""
+    """Load a dataset written by :func:`save_dataset` fully into memory.
+
+    Parameters
+    ----------
+    path : path-like
+        An existing netCDF file (``.nc``) or zarr store (``.zarr``).
+
+    Returns
+    -------
+    xarray.Dataset
+        The dataset, loaded; the file is closed.
+    """
     p = Path(path)
     engine = _engine_for(p)
     if not p.exists():
@@ -278,7 +331,23 @@ def load_dataset(path: str | Path) -> xr.Dataset:
 
 
 def save_figure(fig: Any, path: str | Path, **kwargs: Any) -> Path:
-    """Save a matplotlib figure atomically; the format follows the suffix (.png, .svg, .pdf)."""
+    """Save a matplotlib figure atomically; the format follows the suffix (.png, .svg, .pdf).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure to save.
+    path : path-like
+        The output file, ending in ``.png``, ``.svg``, ``.pdf``, ``.jpg`` or ``.jpeg``.
+    **kwargs
+        Passed on to ``fig.savefig``; ``dpi`` defaults to 150 and ``bbox_inches`` to
+        ``"tight"``.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path`` as a ``Path``.
+    """
     final = Path(path)
     fmt = final.suffix.lstrip(".").lower()
     if fmt not in {"png", "svg", "pdf", "jpg", "jpeg"}:
@@ -291,7 +360,20 @@ def save_figure(fig: Any, path: str | Path, **kwargs: Any) -> Path:
 
 
 def write_text(path: str | Path, text: str) -> Path:
-    """Write a text file (JSON, CSV, HTML) atomically."""
+    """Write a text file (JSON, CSV, HTML) atomically.
+
+    Parameters
+    ----------
+    path : path-like
+        The output file.
+    text : str
+        The content, written as UTF-8.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path`` as a ``Path``.
+    """
     final = Path(path)
     with atomic_path(final) as tmp:
         tmp.write_text(text, encoding="utf-8")

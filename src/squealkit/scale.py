@@ -120,7 +120,21 @@ def _connect(distributed, address: str):
 
 @contextlib.contextmanager
 def cluster_client(scheduler: str | None, *, n_workers: int | None = None) -> Iterator[Any]:
-    """Context manager: a client for ``scheduler`` (None yields None), closed on exit."""
+    """Context manager: a client for ``scheduler`` (None yields None), closed on exit.
+
+    Parameters
+    ----------
+    scheduler : str or None
+        ``"local"``, a scheduler address or a scheduler file, as in :func:`get_client`;
+        None runs without a cluster.
+    n_workers : int, optional
+        Workers of a local cluster.
+
+    Yields
+    ------
+    distributed.Client or None
+        The client; on exit it is closed, and with ``"local"`` its cluster too.
+    """
     if scheduler is None:
         yield None
         return
@@ -227,6 +241,24 @@ def lazy_template(sample: xr.Dataset, dim: str, index: np.ndarray, chunk: int) -
     ``dim`` becomes lazy zeros chunked ``chunk`` along ``dim`` (whole along the others), so
     writing the template stores only the metadata and the coordinates. ``index`` is the
     coordinate of ``dim``.
+
+    Parameters
+    ----------
+    sample : xarray.Dataset
+        One computed piece of the result.
+    dim : str
+        The dimension the result is split along.
+    index : array_like, 1-D
+        The full coordinate of ``dim``; its length is the result's along ``dim``.
+    chunk : int
+        Chunk length along ``dim`` (the length of a piece).
+
+    Returns
+    -------
+    xarray.Dataset
+        Shaped like ``sample`` but ``len(index)`` long in ``dim``: the variables and
+        coordinates along ``dim`` are lazy zeros (``dim`` itself is ``index``), the rest and
+        the attributes are ``sample``'s.
     """
     import dask.array as da
 

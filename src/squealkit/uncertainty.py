@@ -278,9 +278,19 @@ def sample_parameters(
     reproducible from the generator's seed), in the parameters' own units (degrees for
     ``*_deg``).
 
+    Parameters
+    ----------
+    uncertain : sequence of UncertainParameter
+        The parameters, one column each.
+    n : int
+        Number of samples (rows).
+    rng : numpy.random.Generator
+        The generator drawn from, e.g. ``np.random.default_rng(seed)``.
+
     Returns
     -------
     ndarray, shape (n, len(uncertain))
+        The samples; column j holds those of ``uncertain[j]``.
 
     Examples
     --------
@@ -637,6 +647,11 @@ def _num(x: Any) -> float | None:
 
 def propensity_summary(ds: xr.Dataset) -> dict[str, Any]:
     """The headline numbers of :func:`squeal_propensity` (``squealkit montecarlo --json``).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`squeal_propensity` (with or without the Sobol' indices).
 
     Returns
     -------

@@ -255,6 +255,29 @@ def critical_friction(
 
     See :func:`critical_friction_curve` (paper §3, eq. 6); ``friction`` and ``speed`` as there.
 
+    Parameters
+    ----------
+    model : FrictionModel
+        The system, e.g. ``get_preset("lv2013")``.
+    theta : float
+        Run-out incline [rad], strictly inside (-90, 90) deg; ``tan(theta)`` enters the model.
+    damped : bool
+        Include the damping matrix C.
+    mu_max : float
+        Upper end of the friction search range ``[0, mu_max]`` (> 0); when the system is
+        unstable already at mu = 0 the search also goes down to ``-mu_max``.
+    friction : Stribeck, optional
+        Speed-dependent friction; ``mu_critical`` is then the kinetic coefficient and
+        ``mu_e_critical`` uses the coefficient at ``speed``.
+    speed : float, optional
+        Sliding speed V [m/s], > 0; needed with ``friction`` (and only with it).
+
+    Returns
+    -------
+    CriticalFriction
+        The critical friction, its frequency and onset status, and every unstable and
+        indeterminate friction window in the searched range.
+
     Examples
     --------
     Hoffmann's model has a closed-form threshold to compare with:

@@ -61,7 +61,18 @@ def _perms(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def unstable_threshold(lam: NDArray[np.complexfloating]) -> NDArray[np.float64]:
-    """Growth rate [1/s] above which each point counts as unstable (per grid point)."""
+    """Growth rate [1/s] above which each point counts as unstable (per grid point).
+
+    Parameters
+    ----------
+    lam : ndarray of complex, shape (..., n)
+        Eigenvalues [1/s] at each point, the modes along the last axis.
+
+    Returns
+    -------
+    ndarray, shape ``lam.shape[:-1]``
+        ``UNSTABLE_RTOL * max |lambda|`` [1/s] over the modes of each point.
+    """
     return UNSTABLE_RTOL * np.max(np.abs(lam), axis=-1)
 
 
@@ -323,6 +334,26 @@ def stability_verdict(
     decide: the answer lies within the rounding of the model's own numbers. ``friction`` and
     ``speed`` as for :func:`eigenvalues`.
 
+    Parameters
+    ----------
+    model : FrictionModel
+        The system, e.g. ``get_preset("lv2013")``.
+    mu : array_like
+        Friction coefficient; broadcast against ``tan_theta``.
+    tan_theta : array_like
+        Run-out slope ``tan(theta)`` [1]; broadcast against ``mu``.
+    damped : bool
+        Include the damping matrix C.
+    friction : Stribeck, optional
+        Speed-dependent friction, ``mu`` its kinetic coefficient (see :func:`eigenvalues`).
+    speed : float, optional
+        Sliding speed V [m/s], > 0; needed with ``friction`` (and only with it).
+
+    Returns
+    -------
+    ndarray of str, shape ``broadcast(mu, tan_theta).shape``
+        One of :data:`VERDICTS` per point.
+
     Examples
     --------
     >>> from squealkit.models import get_preset
@@ -538,6 +569,12 @@ def _dataset(model, mu, theta, sol, *, damped, tracked, lock_in_rtol, friction=N
 
 def stability_summary(ds: xr.Dataset) -> dict[str, object]:
     """Headline numbers of a stability map (what ``squealkit stability --json`` prints).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`stability_map`, in memory or streamed (dask-backed: only
+        reductions are computed, the map is never loaded whole).
 
     Returns
     -------

@@ -290,6 +290,20 @@ def mode_shapes(ds: xr.Dataset, *, left: bool = False) -> NDArray[np.complex128]
     """The complex mode shapes of a :func:`modes` result, shape (mode, dof).
 
     ``left=True`` gives the left eigenvectors psi.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`modes` or :func:`onset_modes` (``shape_real``, ``shape_imag``,
+        ``left_shape_real``, ``left_shape_imag`` over ``(mode, dof)``).
+    left : bool
+        Return the left eigenvectors psi instead of the right eigenvectors phi.
+
+    Returns
+    -------
+    ndarray of complex, shape (mode, dof)
+        ``*_real + 1j * *_imag``: row k is the shape of mode k, its largest-amplitude entry
+        1 + 0j.
     """
     pre = "left_shape" if left else "shape"
     return ds[f"{pre}_real"].values + 1j * ds[f"{pre}_imag"].values
@@ -305,6 +319,25 @@ def onset_modes(
     the one that grows just above mu_crit (1e-6 relative), i.e. the mode that crosses the
     imaginary axis (damped) or the pair that merges (undamped mode coupling: at the
     coalescence both have one shape).
+
+    Parameters
+    ----------
+    model : FrictionModel
+        The system, e.g. ``get_preset("lv2013")``.
+    theta : float
+        Run-out incline [rad], strictly inside (-90, 90) deg.
+    damped : bool
+        Include the damping matrix C.
+    mu_max : float
+        Upper end of the friction search range ``[0, mu_max]`` for the critical friction
+        (> 0).
+
+    Returns
+    -------
+    xarray.Dataset
+        The :func:`modes` result at ``mu = mu_critical`` with the boolean variable
+        ``loses_stability`` over ``mode`` (True for one mode) and the attributes
+        ``mu_critical``, ``mu_e_critical`` and ``onset_frequency_hz`` [Hz].
 
     Raises
     ------
@@ -342,6 +375,11 @@ def onset_modes(
 
 def modes_summary(ds: xr.Dataset) -> dict[str, object]:
     """A :func:`modes` result as plain Python (what ``squealkit modes --json`` prints).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`modes` or :func:`onset_modes`.
 
     Returns
     -------
