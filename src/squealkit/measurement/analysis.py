@@ -22,7 +22,8 @@ from scipy import fft as sp_fft
 from scipy import signal
 
 from .. import __version__
-from .._validation import InputError, validate_finite, validate_fs, validate_positive
+from .._validation import InputError, validate_fs, validate_positive
+from .criteria import SquealCriteria, band_weighted_signal, exponential_average, squeal_criteria
 from .events import SquealEvent, link_components, tonal_components
 from .filters import lowpass, lowpass_decimated
 from .readers import DEFAULT_BLOCK, RecordingSource, open_recording
@@ -42,9 +43,7 @@ class AnalysisSettings:
 
     rpm: float
     radius: float
-    band: tuple[float, float] = (1000.0, 16000.0)
-    threshold_dba: float = 70.0
-    min_duration: float = 0.01
+    criteria: SquealCriteria = field(default_factory=squeal_criteria)
     lowpass_freq: float = 1000.0
     macro_orders: int = 10
     nperseg: int = 512
@@ -53,16 +52,26 @@ class AnalysisSettings:
     n_angle_bins: int = 72
     chunk_s: float = 10.0
 
+    @property
+    def band(self) -> tuple[float, float]:
+        """Squeal band [Hz] of the criteria."""
+        return self.criteria.band
+
+    @property
+    def threshold_dba(self) -> float:
+        """Squeal threshold [dB(A)] of the criteria."""
+        return self.criteria.threshold_dba
+
+    @property
+    def min_duration(self) -> float:
+        """Shortest tonal event [s] of the criteria."""
+        return self.criteria.min_duration
+
     def validated(self, fs: float) -> AnalysisSettings:
         validate_positive("rpm", self.rpm)
         validate_positive("radius", self.radius)
-        validate_finite("threshold_dba", self.threshold_dba)
-        validate_positive("min_duration", self.min_duration, allow_zero=True)
         validate_positive("chunk_s", self.chunk_s)
-        lo, hi = (validate_positive("band lower", self.band[0]), validate_positive("band upper", self.band[1]))
-        if not lo < hi:
-            raise InputError(f"Parameter band={self.band!r} must satisfy lower < upper.")
-        if hi >= fs / 2:
+        if self.band[1] >= fs / 2:
             raise InputError(f"Parameter band={self.band!r}: upper edge must lie below fs/2 = {fs / 2:g} Hz.")
         if not (isinstance(self.nperseg, int) and self.nperseg >= 16):
             raise InputError(f"Parameter nperseg={self.nperseg!r} must be a whole number >= 16.")
@@ -93,6 +102,10 @@ class MeasurementResult:
         rising run-out (``tan(theta) > 0``); 0.5 means no preference. None without squeal.
     growth_slope_correlation : float or None
         Pearson correlation of the squeal envelope's growth rate with the SRO slope.
+    peak_dba : float
+        The application's peak level (SAE J2521): the highest time-weighted (Fast unless the
+        criteria say Slow), A-weighted level in the criteria band [dB(A)], whether or not it
+        reached the threshold. Independent of the analysis frames.
     frames, revolutions, polar, spectrum : xarray.Dataset
         Per-frame level, ridge and slope; per-revolution run-out peak-to-peak; squeal level
         and run-out against disc angle; mean spectra.
@@ -103,7 +116,7 @@ class MeasurementResult:
     events: tuple[SquealEvent, ...]
     rising_fraction: float | None
     growth_slope_correlation: float | None
-    peak_dba: float | None
+    peak_dba: float
     duration_s: float
     fs: float
     settings: AnalysisSettings
@@ -141,6 +154,7 @@ class MeasurementResult:
                 "micro_p2p_m": float(rev["micro_p2p"].median()) if rev.sizes["revolution"] else None,
                 "max_tan_theta": float(self.attrs.get("max_tan_theta", float("nan"))),
             },
+            "criteria": self.settings.criteria.to_dict(),
             "settings": {
                 "rpm": self.settings.rpm, "radius_m": self.settings.radius, "band_hz": list(self.settings.band),
                 "threshold_dba": self.settings.threshold_dba, "min_duration_s": self.settings.min_duration,
@@ -159,7 +173,8 @@ class MeasurementResult:
         )
         ds.attrs = {k: int(v) if isinstance(v, bool) else v for k, v in self.to_dict().items()
                     if isinstance(v, int | float | str)}
-        ds.attrs.update(squealkit_version=__version__, synthetic=int(bool(self.attrs.get("synthetic", False))))
+        ds.attrs.update(squealkit_version=__version__, synthetic=int(bool(self.attrs.get("synthetic", False))),
+                        criteria=self.settings.criteria.describe())
         return ds
 
 
@@ -168,6 +183,13 @@ def _refine_rows(power: NDArray[np.float64], k: NDArray[np.intp]) -> NDArray[np.
     kk = np.clip(k, 1, power.shape[1] - 2)
     mag3 = np.sqrt(np.take_along_axis(power, kk[:, None] + np.array([-1, 0, 1]), axis=1))
     return np.atleast_1d(refine_peak(mag3, np.ones(kk.size, np.intp))) - 1 + kk
+
+
+def _time_weight_rows(p: NDArray, a: float, state: NDArray[np.float64]) -> tuple[NDArray, NDArray[np.float64]]:
+    """Exponential average over rows (frames): ``y_m = a y_(m-1) + (1 - a) p_m``; returns y and its last row."""
+    y, _ = signal.lfilter([1.0 - a], [1.0, -a], p, axis=0, zi=(a * state)[None, :])
+    y = y.astype(p.dtype, copy=False)
+    return y, y[-1].astype(np.float64)
 
 
 class _DatasetSource:
@@ -243,9 +265,11 @@ def analyze_recording(
     displacement: str | int,
     rpm: float,
     radius: float,
-    band: tuple[float, float] = (1000.0, 16000.0),
+    setup: str | None = None,
+    band: tuple[float, float] | None = None,
     threshold_dba: float = 70.0,
     min_duration: float = 0.01,
+    time_weighting: str = "fast",
     fs: float | None = None,
     progress: Callable[[int, int], None] | None = None,
     **options: Any,
@@ -263,12 +287,17 @@ def analyze_recording(
         Disc speed [rpm] (paper: 900).
     radius : float
         Probe (and pin) radius on the disc [m].
-    band : (float, float)
-        Criteria band [Hz] for the A-weighted level (default 1-16 kHz).
+    setup : {"component", "corner"}, optional
+        SAE J2521 setup whose squeal band applies (default ``"component"``, 2-16 kHz: brakes
+        not on a full corner, such as a pin-on-disc rig; ``"corner"``: 1.25-16 kHz).
+    band : (float, float), optional
+        A user band [Hz] instead of the setup's.
     threshold_dba : float
         Squeal threshold [dB(A)] (SAE J2521: 70).
     min_duration : float
         Shortest event [s] (no standard fixes it).
+    time_weighting : {"fast", "slow"}
+        IEC 61672-1 time weighting of the level (default Fast, 125 ms).
     fs : float, optional
         Sample rate [Hz] where the recording does not carry one.
     progress : callable, optional
@@ -299,9 +328,10 @@ def analyze_recording(
     else:
         src = open_recording(recording, fs=fs)
         attrs = {"source": str(src.path), "synthetic": src.synthetic}
+    crit = squeal_criteria(setup, band=band, threshold_dba=threshold_dba, time_weighting=time_weighting,
+                           min_duration=min_duration)
     try:
-        s = AnalysisSettings(rpm=rpm, radius=radius, band=tuple(band), threshold_dba=threshold_dba,
-                             min_duration=min_duration, **options)
+        s = AnalysisSettings(rpm=rpm, radius=radius, criteria=crit, **options)
     except TypeError as e:
         raise InputError(f"Unknown analysis option: {e}") from e
     fs_ = float(src.fs)
@@ -325,6 +355,8 @@ def analyze_recording(
     w_a32 = w_a.astype(np.float32)
     pscale = 2.0 / (s.nperseg * float(np.sum(win**2)))
     thr_power = P_REF**2 * 10 ** (s.threshold_dba / 10)
+    half_width = max(2, int(0.5 * s.freq_tol * n / fs_))  # bins of a tonal component either side
+    # the Fast level is compared and stored as mean square until the end
     core = max(hop, round(s.chunk_s * fs_ / hop) * hop)
     margin = max(n, int(0.25 * fs_), int(4 * fs_ / ((s.macro_orders + 0.5) * f_rev)))
     n_frames = (total - n) // hop + 1
@@ -332,13 +364,18 @@ def analyze_recording(
     # run-out is analysed at fs / dec, dec a divisor of hop with fs / dec >= 4 lowpass_freq
     dec = max(d for d in range(1, hop + 1) if hop % d == 0 and fs_ / d >= 4 * s.lowpass_freq)
     fs_d = fs_ / dec
-    sos_hp = signal.butter(2, s.band[0], "highpass", fs=fs_, output="sos")
     f_macro = (s.macro_orders + 0.5) * f_rev
     if f_macro >= s.lowpass_freq:
         raise InputError(f"macro_orders={s.macro_orders} at {s.rpm:g} rpm puts the macro corner ({f_macro:g} Hz) "
                          f"above lowpass_freq={s.lowpass_freq:g} Hz.")
 
-    level = np.empty(n_frames)
+    level = np.full(n_frames, -np.inf)  # Fast (time-weighted) level: max over each frame's interval
+    leq = np.empty(n_frames)  # the frame's own A-weighted band level (Hann window)
+    laf_state = 0.0  # time-weighted mean square carried from core to core
+    laf_max = 0.0
+    spec_state = np.zeros(hi - lo)  # time-weighted A-weighted power spectrum carried likewise
+    a_frames = math.exp(-hop / fs_ / s.criteria.time_constant_s)
+    a_tw = s.criteria.time_constant_s
     ridge_f = np.empty(n_frames)
     e_tot = np.empty(n_frames)
     e_rise = np.empty(n_frames)
@@ -367,6 +404,24 @@ def analyze_recording(
         p, q = data[mic_n], data[disp_n]
         f0 = -(-c0 // hop)
         f1 = min(n_frames, (c1 - 1) // hop + 1)
+        # the run-out grid: every dec-th sample, from g0 (a multiple of dec: one grid for all cores)
+        o = (-w0) % dec
+        g0 = w0 + o
+        ci = slice(-(-(c0 - g0) // dec), -(-(c1 - g0) // dec))
+        # A-weighted band mean square on the grid, time weighted (IEC 61672-1) from the state of the
+        # previous core on, through this core and on into the margin (for the frames ending there)
+        pw = band_weighted_signal(p[o:], fs_, s.band)
+        m_full = pw.size // dec
+        ms = np.zeros(-(-(p.size - o) // dec))
+        ms[:m_full] = np.square(pw[:m_full * dec], dtype=np.float32).reshape(-1, dec).mean(axis=1, dtype=np.float64)
+        laf = exponential_average(ms[ci.start:], dec / fs_, a_tw, initial=laf_state)
+        if ci.stop > ci.start:
+            laf_state = float(laf[ci.stop - ci.start - 1])
+            laf_max = max(laf_max, float(laf[:ci.stop - ci.start].max()))
+        if f1 > f0:
+            a = -(-(np.arange(f0, f1) * hop + half - g0) // dec)
+            b = a + hop // dec
+            level[f0:f1] = np.maximum.reduceat(laf[:b[-1] - ci.start], a - ci.start)
         # frames [f0, f1) start inside the core; their samples lie in the window
         if f1 > f0:
             # frames [fp, f1): one before the core's first (its samples lie in the margin), so
@@ -382,22 +437,31 @@ def analyze_recording(
             pb *= np.float32(pscale)  # [Pa^2] per bin
             pa = pb * w_a32
             lev = pa.sum(axis=1, dtype=np.float64)
-            level[f0:f1] = 10 * np.log10(np.maximum(lev, 1e-300) / P_REF**2)
+            leq[f0:f1] = 10 * np.log10(np.maximum(lev, 1e-300) / P_REF**2)
             ridge_f[f0:f1] = (_refine_rows(pb, np.argmax(pa, axis=1)) + lo) * fs_ / n
-            loud = np.flatnonzero(lev >= thr_power)  # a component cannot exceed its frame's level
+            # the A-weighted spectrum time weighted like the level (exponential over frames, same time
+            # constant): a component's level is the frame's Fast level times its share of this spectrum,
+            # so each tone's level is what the meter shows, split by what the meter has heard
+            pa_tw, spec_state = _time_weight_rows(pa, a_frames, spec_state)
+            loud = np.flatnonzero(level[f0:f1] >= thr_power)
+            share_scale = level[f0:f1][loud] / np.maximum(pa_tw[loud].sum(axis=1, dtype=np.float64), 1e-300)
             if loud.size:
                 # phase advance of every band bin from the previous frame (zero for frame 0)
                 prev = loud + (f0 - fp - 1)
                 cross = spec[loud] * np.conj(spec_p[np.maximum(prev, 0)])
                 cross[prev < 0] = 0
                 mic_cross_sum[lo:hi] += cross.sum(axis=0, dtype=np.complex128)
-                fr, ff, fl = tonal_components(pb[loud], pa[loud], lo, fs_, n, s.threshold_dba)
+                # components (and their coarse frequency) from the time-weighted spectrum
+                fr, ff, fl = tonal_components(pa_tw[loud], pa_tw[loud], lo, fs_, n, s.threshold_dba,
+                                              scale=share_scale, half_width=half_width)
                 # each component's frequency from its phase advance over the main lobe (unbiased
-                # for growing and decaying squeal, where the two-bin ratio is not)
+                # for growing and decaying squeal, where the two-bin ratio is not), where the tone is
+                # in the frame itself (a quarter of its time-weighted power), not only remembered
                 kc = np.clip(np.rint(ff * (n / fs_)).astype(np.intp) - lo, _LOBE, hi - lo - 1 - _LOBE)
                 lobe = kc[:, None] + np.arange(-_LOBE, _LOBE + 1)
                 c = cross[fr[:, None], lobe].sum(axis=1, dtype=np.complex128)
-                ff = np.where(prev[fr] >= 0, phase_advance_freq(c, ff, fs_, hop), ff)
+                now = pa[loud[fr][:, None], lobe].sum(axis=1) >= 0.25 * pa_tw[loud[fr][:, None], lobe].sum(axis=1)
+                ff = np.where((prev[fr] >= 0) & now, phase_advance_freq(c, ff, fs_, hop), ff)
                 # weights of the event's mean frequency: |c| (the cross power of the frame pair), so
                 # a pair whose earlier frame is still in the noise (squeal onset) counts little
                 wc = np.where(prev[fr] >= 0, np.abs(c) * pscale, pb[loud[fr][:, None], lobe].sum(axis=1))
@@ -413,30 +477,21 @@ def analyze_recording(
         # low-pass at lowpass_freq (paper Fig. 12), run at fs / dec after linear-phase anti-alias
         # FIRs that pass up to 1.5 lowpass_freq and remove, 80 dB down, whatever would fold below
         # it; so the corner keeps its meaning (lowpass_decimated; tests compare the full rate)
-        o = (-w0) % dec
         sro = lowpass_decimated(q[o:], s.lowpass_freq, fs_, dec)
-        g0 = w0 + o  # global index of sro[0]
         macro = lowpass(sro, f_macro, fs_d, order=2)
         micro = sro - macro
         tan_t = np.gradient(sro) * fs_d / v
-        # sound energy above the band's lower edge per sample (causal 2nd-order high-pass: its delay of
-        # a fraction of a millisecond is negligible against a revolution), summed on the run-out grid
-        hp = signal.sosfilt(sos_hp, p[o:o + (p.size - o) // dec * dec])
-        hp *= hp
-        e_d = np.zeros(sro.size)
-        e_d[:hp.size // dec] = hp.reshape(-1, dec) @ np.ones(dec)  # sums of dec samples (matmul: fast)
+        # A-weighted sound energy in the squeal band on the run-out grid (zero-phase: nothing shifted)
+        e_d = ms
         cs_e, cs_r, cs_t = np.zeros((3, sro.size + 1))  # cumulative sums from 0
         np.cumsum(e_d, out=cs_e[1:])
         np.cumsum(np.where(tan_t > 0, e_d, 0.0), out=cs_r[1:])
         np.cumsum(tan_t, out=cs_t[1:])
         if f1 > f0:
-            a = -(-(np.arange(f0, f1) * hop + half - g0) // dec)
-            b = a + hop // dec
             e_int = cs_e[b] - cs_e[a]
             share = np.divide(cs_r[b] - cs_r[a], e_int, out=np.full(e_int.shape, 0.5), where=e_int > 0)
             e_rise[f0:f1] = e_tot[f0:f1] * share
             slope_f[f0:f1] = (cs_t[b] - cs_t[a]) / (b - a)
-        ci = slice(-(-(c0 - g0) // dec), -(-(c1 - g0) // dec))
         idx = g0 + np.arange(ci.start, ci.stop) * dec
         turns = idx * (f_rev / fs_)
         rev = turns.astype(np.int64)  # floor (turns >= 0)
@@ -468,7 +523,6 @@ def analyze_recording(
     harmonics: list[dict[str, float]] = []
     rising: float | None = None
     corr: float | None = None
-    peak: float | None = None
     if events:
         cover = np.zeros(n_frames + 1, np.int64)  # +1 at each event's first frame, -1 after its last
         np.add.at(cover, np.array([fr[0] for fr in ev_frames]), 1)
@@ -476,7 +530,6 @@ def analyze_recording(
         in_ev = np.cumsum(cover[:-1]) > 0
         tot = float(e_tot[in_ev].sum())
         rising = float(e_rise[in_ev].sum() / tot) if tot > 0 else None
-        peak = max(ev.peak_dba for ev in events)
         mag = np.sqrt(mic_spec_sum)
         k0 = lo + int(np.argmax(mic_spec_sum[lo:hi] * w_a))
         # the dominant line's phase advance over its own components only: the main lobe of another
@@ -499,15 +552,19 @@ def analyze_recording(
         with np.errstate(divide="ignore"):
             ln_e = np.log(np.maximum(e_tot, 1e-300))
         growth = np.gradient(ln_e) * 0.5 * fs_ / hop
-        sel = level >= s.threshold_dba - 20
+        sel = leq >= s.threshold_dba - 20
         if sel.sum() > 3 and np.std(growth[sel]) > 0 and np.std(slope_f[sel]) > 0:
             corr = float(np.corrcoef(growth[sel], slope_f[sel])[0, 1])
 
+    level = 10 * np.log10(np.maximum(level, 1e-300) / P_REF**2)
+    peak = float(10 * np.log10(max(laf_max, 1e-300) / P_REF**2))
     t_frames = frame_start + n / 2 / fs_
     frames = xr.Dataset(
         {
-            "level_dba": ("time", level, {"units": "dB(A)",
-                                          "long_name": f"A-weighted level {s.band[0]:g}-{s.band[1]:g} Hz"}),
+            "level_dba": ("time", level, {"units": "dB(A)", "long_name":
+                                          f"L_A{s.criteria.time_weighting[0].upper()} {s.band[0]:g}-{s.band[1]:g} Hz "
+                                          "(max over the frame's interval)"}),
+            "leq_dba": ("time", leq, {"units": "dB(A)", "long_name": "A-weighted band level of the Hann frame"}),
             "ridge_freq": ("time", ridge_f, {"units": "Hz", "long_name": "strongest line in the band"}),
             "band_power": ("time", e_tot, {"units": "Pa^2", "long_name": "mean square in the band (Hann frame)"}),
             "rising_power": ("time", e_rise, {"units": "Pa^2", "long_name": "band_power x share on rising run-out"}),

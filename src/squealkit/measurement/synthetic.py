@@ -22,8 +22,8 @@ import xarray as xr
 from numpy.typing import NDArray
 
 from .._validation import InputError, validate_fs, validate_positive
+from .criteria import P_REF, a_weighting_db, exponential_average
 from .readers import DEFAULT_BLOCK, RecordingSource, recording_dataset
-from .spectral import P_REF, a_weighting_db
 
 __all__ = ["SyntheticSource", "synthetic_recording"]
 
@@ -103,13 +103,23 @@ class SyntheticSource:
             data = self.block(s, min(self.n_samples, s + block))
             yield s, {n: data[n] for n in names}
 
-    def truth(self, threshold_dba: float = 70.0, merge_gap: float = 0.01) -> dict[str, object]:
-        """Known answers: frequency, event intervals above ``threshold_dba``, rising fraction."""
-        t = np.arange(0, self.n_samples, 8) / self.fs
+    def truth(self, threshold_dba: float = 70.0, merge_gap: float = 0.01, time_constant: float = 0.125
+              ) -> dict[str, object]:
+        """Known answers: frequency, event intervals above ``threshold_dba``, rising fraction, peak level.
+
+        Levels are those of the noise-free squeal (fundamental and harmonics), A-weighted and
+        time weighted with ``time_constant`` [s] (IEC 61672-1 Fast: 0.125), as a sound level
+        meter shows them.
+        """
+        step = 8
+        t = np.arange(0, self.n_samples, step) / self.fs
         turns = t * self.rpm / 60.0
         env = self.envelope(turns)
         _, tan_t = self.surface(turns)
-        level = 20 * np.log10(np.maximum(env, 1e-30) / math.sqrt(2) / P_REF) + float(a_weighting_db(self.freq))
+        gain = 10 ** (a_weighting_db(self.freq) / 10) + sum(
+            a * a * 10 ** (a_weighting_db(h * self.freq) / 10) for h, a in enumerate(self.harmonics, start=2))
+        ms = exponential_average(env**2 / 2 * gain, step / self.fs, time_constant)
+        level = 10 * np.log10(np.maximum(ms, 1e-300) / P_REF**2)
         on = level >= threshold_dba
         edges = np.flatnonzero(np.diff(np.concatenate([[0], on.astype(np.int8), [0]])))
         starts, ends = t[edges[::2]], t[np.minimum(edges[1::2], t.size - 1)]
