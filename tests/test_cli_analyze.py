@@ -149,3 +149,17 @@ def test_wav_with_scale_and_unit_and_out(tmp_path):
     assert res.exit_code == 0, res.output
     assert abs(json.loads(res.output)["squeal_frequency_hz"] - 2388.0) < 3.0
     assert load_dataset(out)["event_start"].size == len(json.loads(res.output)["events"])
+
+
+def test_decelerating_stop_with_tacho_and_probe_settings(tmp_path):
+    path = tmp_path / "stop.nc"
+    res = invoke(["synth", str(path), "--duration", "2", "--rpm-end", "300", "--probe-offset-deg", "10",
+                  "--polarity", "-1"])
+    assert res.exit_code == 0, res.output
+    args = ["analyze", str(path), "--mic", "mic", "--displacement", "displacement", "--radius", "0.05",
+            "--tacho", "tacho", "--probe-offset-deg", "10", "--polarity", "-1", "--json"]
+    out = json.loads(invoke(args).output)
+    assert out["runout"]["n_revolutions"] == 20 and out["growth_slope_correlation"] > 0.5
+    assert out["rising_fraction"] > 0.85
+    res = invoke(["analyze", str(path), "--mic", "mic", "--displacement", "displacement", "--radius", "0.05"])
+    assert res.exit_code == 2 and "--rpm" in res.output

@@ -34,8 +34,18 @@ def _pairs(option: str, items: tuple[str, ...]) -> dict[str, str]:
 @click.argument("files", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("--mic", required=True, help="Microphone channel [Pa]: name or 0-based index.")
 @click.option("--displacement", required=True, help="Eddy-current probe channel [m]: name or index.")
-@click.option("--rpm", type=float, required=True, help="Disc speed [rpm].")
+@click.option("--rpm", type=float, default=None, help="Disc speed [rpm] (constant; or give --tacho).")
 @click.option("--radius", type=float, required=True, help="Probe radius on the disc [m].")
+@click.option("--tacho", default=None, help="Tacho channel (name or index): disc angle and speed from it.")
+@click.option("--tacho-kind", type=click.Choice(["pulses", "angle"]), default="pulses", show_default=True,
+              help="Tacho channel: a pulse train or an angle (degrees).")
+@click.option("--pulses-per-rev", type=int, default=1, show_default=True, help="Tacho pulses per revolution.")
+@click.option("--probe-offset-deg", type=float, default=0.0, show_default=True,
+              help="The probe sits this far upstream of the pin [deg] (sees the surface earlier).")
+@click.option("--acoustic-delay", type=float, default=0.0, show_default=True,
+              help="Delay of the sound from the pin to the microphone [s].")
+@click.option("--polarity", type=click.Choice(["1", "-1"]), default="1", show_default=True,
+              help="-1 when the probe reads the run-out reversed.")
 @criteria_options
 @click.option("--fs", type=float, default=None, help="Sample rate [Hz] for a CSV without time column.")
 @click.option("--scale", "scales", multiple=True, metavar="CHANNEL=FACTOR",
@@ -49,7 +59,9 @@ def _pairs(option: str, items: tuple[str, ...]) -> dict[str, str]:
 @click.option("--summary", "summary_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write the campaign summary (one row per recording) as CSV.")
 @scheduler_option
-def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float, radius: float, setup: str | None,
+def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float | None, radius: float,
+            tacho: str | None, tacho_kind: str, pulses_per_rev: int, probe_offset_deg: float, acoustic_delay: float,
+            polarity: str, setup: str | None,
             band: str | None, threshold_dba: float, time_weighting: str, min_duration: float, fs: float | None,
             scales: tuple[str, ...], units: tuple[str, ...], as_json: bool, plot_dir: Path | None,
             out_path: Path | None, summary_path: Path | None, scheduler: str | None) -> None:
@@ -83,7 +95,13 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float, ra
 
     crit = criteria_from_options(setup, band, threshold_dba, time_weighting, min_duration)
     crit_kw = dict(setup=crit.setup if crit.setup != "user" else None, band=crit.band,
-                   threshold_dba=crit.threshold_dba, time_weighting=crit.time_weighting, min_duration=crit.min_duration)
+                   threshold_dba=crit.threshold_dba, time_weighting=crit.time_weighting, min_duration=crit.min_duration,
+                   probe_offset_deg=probe_offset_deg, acoustic_delay=acoustic_delay, polarity=int(polarity))
+    if tacho is not None:
+        crit_kw.update(tacho=int(tacho) if tacho.isdigit() else tacho, tacho_kind=tacho_kind,
+                       pulses_per_rev=pulses_per_rev)
+    elif rpm is None:
+        raise InputError("Give the disc speed --rpm, or a --tacho channel.")
     check_output_suffix(out_path, (".nc",), "--out")
     check_output_suffix(summary_path, (".csv",), "--summary")
     if out_path is not None and len(files) > 1:

@@ -29,6 +29,7 @@ from .filters import lowpass, lowpass_decimated
 from .readers import DEFAULT_BLOCK, RecordingSource, open_recording
 from .runout import revolution_frequency, surface_speed
 from .spectral import P_REF, a_weighting_db, phase_advance_freq, refine_peak
+from .tacho import ConstantSpeed, read_tacho
 
 __all__ = ["AnalysisSettings", "MeasurementResult", "analyze_recording"]
 
@@ -51,6 +52,13 @@ class AnalysisSettings:
     freq_tol: float = 100.0
     n_angle_bins: int = 72
     chunk_s: float = 10.0
+    probe_offset_deg: float = 0.0
+    acoustic_delay: float = 0.0
+    polarity: int = 1
+    tacho_kind: str = "pulses"
+    pulses_per_rev: int = 1
+    tacho_level: float | None = None
+    angle_unit: str = "deg"
 
     @property
     def band(self) -> tuple[float, float]:
@@ -71,6 +79,11 @@ class AnalysisSettings:
         validate_positive("rpm", self.rpm)
         validate_positive("radius", self.radius)
         validate_positive("chunk_s", self.chunk_s)
+        validate_positive("acoustic_delay", self.acoustic_delay, allow_zero=True)
+        if self.polarity not in (1, -1):
+            raise InputError(f"Parameter polarity={self.polarity!r} must be 1 or -1 (probe reading reversed).")
+        if not math.isfinite(self.probe_offset_deg) or abs(self.probe_offset_deg) >= 360:
+            raise InputError(f"Parameter probe_offset_deg={self.probe_offset_deg!r} must lie in (-360, 360).")
         if self.band[1] >= fs / 2:
             raise InputError(f"Parameter band={self.band!r}: upper edge must lie below fs/2 = {fs / 2:g} Hz.")
         if not (isinstance(self.nperseg, int) and self.nperseg >= 16):
@@ -145,8 +158,8 @@ class MeasurementResult:
             "peak_dba": self.peak_dba,
             "n_events": len(self.events),
             "events": [e.to_dict() for e in self.events],
-            "rising_fraction": self.rising_fraction,
             "growth_slope_correlation": self.growth_slope_correlation,
+            "rising_fraction": self.rising_fraction,
             "runout": {
                 "n_revolutions": int(rev.sizes["revolution"]),
                 "sro_p2p_m": float(rev["sro_p2p"].median()) if rev.sizes["revolution"] else None,
@@ -263,8 +276,9 @@ def analyze_recording(
     *,
     mic: str | int,
     displacement: str | int,
-    rpm: float,
+    rpm: float | None = None,
     radius: float,
+    tacho: str | int | None = None,
     setup: str | None = None,
     band: tuple[float, float] | None = None,
     threshold_dba: float = 70.0,
@@ -283,10 +297,15 @@ def analyze_recording(
     mic, displacement : str or int
         Channel name or index of the calibrated microphone [Pa] and the eddy-current
         probe [m].
-    rpm : float
-        Disc speed [rpm] (paper: 900).
+    rpm : float, optional
+        Disc speed [rpm] (paper: 900) when there is no tacho (constant speed).
     radius : float
         Probe (and pin) radius on the disc [m].
+    tacho : str or int, optional
+        Tacho channel: disc angle and speed from it (:mod:`squealkit.measurement.tacho`;
+        options ``tacho_kind`` "pulses" or "angle", ``pulses_per_rev``, ``tacho_level``,
+        ``angle_unit``), so a decelerating stop is analysed at its actual speed; revolutions
+        and angles count from the first pulse.
     setup : {"component", "corner"}, optional
         SAE J2521 setup whose squeal band applies (default ``"component"``, 2-16 kHz: brakes
         not on a full corner, such as a pin-on-disc rig; ``"corner"``: 1.25-16 kHz).
@@ -304,7 +323,10 @@ def analyze_recording(
         Called as ``progress(samples_done, samples_total)``.
     **options
         Further :class:`AnalysisSettings` fields (``lowpass_freq``, ``macro_orders``,
-        ``nperseg``, ``hop``, ``freq_tol``, ``n_angle_bins``, ``chunk_s``).
+        ``nperseg``, ``hop``, ``freq_tol``, ``n_angle_bins``, ``chunk_s``), and the rig's
+        geometry: ``probe_offset_deg`` (the probe sits this far upstream of the pin, so it sees
+        the surface that much rotation before the pin), ``acoustic_delay`` [s] (pin to
+        microphone) and ``polarity`` (-1: the probe reads the run-out reversed).
 
     Returns
     -------
@@ -330,11 +352,23 @@ def analyze_recording(
         attrs = {"source": str(src.path), "synthetic": src.synthetic}
     crit = squeal_criteria(setup, band=band, threshold_dba=threshold_dba, time_weighting=time_weighting,
                            min_duration=min_duration)
+    fs_ = float(src.fs)
+    rotation: Any
+    if tacho is not None:
+        tk = {k: options[k] for k in ("tacho_kind", "pulses_per_rev", "tacho_level", "angle_unit") if k in options}
+        rotation = read_tacho(src, tacho, kind=tk.get("tacho_kind", "pulses"),
+                              pulses_per_rev=tk.get("pulses_per_rev", 1), level=tk.get("tacho_level"),
+                              angle_unit=tk.get("angle_unit", "deg"))
+        span = src.n_samples / fs_
+        rpm = 60.0 * float(rotation.turns(span) - rotation.turns(0.0)) / span  # mean speed
+    elif rpm is None:
+        raise InputError("Give the disc speed rpm, or a tacho channel.")
+    else:
+        rotation = ConstantSpeed(validate_positive("rpm", rpm))
     try:
         s = AnalysisSettings(rpm=rpm, radius=radius, criteria=crit, **options)
     except TypeError as e:
         raise InputError(f"Unknown analysis option: {e}") from e
-    fs_ = float(src.fs)
     s = s.validated(fs_)
     mic_n, disp_n = src.resolve(mic), src.resolve(displacement)
     if mic_n == disp_n:
@@ -358,7 +392,12 @@ def analyze_recording(
     half_width = max(2, int(0.5 * s.freq_tol * n / fs_))  # bins of a tonal component either side
     # the Fast level is compared and stored as mean square until the end
     core = max(hop, round(s.chunk_s * fs_ / hop) * hop)
-    margin = max(n, int(0.25 * fs_), int(4 * fs_ / ((s.macro_orders + 0.5) * f_rev)))
+    # the slowest speed decides how far the probe's view of the pin's surface lies back in time
+    t_span = np.linspace(0.0, total / fs_, 257)
+    f_min = max(float(np.min(rotation.rev_per_s(t_span))), 1e-3 * f_rev)
+    lag = s.acoustic_delay + abs(s.probe_offset_deg) / 360.0 / f_min
+    margin = max(n, int(0.25 * fs_), int(4 * fs_ / ((s.macro_orders + 0.5) * f_rev)), int(lag * fs_) + n)
+    off_turns = s.probe_offset_deg / 360.0
     n_frames = (total - n) // hop + 1
     half = (n - hop) // 2  # frame "interval" [start + half, start + half + hop) for energy sums
     # run-out is analysed at fs / dec, dec a divisor of hop with fs / dec >= 4 lowpass_freq
@@ -387,7 +426,8 @@ def analyze_recording(
     comp_cross: list[NDArray] = [np.empty(0, np.complex128)]
     mic_spec_sum = np.zeros(freq.size)  # summed over loud frames, band bins only
     mic_cross_sum = np.zeros(freq.size, np.complex128)  # X_m conj(X_m-1) summed likewise
-    n_rev = int((total - 1) * f_rev / fs_) + 1
+    rev0 = math.floor(float(rotation.turns(0.0)))  # revolutions count from the first mark (or t = 0)
+    n_rev = math.floor(float(rotation.turns((total - 1) / fs_))) - rev0 + 1
     rev_max = np.full((3, n_rev), -np.inf)  # sro, macro, micro per revolution
     rev_min = np.full((3, n_rev), np.inf)
     nb = s.n_angle_bins
@@ -478,9 +518,20 @@ def analyze_recording(
         # FIRs that pass up to 1.5 lowpass_freq and remove, 80 dB down, whatever would fold below
         # it; so the corner keeps its meaning (lowpass_decimated; tests compare the full rate)
         sro = lowpass_decimated(q[o:], s.lowpass_freq, fs_, dec)
+        if s.polarity < 0:
+            sro = -sro
         macro = lowpass(sro, f_macro, fs_d, order=2)
         micro = sro - macro
-        tan_t = np.gradient(sro) * fs_d / v
+        # incline under the probe, dq / (r dphi) (paper eq. 11 with v = r dphi/dt at the actual speed)
+        t_d = (g0 + np.arange(sro.size) * dec) / fs_
+        tan_probe = np.gradient(sro) * fs_d / (2 * math.pi * s.radius * rotation.rev_per_s(t_d))
+        # incline under the pin when the sound heard at t_d left it: emitted at t_d - acoustic_delay,
+        # from the surface the probe saw probe_offset earlier in rotation
+        if s.acoustic_delay or off_turns:
+            t_src = rotation.time_at(rotation.turns(t_d - s.acoustic_delay) - off_turns)
+            tan_t = np.interp(t_src, t_d, tan_probe)
+        else:
+            tan_t = tan_probe
         # A-weighted sound energy in the squeal band on the run-out grid (zero-phase: nothing shifted)
         e_d = ms
         cs_e, cs_r, cs_t = np.zeros((3, sro.size + 1))  # cumulative sums from 0
@@ -492,21 +543,22 @@ def analyze_recording(
             share = np.divide(cs_r[b] - cs_r[a], e_int, out=np.full(e_int.shape, 0.5), where=e_int > 0)
             e_rise[f0:f1] = e_tot[f0:f1] * share
             slope_f[f0:f1] = (cs_t[b] - cs_t[a]) / (b - a)
-        idx = g0 + np.arange(ci.start, ci.stop) * dec
-        turns = idx * (f_rev / fs_)
-        rev = turns.astype(np.int64)  # floor (turns >= 0)
+        # the probe sees disc position turns + probe offset (angle 0: the first mark, under the pin)
+        turns = rotation.turns(t_d[ci]) + off_turns
+        rev = np.floor(turns).astype(np.int64) - rev0
+        rev = np.clip(rev, 0, n_rev - 1)
         starts = np.concatenate([[0], np.flatnonzero(np.diff(rev)) + 1])
         r = rev[starts]  # distinct revolutions of this core; the next core may continue the last one
         for j, sig in enumerate((sro[ci], macro[ci], micro[ci])):
             rev_max[j, r] = np.maximum(rev_max[j, r], np.maximum.reduceat(sig, starts))
             rev_min[j, r] = np.minimum(rev_min[j, r], np.minimum.reduceat(sig, starts))
-        abin = ((turns - rev) * nb).astype(np.int64) % nb
+        abin = ((turns % 1.0) * nb).astype(np.int64) % nb
         ang_q += np.bincount(abin, sro[ci], nb)
         ang_macro += np.bincount(abin, macro[ci], nb)
         ang_cnt += np.bincount(abin, minlength=nb)
-        max_tan = max(max_tan, float(np.max(np.abs(tan_t[ci]))))
-        if f1 > f0:
-            centre = (np.arange(f0, f1) * hop + n / 2) * (f_rev / fs_)
+        max_tan = max(max_tan, float(np.max(np.abs(tan_probe[ci]))))
+        if f1 > f0:  # the disc position under the pin when the frame's sound left it
+            centre = rotation.turns((np.arange(f0, f1) * hop + n / 2) / fs_ - s.acoustic_delay)
             fb = ((centre % 1.0) * nb).astype(np.int64) % nb
             ang_e += np.bincount(fb, e_tot[f0:f1], nb)
             ang_ecnt += np.bincount(fb, minlength=nb)
