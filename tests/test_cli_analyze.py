@@ -163,3 +163,14 @@ def test_decelerating_stop_with_tacho_and_probe_settings(tmp_path):
     assert out["rising_fraction"] > 0.85
     res = invoke(["analyze", str(path), "--mic", "mic", "--displacement", "displacement", "--radius", "0.05"])
     assert res.exit_code == 2 and "--rpm" in res.output
+
+
+@pytest.mark.parametrize("suffix", [".wav", ".tdms", ".mf4", ".uff"])
+def test_synth_writes_every_daq_format_and_analyze_reads_it(tmp_path, suffix):
+    path = tmp_path / f"r{suffix}"
+    assert invoke(["synth", str(path), "--duration", "1"]).exit_code == 0
+    mic, disp = ("0", "1") if suffix == ".wav" else ("mic", "displacement")
+    res = invoke(["analyze", str(path), "--mic", mic, "--displacement", disp, "--rpm", "900", "--radius", "0.05",
+                  "--json"])
+    assert res.exit_code == 0, res.output
+    assert abs(json.loads(res.output)["squeal_frequency_hz"] - 2388.0) < 0.1

@@ -34,30 +34,25 @@ def synth(out: Path, seed: int, duration: float, fs: float, rpm: float, rpm_end:
           level_dba: float, squeal_on: str, as_json: bool) -> None:
     """Write a SYNTHETIC pin-on-disc recording (mic [Pa], displacement [m]) with known truth.
 
-    OUT ends in .nc (netCDF, truth in attributes) or .csv (time column + channels).
+    OUT ends in .nc (netCDF, truth in attributes), .csv, .wav (32-bit float), .tdms, .mf4
+    (ASAM MDF4) or .uff (UFF 58): every format `analyze` reads. Channels: mic [Pa],
+    displacement [m], tacho [V] (5 V pulses, the first rising edge is the disc's angle 0).
 
     \b
     Example:
       squealkit synth rec.nc --seed 1 --duration 2
       squealkit analyze rec.nc --mic mic --displacement displacement --rpm 900 --radius 0.05
+      squealkit synth stop.mf4 --rpm 900 --rpm-end 300
+      squealkit analyze stop.mf4 --mic mic --displacement displacement --tacho tacho --radius 0.05
     """
-    import numpy as np
-
-    from ..io import save_dataset, write_text
     from ..measurement import synthetic_recording
+    from ..measurement.writers import FORMATS, write_recording
 
-    check_output_suffix(out, (".nc", ".csv"), "OUT")
+    check_output_suffix(out, FORMATS, "OUT")
     rec = synthetic_recording(duration=duration, fs=fs, rpm=rpm, radius=radius, freq=freq, level_dba=level_dba,
                               squeal_on=squeal_on, seed=seed, rpm_end=rpm_end, probe_offset_deg=probe_offset_deg,
                               polarity=int(polarity), acoustic_delay=acoustic_delay, tacho_ppr=tacho_ppr)
-    if out.suffix.lower() == ".nc":
-        save_dataset(rec, out)
-    else:
-        cols = np.column_stack([rec["time"].values, rec["mic"].values, rec["displacement"].values,
-                                rec["tacho"].values])
-        lines = ["time [s],mic [Pa],displacement [m],tacho [V]"]
-        lines += [f"{t:.8g},{p:.8g},{q:.8g},{v:.3g}" for t, p, q, v in cols]
-        write_text(out, "\n".join(lines) + "\n")
+    write_recording(rec, out)
     truth = {k.removeprefix("truth_"): v for k, v in rec.attrs.items() if k.startswith("truth_")}
     if as_json:
         emit_json({"out": str(out), "synthetic": True, "truth": truth})
