@@ -10,7 +10,7 @@ from ._options import check_output_suffix, emit_json
 
 
 @click.command()
-@click.argument("out", type=click.Path(dir_okay=False, path_type=Path))
+@click.argument("out", type=click.Path(path_type=Path))
 @click.option("--seed", type=int, default=1, show_default=True, help="Random seed (run-out phases, noise).")
 @click.option("--duration", type=float, default=2.0, show_default=True, help="Length [s].")
 @click.option("--fs", type=float, default=40000.0, show_default=True, help="Sample rate [Hz].")
@@ -28,10 +28,15 @@ from ._options import check_output_suffix, emit_json
 @click.option("--level-dba", type=float, default=90.0, show_default=True, help="Saturated squeal level [dB(A)].")
 @click.option("--squeal-on", type=click.Choice(["rising", "falling", "none"]), default="rising",
               show_default=True, help="Run-out stage on which the squeal grows.")
+@click.option("--campaign", "n_campaign", type=int, default=None, metavar="N",
+              help="Write a SYNTHETIC J2521-like campaign of N applications into the folder OUT instead "
+              "(matrix.csv, recordings/, truth.json).")
+@click.option("--format", "fmt", type=click.Choice([".nc", ".mf4", ".tdms", ".uff", ".wav", ".csv"]), default=".nc",
+              show_default=True, help="Recording format of a --campaign.")
 @click.option("--json", "as_json", is_flag=True, help="Print the truth as JSON.")
 def synth(out: Path, seed: int, duration: float, fs: float, rpm: float, rpm_end: float | None,
           probe_offset_deg: float, polarity: str, acoustic_delay: float, tacho_ppr: int, radius: float, freq: float,
-          level_dba: float, squeal_on: str, as_json: bool) -> None:
+          level_dba: float, squeal_on: str, n_campaign: int | None, fmt: str, as_json: bool) -> None:
     """Write a SYNTHETIC pin-on-disc recording (mic [Pa], displacement [m]) with known truth.
 
     OUT ends in .nc (netCDF, truth in attributes), .csv, .wav (32-bit float), .tdms, .mf4
@@ -47,6 +52,18 @@ def synth(out: Path, seed: int, duration: float, fs: float, rpm: float, rpm_end:
     """
     from ..measurement import synthetic_recording
     from ..measurement.writers import FORMATS, write_recording
+
+    if n_campaign is not None:
+        from ..campaign import synthetic_campaign
+
+        truth = synthetic_campaign(out, n_applications=n_campaign, duration=duration, fs=fs, suffix=fmt, seed=seed)
+        if as_json:
+            emit_json({k: v for k, v in truth.items() if k != "by_application"} | {"out": str(out)})
+        else:
+            click.echo(f"wrote {out / 'matrix.csv'} and {n_campaign} SYNTHETIC recordings ({fmt}); truth: "
+                       f"occurrence {truth['occurrence_percent']:.1f} %, by line "
+                       + ", ".join(f"{float(k):g} Hz {v:.1f} %" for k, v in truth["line_occurrence_percent"].items()))
+        return
 
     check_output_suffix(out, FORMATS, "OUT")
     rec = synthetic_recording(duration=duration, fs=fs, rpm=rpm, radius=radius, freq=freq, level_dba=level_dba,

@@ -115,6 +115,10 @@ class MeasurementResult:
         rising run-out (``tan(theta) > 0``); 0.5 means no preference. None without squeal.
     growth_slope_correlation : float or None
         Pearson correlation of the squeal envelope's growth rate with the SRO slope.
+    runout_phase_deg : float or None
+        Where on the disc the squeal sounds, relative to the run-out: the circular mean disc
+        angle of the squeal-band energy minus the angle of the macro run-out's maximum
+        [deg, -180 to 180]; negative: before the crest, on the rising run-out. None without squeal.
     peak_dba : float
         The application's peak level (SAE J2521): the highest time-weighted (Fast unless the
         criteria say Slow), A-weighted level in the criteria band [dB(A)], whether or not it
@@ -130,6 +134,7 @@ class MeasurementResult:
     rising_fraction: float | None
     growth_slope_correlation: float | None
     peak_dba: float
+    runout_phase_deg: float | None
     duration_s: float
     fs: float
     settings: AnalysisSettings
@@ -160,6 +165,7 @@ class MeasurementResult:
             "events": [e.to_dict() for e in self.events],
             "growth_slope_correlation": self.growth_slope_correlation,
             "rising_fraction": self.rising_fraction,
+            "runout_phase_deg": self.runout_phase_deg,
             "runout": {
                 "n_revolutions": int(rev.sizes["revolution"]),
                 "sro_p2p_m": float(rev["sro_p2p"].median()) if rev.sizes["revolution"] else None,
@@ -608,6 +614,15 @@ def analyze_recording(
         if sel.sum() > 3 and np.std(growth[sel]) > 0 and np.std(slope_f[sel]) > 0:
             corr = float(np.corrcoef(growth[sel], slope_f[sel])[0, 1])
 
+    phase: float | None = None
+    if events and ang_ecnt.any() and ang_cnt.any():
+        # squeal energy's circular mean angle against the macro run-out's crest (both in the disc's frame)
+        angle_c = (np.arange(nb) + 0.5) * 2 * math.pi / nb
+        e_mean = np.divide(ang_e, ang_ecnt, out=np.zeros(nb), where=ang_ecnt > 0)
+        z = np.sum(e_mean * np.exp(1j * angle_c))
+        q_mean = np.divide(ang_macro, ang_cnt, out=np.full(nb, -np.inf), where=ang_cnt > 0)
+        crest = angle_c[int(np.argmax(q_mean))]
+        phase = float(np.degrees(np.angle(z * np.exp(-1j * crest))))
     level = 10 * np.log10(np.maximum(level, 1e-300) / P_REF**2)
     peak = float(10 * np.log10(max(laf_max, 1e-300) / P_REF**2))
     t_frames = frame_start + n / 2 / fs_
@@ -652,6 +667,7 @@ def analyze_recording(
              "max_tan_theta": max_tan, "surface_speed": v}
     return MeasurementResult(
         squeal_frequency_hz=squeal_f, harmonics=tuple(harmonics), events=tuple(events), rising_fraction=rising,
-        growth_slope_correlation=corr, peak_dba=peak, duration_s=total / fs_, fs=fs_, settings=s,
+        growth_slope_correlation=corr, peak_dba=peak, runout_phase_deg=phase, duration_s=total / fs_, fs=fs_,
+        settings=s,
         frames=frames, revolutions=revolutions, polar=polar, spectrum=spectrum, attrs=attrs,
     )

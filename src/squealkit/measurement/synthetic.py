@@ -154,8 +154,16 @@ class SyntheticSource:
             starts = starts[keep]
         e = env**2 * on
         rising = float((e * (tan_t > 0)).sum() / e.sum()) if e.sum() > 0 else None
+        # where the squeal sounds against the macro run-out's crest (orders <= 10), in the disc's frame
+        ang = (np.arange(_N_ANGLE) + 0.5) / _N_ANGLE
+        macro = self.sro_orders <= 10
+        q_macro = np.sin(2 * np.pi * np.multiply.outer(ang, self.sro_orders[macro]) + self.sro_phases[macro]) \
+            @ self.sro_amps[macro]
+        z = np.sum(self.envelope(ang) ** 2 * np.exp(2j * np.pi * ang))
+        phase = float(np.degrees(np.angle(z * np.exp(-2j * np.pi * ang[np.argmax(q_macro)]))))
         return {"frequency_hz": self.freq if on.any() else None, "event_starts_s": starts, "event_ends_s": ends,
                 "rising_fraction": rising, "threshold_dba": threshold_dba,
+                "runout_phase_deg": phase if on.any() else None,
                 "peak_dba": float(level.max()) if on.any() else None}
 
 
@@ -310,6 +318,7 @@ def synthetic_recording(*, threshold_dba: float = 70.0, **kwargs) -> xr.Dataset:
         "truth_event_starts_s": np.asarray(tr["event_starts_s"]),
         "truth_event_ends_s": np.asarray(tr["event_ends_s"]),
         "truth_rising_fraction": float("nan") if tr["rising_fraction"] is None else tr["rising_fraction"],
+        "truth_runout_phase_deg": float("nan") if tr["runout_phase_deg"] is None else tr["runout_phase_deg"],
         "truth_threshold_dba": threshold_dba,
         "rpm_end": float("nan") if src.rpm_end is None else src.rpm_end,
         "probe_offset_deg": src.probe_offset_deg,
