@@ -150,3 +150,20 @@ def test_tacho_errors_are_clear(stop):
         analyze_recording(synthetic_recording(duration=0.2, seed=1), rpm=900.0, polarity=0, **KW)
     with pytest.raises(InputError, match="pulses_per_rev"):
         tacho_angle(data["tacho"], FS, pulses_per_rev=0)
+
+
+def test_figures_follow_the_squeal_found():
+    # issue 14: the Figs. 10-13 views were fixed (0.1-0.3 s, 1000-2500 Hz); they follow the squeal now
+    from squealkit.plotting.measurement import squeal_views
+
+    rec = synthetic_recording(duration=2.0, seed=1, rpm_end=300.0, freq=6100.0)
+    res = analyze_recording(rec, tacho="tacho", **KW)
+    v = squeal_views(res, 2.0)
+    onset = float(rec.attrs["truth_event_starts_s"][0])
+    t0, t1 = v["zoom"]
+    assert t0 <= onset < t1
+    speed = 900.0 + (300.0 - 900.0) * onset / 2.0  # rpm at the onset
+    assert t1 - t0 == pytest.approx(3 * 60.0 / speed, rel=0.02)  # three revolutions at the actual speed
+    assert v["band"][0] < 6100.0 < v["band"][1] and v["freq_max"] > 6100.0
+    quiet = analyze_recording(synthetic_recording(duration=0.5, seed=1, squeal_on="none"), rpm=900.0, **KW)
+    assert squeal_views(quiet, 0.5)["band"] == (1000.0, 2500.0)

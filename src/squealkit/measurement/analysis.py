@@ -636,6 +636,7 @@ def analyze_recording(
             "band_power": ("time", e_tot, {"units": "Pa^2", "long_name": "mean square in the band (Hann frame)"}),
             "rising_power": ("time", e_rise, {"units": "Pa^2", "long_name": "band_power x share on rising run-out"}),
             "tan_theta": ("time", slope_f, {"units": "1", "long_name": "mean SRO slope tan(theta)"}),
+            "rpm": ("time", 60.0 * rotation.rev_per_s(t_frames), {"units": "rpm", "long_name": "disc speed"}),
         },
         coords={"time": ("time", t_frames, {"units": "s", "long_name": "frame centre"})},
     )

@@ -40,8 +40,8 @@ def _save_measurement_figures(figs: dict, figures: Path, prefix: str) -> tuple[F
 
 
 def recording_step(recording: Path, figures: Path, data: Path, *, mic: str, displacement: str, rpm: float,
-                   radius: float, fs: float | None = None) -> Section:
-    """Figs. 6-13 on the user's own recording."""
+                   radius: float, fs: float | None = None, model: FrictionModel | None = None) -> Section:
+    """Figs. 6-13 on the user's own recording; with a model, its onset frequency beside the measured squeal."""
     from ..measurement import read_recording
     from ..plotting.measurement import measurement_figures
 
@@ -54,9 +54,17 @@ def recording_step(recording: Path, figures: Path, data: Path, *, mic: str, disp
     f_sq, rf = res.squeal_frequency_hz, res.rising_fraction
     comps = (
         Comparison("squeal main frequency", F_PUBLISHED, f_sq, "Hz", None, "paper: its own rig; yours may differ"),
+        Comparison("growth/slope correlation", None, res.growth_slope_correlation, "1", None,
+                   "the squeal's growth rate against the run-out slope; positive: squeal grows on rising run-out"),
         Comparison("share of squeal energy on rising run-out", None, rf, "1", None,
                    "above 0.5: squeal favours rising run-out, as the paper finds"),
     )
+    if model is not None:
+        onset = critical_friction(model, 0.0, damped=True)
+        f_model = onset.frequency_hz if math.isfinite(onset.frequency_hz) else None
+        comps += (Comparison("squeal frequency: model onset (published column) against measured", f_model, f_sq, "Hz",
+                             None if f_model is None or f_sq is None else abs(f_sq / f_model - 1) < 0.05,
+                             "the model's frequency where it first loses stability (theta = 0); within 5 % agrees"),)
     paragraphs = (
         f"Your recording {recording.name}: microphone channel {mic!r}, displacement channel {displacement!r}, "
         f"{rpm:g} rpm, probe radius {radius * 1e3:g} mm. Criteria: {res.settings.criteria.describe()}.",
