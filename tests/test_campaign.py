@@ -145,3 +145,17 @@ def test_campaign_report_loads_in_headless_chromium(camp):
 
     body = _chromium_body(camp[0] / "out" / "report.html")
     assert 'data-figures="5"' in body and 'data-figures-loaded="5"' in body
+
+
+def test_conditions_taken_from_channels(tmp_path):
+    truth = synthetic_campaign(tmp_path, n_applications=4, duration=0.5, seed=4, condition_channels=True,
+                               suffix=".tdms")
+    assert np.isnan(read_matrix(tmp_path / "matrix.csv")[0].temperature_c)  # not in the matrix
+    res = run(["campaign", str(tmp_path / "matrix.csv"), "--out", str(tmp_path / "out"), "--mic", "mic",
+               "--displacement", "displacement", "--radius", "0.05", "--tacho", "tacho", "--no-report",
+               "--pressure-channel", "pressure", "--temperature-channel", "temperature", "--json"])
+    assert res.exit_code == 0, res.output
+    con = duckdb.connect(str(tmp_path / "out" / "campaign.duckdb"), read_only=True)
+    for app, p, t in con.execute("SELECT application, pressure_bar, temperature_c FROM applications").fetchall():
+        assert p == pytest.approx(truth["by_application"][app]["pressure_bar"], abs=0.01)
+        assert t == pytest.approx(truth["by_application"][app]["temperature_c"], abs=0.05)

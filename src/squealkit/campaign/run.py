@@ -24,6 +24,9 @@ def _analyze_application(item: dict[str, Any]) -> tuple[dict[str, Any], list[dic
     app, kw, bands = item["app"], item["analysis"], item["bands"]
     row = {**app, "error": None}
     try:
+        for col, channel in item.get("condition_channels", {}).items():
+            if not math.isfinite(row[col]):  # the matrix does not say: the channel's mean over the application
+                row[col] = _channel_mean(app["file"], channel)
         res = analyze_recording(app["file"], **kw)
     except (InputError, OSError) as e:
         row["error"] = str(e).splitlines()[0][:500]
@@ -44,6 +47,17 @@ def _analyze_application(item: dict[str, Any]) -> tuple[dict[str, Any], list[dic
     return row, events
 
 
+def _channel_mean(path: str, channel: str) -> float:
+    from ..measurement import open_recording
+
+    src = open_recording(path)
+    name = src.resolve(channel)
+    total = 0.0
+    for _, blk in src.iter_blocks([name]):
+        total += float(blk[name].sum())
+    return total / src.n_samples
+
+
 def run_campaign(
     matrix: str | Path,
     out: str | Path,
@@ -61,6 +75,8 @@ def run_campaign(
     client: Any = None,
     progress: Callable[[int, int], None] | None = None,
     report: bool = True,
+    pressure_channel: str | None = None,
+    temperature_channel: str | None = None,
     **options: Any,
 ) -> dict[str, Any]:
     """Analyse a campaign: every application of ``matrix`` into ``out/campaign.duckdb``.
@@ -86,6 +102,9 @@ def run_campaign(
         Analyse the applications on a Dask cluster (the files must be readable there).
     progress : callable, optional
         ``progress(done, total)`` in applications still to analyse.
+    pressure_channel, temperature_channel : str, optional
+        Channels [bar], [C] whose mean over an application gives its condition where the
+        matrix leaves ``pressure_bar`` or ``temperature_c`` empty.
     **options
         Further analysis options (``probe_offset_deg``, ``pulses_per_rev``, ``nperseg``, ...).
 
@@ -126,7 +145,9 @@ def run_campaign(
             if st is None:
                 store.put({**row, "error": f"Recording {str(a.file)!r} does not exist."}, [])
                 continue
-            items.append({"app": row, "analysis": kw, "bands": bands})
+            cond = {c: ch for c, ch in (("pressure_bar", pressure_channel), ("temperature_c", temperature_channel))
+                    if ch is not None}
+            items.append({"app": row, "analysis": kw, "bands": bands, "condition_channels": cond})
         from ..scale import map_tasks
 
         for _, (row, events) in map_tasks(_analyze_application, items, client=client, progress=progress,

@@ -50,6 +50,7 @@ def _lines(temperature_c: float, pressure_bar: float) -> list[float]:
 def synthetic_campaign(
     out: str | Path, *, n_applications: int = 60, duration: float = 2.0, fs: float = 40000.0,
     suffix: str = ".nc", stop_share: float = 0.3, seed: int = 0, level_dba: float = 85.0,
+    condition_channels: bool = False,
 ) -> dict[str, Any]:
     """Write a synthetic campaign: ``out/matrix.csv``, one recording per application, ``out/truth.json``.
 
@@ -69,6 +70,10 @@ def synthetic_campaign(
         Seed of the conditions and recordings.
     level_dba : float
         Saturated level of every squeal line [dB(A)].
+    condition_channels : bool
+        Record the brake pressure [bar] and temperature [C] as channels ``pressure`` and
+        ``temperature`` (a little noise; the temperature rising by 5 C over a stop) and leave
+        those matrix columns empty, as a DAQ that logs its conditions would.
 
     Returns
     -------
@@ -111,12 +116,21 @@ def synthetic_campaign(
             amp = math.sqrt(2) * P_REF * 10 ** ((85.0 - float(a_weighting_db(_DISTRACTOR_HZ))) / 20)
             mic += amp * np.sin(2 * np.pi * _DISTRACTOR_HZ * t)
         rec = rec.assign(mic=("time", mic, rec["mic"].attrs))
+        if condition_channels:
+            t = rec["time"].values
+            crng = np.random.default_rng([seed, i, 7])
+            rise = 5.0 * t / duration if mode == "stop" else 0.0 * t
+            rec = rec.assign(
+                pressure=("time", pressure + 0.05 * crng.standard_normal(t.size), {"units": "bar"}),
+                temperature=("time", temperature - 2.5 * (mode == "stop") + rise + 0.2 * crng.standard_normal(t.size),
+                             {"units": "C"}))
         name = f"recordings/{app}{suffix}"
         write_recording(rec, out / name)
         truth_apps[app] = {"lines_hz": lines, "runout_phase_deg": float(rec.attrs["truth_runout_phase_deg"])
                            if lines else None, "mode": mode, "temperature_c": temperature, "pressure_bar": pressure}
         rows.append({"application": app, "file": name, "section": f"S{1 + i * 5 // n_applications}", "mode": mode,
-                     "pressure_bar": pressure, "temperature_c": temperature,
+                     "pressure_bar": "" if condition_channels else pressure,
+                     "temperature_c": "" if condition_channels else temperature,
                      "speed_kmh": round(rpm / 60 * 2 * math.pi * 0.33 * 3.6, 1)})
     with atomic_path(out / "matrix.csv") as tmp, open(tmp, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))

@@ -199,6 +199,9 @@ def _print_text(f: Path, r) -> None:
         click.echo(f"  squeal {r.squeal_frequency_hz:.1f} Hz, peak {r.peak_dba:.1f} dB(A), {len(r.events)} events")
         click.echo(f"  growth/slope correlation {corr} (squeal growth rate against the run-out slope), "
                    f"rising_fraction {r.rising_fraction:.3f} (share of squeal energy on rising run-out)")
+        if r.runout_phase_deg is not None:
+            click.echo(f"  run-out phase {r.runout_phase_deg:+.0f} deg (where the squeal sounds on the disc, from the "
+                       "run-out crest; negative: on the rising run-out)")
         for e in r.events[:10]:
             click.echo(f"    {e.start_s:8.4f}-{e.end_s:8.4f} s  {e.frequency_hz:8.1f} Hz  {e.peak_dba:6.1f} dB(A)")
         if len(r.events) > 10:

@@ -23,12 +23,17 @@ from ._options import criteria_from_options, criteria_options, emit_json, progre
               help="The probe sits this far upstream of the pin [deg].")
 @click.option("--polarity", type=click.Choice(["1", "-1"]), default="1", show_default=True,
               help="-1 when the probe reads the run-out reversed.")
+@click.option("--pressure-channel", default=None,
+              help="Channel [bar] whose mean gives an application's pressure where the matrix leaves it empty.")
+@click.option("--temperature-channel", default=None,
+              help="Channel [C] whose mean gives an application's temperature where the matrix leaves it empty.")
 @click.option("--no-report", is_flag=True, help="Skip the HTML report and its figures.")
 @criteria_options
 @scheduler_option
 @click.option("--json", "as_json", is_flag=True, help="Print summary.json on stdout.")
 def campaign(matrix: Path, out_dir: Path, mic: str, displacement: str, radius: float, tacho: str | None,
-             pulses_per_rev: int, rpm: float | None, probe_offset_deg: float, polarity: str, no_report: bool,
+             pulses_per_rev: int, rpm: float | None, probe_offset_deg: float, polarity: str,
+             pressure_channel: str | None, temperature_channel: str | None, no_report: bool,
              setup: str | None, band: str | None, threshold_dba: float, time_weighting: str, min_duration: float,
              scheduler: str | None, as_json: bool) -> None:
     """Analyse every brake application of a test matrix (SAE J2521 occurrence, VDA 303 events).
@@ -55,7 +60,7 @@ def campaign(matrix: Path, out_dir: Path, mic: str, displacement: str, radius: f
     kw = dict(mic=mic, displacement=displacement, radius=radius, rpm=rpm, setup=crit.setup if crit.setup != "user"
               else None, band=crit.band, threshold_dba=crit.threshold_dba, time_weighting=crit.time_weighting,
               min_duration=crit.min_duration, probe_offset_deg=probe_offset_deg, polarity=int(polarity),
-              report=not no_report)
+              report=not no_report, pressure_channel=pressure_channel, temperature_channel=temperature_channel)
     if tacho is not None:
         kw.update(tacho=int(tacho) if tacho.isdigit() else tacho, pulses_per_rev=pulses_per_rev)
     with cluster_client(scheduler) as client, progress_callback("applications", enabled=not as_json) as cb:

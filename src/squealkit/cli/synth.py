@@ -33,10 +33,13 @@ from ._options import check_output_suffix, emit_json
               "(matrix.csv, recordings/, truth.json).")
 @click.option("--format", "fmt", type=click.Choice([".nc", ".mf4", ".tdms", ".uff", ".wav", ".csv"]), default=".nc",
               show_default=True, help="Recording format of a --campaign.")
+@click.option("--condition-channels", is_flag=True,
+              help="A --campaign records pressure [bar] and temperature [C] as channels instead of matrix columns.")
 @click.option("--json", "as_json", is_flag=True, help="Print the truth as JSON.")
 def synth(out: Path, seed: int, duration: float, fs: float, rpm: float, rpm_end: float | None,
           probe_offset_deg: float, polarity: str, acoustic_delay: float, tacho_ppr: int, radius: float, freq: float,
-          level_dba: float, squeal_on: str, n_campaign: int | None, fmt: str, as_json: bool) -> None:
+          level_dba: float, squeal_on: str, n_campaign: int | None, fmt: str, condition_channels: bool,
+          as_json: bool) -> None:
     """Write a SYNTHETIC pin-on-disc recording (mic [Pa], displacement [m]) with known truth.
 
     OUT ends in .nc (netCDF, truth in attributes), .csv, .wav (32-bit float), .tdms, .mf4
@@ -56,7 +59,8 @@ def synth(out: Path, seed: int, duration: float, fs: float, rpm: float, rpm_end:
     if n_campaign is not None:
         from ..campaign import synthetic_campaign
 
-        truth = synthetic_campaign(out, n_applications=n_campaign, duration=duration, fs=fs, suffix=fmt, seed=seed)
+        truth = synthetic_campaign(out, n_applications=n_campaign, duration=duration, fs=fs, suffix=fmt, seed=seed,
+                                   condition_channels=condition_channels)
         if as_json:
             emit_json({k: v for k, v in truth.items() if k != "by_application"} | {"out": str(out)})
         else:
