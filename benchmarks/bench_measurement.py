@@ -43,7 +43,19 @@ def _best(fn, repeat: int = 3) -> float:
     return best
 
 
-def short(duration: float) -> None:
+def _time_other(src: str, path: Path, rpm: float) -> float:
+    """Seconds another squealkit version (its ``src`` folder) takes to analyse ``path`` (after a warm-up)."""
+    code = ("import sys,time; sys.path.insert(0, sys.argv[1]); "
+            "from squealkit.measurement import analyze_recording as a; "
+            f"kw=dict(mic='mic', displacement='displacement', rpm={rpm}, radius=0.05); "
+            "a(sys.argv[2], **kw); "
+            "t0=time.perf_counter(); a(sys.argv[2], **kw); print(time.perf_counter()-t0)")
+    out = subprocess.run([sys.executable, "-c", code, src, str(path)], check=True, capture_output=True,
+                         text=True).stdout
+    return float(out.strip().splitlines()[-1])
+
+
+def short(duration: float, baseline_src: str | None = None) -> None:
     from squealkit.io import save_dataset
     from squealkit.measurement import analyze_recording, synthetic_recording
 
@@ -55,7 +67,15 @@ def short(duration: float) -> None:
     with tempfile.TemporaryDirectory() as d:
         path = save_dataset(rec, Path(d) / "rec.nc")
         t_file = _best(lambda: analyze_recording(path, **KW))
+        if baseline_src:  # interleaved with this version, three times each
+            t_file, t_other = float("inf"), float("inf")
+            for _ in range(3):
+                t_file = min(t_file, _best(lambda: analyze_recording(path, **KW), repeat=1))
+                t_other = min(t_other, _time_other(baseline_src, path, 900.0))
     print(f"from .nc  : {duration:g} s read + analysed in {t_file:.3f} s -> {duration / t_file:.0f}x real time")
+    if baseline_src:
+        print(f"baseline  : {baseline_src}: {t_other:.3f} s -> {duration / t_other:.0f}x real time; "
+              f"ratio this / baseline = {t_file / t_other:.2f} (time)")
 
 
 def tacho(duration: float, baseline_src: str | None) -> None:
@@ -72,14 +92,7 @@ def tacho(duration: float, baseline_src: str | None) -> None:
                                                           radius=0.05, **kw), repeat=1)
                 times[name] = min(times.get(name, float("inf")), t)
             if baseline_src:
-                code = ("import sys,time; sys.path.insert(0, sys.argv[1]); "
-                        "from squealkit.measurement import analyze_recording as a; "
-                        "kw=dict(mic='mic', displacement='displacement', rpm=600.0, radius=0.05); "
-                        "a(sys.argv[2], **kw); "
-                        "t0=time.perf_counter(); a(sys.argv[2], **kw); print(time.perf_counter()-t0)")
-                out = subprocess.run([sys.executable, "-c", code, baseline_src, str(path)], check=True,
-                                     capture_output=True, text=True).stdout
-                times["baseline"] = min(times.get("baseline", float("inf")), float(out.strip().splitlines()[-1]))
+                times["baseline"] = min(times.get("baseline", float("inf")), _time_other(baseline_src, path, 600.0))
     for name, t in times.items():
         print(f"stop .nc  : {duration:g} s @ 48 kHz, {name:13s}: {t:.3f} s -> {duration / t:.0f}x real time")
     print(f"ratio     : tacho / constant rpm = {times['tacho'] / times['constant rpm']:.2f} (time)")
@@ -139,7 +152,7 @@ def main() -> None:
         long_child(args.child_long, args.child_path)
         return
     if args.short > 0:
-        short(args.short)
+        short(args.short, args.baseline_src)
     if args.tacho > 0:
         tacho(args.tacho, args.baseline_src)
     if args.long > 0:
