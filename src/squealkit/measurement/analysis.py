@@ -23,6 +23,7 @@ from scipy import fft as sp_fft
 from scipy import signal
 
 from .. import __version__
+from .._threads import thread_limit
 from .._validation import InputError, validate_fs, validate_positive
 from .criteria import SquealCriteria, band_weighted_signal, exponential_average, squeal_criteria
 from .events import SquealEvent, link_components, tonal_components
@@ -411,6 +412,7 @@ def analyze_recording(
     w_a32 = w_a.astype(np.float32)
     pscale = 2.0 / (s.nperseg * float(np.sum(win**2)))
     thr_power = P_REF**2 * 10 ** (s.threshold_dba / 10)
+    n_threads = thread_limit()  # FFT threads: this process's share (one on a one-thread Dask worker)
     half_width = max(2, int(0.5 * s.freq_tol * n / fs_))  # bins of a tonal component either side
     # the Fast level is compared and stored as mean square until the end
     core = max(hop, round(s.chunk_s * fs_ / hop) * hop)
@@ -472,7 +474,7 @@ def analyze_recording(
         ci = slice(-(-(c0 - g0) // dec), -(-(c1 - g0) // dec))
         # A-weighted band mean square on the grid, time weighted (IEC 61672-1) from the state of the
         # previous core on, through this core and on into the margin (for the frames ending there)
-        pw = band_weighted_signal(p[o:], fs_, s.band)
+        pw = band_weighted_signal(p[o:], fs_, s.band, workers=n_threads)
         m_full = pw.size // dec
         ms = np.zeros(-(-(p.size - o) // dec))
         ms[:m_full] = np.square(pw[:m_full * dec], dtype=np.float32).reshape(-1, dec).mean(axis=1, dtype=np.float64)
@@ -492,7 +494,7 @@ def analyze_recording(
             seg = p[fp * hop - w0: (f1 - 1) * hop + n - w0]
             frames_ = np.lib.stride_tricks.sliding_window_view(seg.astype(np.float32), n)[::hop]
             # single precision (7 digits) for the framed spectra: levels, peaks and their refinement
-            spec_p = sp_fft.rfft(frames_ * win32, axis=-1, workers=-1)[:, lo:hi]
+            spec_p = sp_fft.rfft(frames_ * win32, axis=-1, workers=n_threads)[:, lo:hi]
             spec = spec_p[f0 - fp:]  # frames [f0, f1)
             pb = spec.real**2
             pb += spec.imag**2

@@ -200,7 +200,8 @@ def _band_gain(nfft: int, fs: float, band: tuple[float, float]) -> NDArray[np.fl
     return out
 
 
-def band_weighted_signal(x: ArrayLike, fs: float, band: tuple[float, float]) -> NDArray[np.float32]:
+def band_weighted_signal(x: ArrayLike, fs: float, band: tuple[float, float], *, workers: int | None = None
+                         ) -> NDArray[np.float32]:
     """A-weighted signal limited to ``band`` (zero-phase, by FFT; single precision).
 
     The gain is the IEC 61672-1 A-weighting times a band mask with raised-cosine edges
@@ -215,13 +216,19 @@ def band_weighted_signal(x: ArrayLike, fs: float, band: tuple[float, float]) -> 
         Sample rate [Hz].
     band : (float, float)
         ``(freq_lower, freq_upper)`` [Hz], upper below ``fs / 2``.
+    workers : int, optional
+        FFT threads (default: squealkit's thread limit, see ``SQUEALKIT_THREADS``).
     """
+    if workers is None:
+        from .._threads import thread_limit
+
+        workers = thread_limit()
     arr = np.asarray(x, dtype=np.float32)
     pad = max(2048, int(0.05 * fs))
     nfft = sp_fft.next_fast_len(arr.size + pad, real=True)
-    spec = sp_fft.rfft(arr, nfft, workers=-1)
+    spec = sp_fft.rfft(arr, nfft, workers=workers)
     spec *= _band_gain(nfft, float(fs), (float(band[0]), float(band[1])))
-    return sp_fft.irfft(spec, nfft, workers=-1)[: arr.size]
+    return sp_fft.irfft(spec, nfft, workers=workers)[: arr.size]
 
 
 def exponential_average(
