@@ -124,11 +124,13 @@ def level_plot(result: Any):
     ax = fig.subplots()
     fr = result.frames
     ax.plot(fr["time"], fr["level_dba"], lw=0.6)
-    ax.axhline(result.settings.threshold_dba, color="k", ls="--", lw=0.8, label="threshold")
+    c = result.settings.criteria
+    ax.axhline(c.threshold_dba, color="k", ls="--", lw=0.8,
+               label=f"{c.threshold_dba:g} dB(A), {c.band[0]:g}-{c.band[1]:g} Hz ({c.setup})")
     for e in result.events:
         ax.axvspan(e.start_s, e.end_s, color="C3", alpha=0.2, lw=0)
     ax.set_xlabel("time [s]")
-    ax.set_ylabel("level [dB(A)]")
+    ax.set_ylabel(f"L_A{c.time_weighting[0].upper()} [dB(A)]")
     ax.legend(loc="lower right")
     ax.set_title(f"Squeal level and events ({len(result.events)})" + _tag(result))
     return fig
