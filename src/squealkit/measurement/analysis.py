@@ -548,7 +548,9 @@ def analyze_recording(
         micro = sro - macro
         # incline under the probe, dq / (r dphi) (paper eq. 11 with v = r dphi/dt at the actual speed)
         t_d = (g0 + np.arange(sro.size) * dec) / fs_
-        tan_probe = np.gradient(sro) * fs_d / (2 * math.pi * s.radius * rotation.rev_per_s(t_d))
+        # (a speed extrapolated past the last tacho mark of a stop is held above 1/1000 of the mean)
+        rps = np.maximum(rotation.rev_per_s(t_d), 1e-3 * f_rev)
+        tan_probe = np.gradient(sro) * fs_d / (2 * math.pi * s.radius * rps)
         # incline under the pin when the sound heard at t_d left it: emitted at t_d - acoustic_delay,
         # from the surface the probe saw probe_offset earlier in rotation
         if s.acoustic_delay or off_turns:
