@@ -106,6 +106,11 @@ def test_tdms_through_cli(tmp_path):
     (["--radius", "-2"], "radius"),
     (["--mic", "nope"], "'nope' is not in"),
     (["--band", "2000"], "--band"),
+    (["--band", "5000:3000"], "lower < upper"),
+    (["--band", "2000:30000"], "fs/2"),
+    (["--setup", "axle"], "axle"),
+    (["--tacho", "nope"], "'nope' is not in"),
+    (["--polarity", "2"], "polarity"),
     (["--summary", "x.txt"], "--summary"),
 ])
 def test_bad_options_exit_2_with_one_line(files, extra, match):
@@ -174,3 +179,11 @@ def test_synth_writes_every_daq_format_and_analyze_reads_it(tmp_path, suffix):
                   "--json"])
     assert res.exit_code == 0, res.output
     assert abs(json.loads(res.output)["squeal_frequency_hz"] - 2388.0) < 0.1
+
+
+def test_setup_corner_and_user_band_named_in_text(files):
+    res = invoke(["analyze", str(files / "rising.nc"), *ARGS, "--setup", "corner"])
+    assert res.exit_code == 0 and "SAE J2521 corner" in res.output and "1250-16000 Hz" in res.output
+    res = invoke(["analyze", str(files / "rising.nc"), *ARGS, "--band", "1000:5000", "--json"])
+    crit = json.loads(res.output)["criteria"]
+    assert crit["setup"] == "user" and crit["band_hz"] == [1000.0, 5000.0] and "user band" in crit["name"]
