@@ -43,7 +43,7 @@ def _analyze_application(item: dict[str, Any]) -> tuple[dict[str, Any], list[dic
         events.append({"application": app["application"], "event": i, "start_s": e.start_s, "end_s": e.end_s,
                        "duration_s": e.duration_s, "frequency_hz": e.frequency_hz, "peak_dba": e.peak_dba,
                        "band_center_hz": b[0] if b else math.nan, "band_lo_hz": b[1] if b else math.nan,
-                       "band_hi_hz": b[2] if b else math.nan})
+                       "band_hi_hz": b[2] if b else math.nan, "runout_phase_deg": e.runout_phase_deg})
     return row, events
 
 

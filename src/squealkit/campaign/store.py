@@ -37,7 +37,7 @@ APPLICATION_COLUMNS = {
 EVENT_COLUMNS = {
     "application": "VARCHAR", "event": "INTEGER", "start_s": "DOUBLE", "end_s": "DOUBLE", "duration_s": "DOUBLE",
     "frequency_hz": "DOUBLE", "peak_dba": "DOUBLE", "band_center_hz": "DOUBLE", "band_lo_hz": "DOUBLE",
-    "band_hi_hz": "DOUBLE",
+    "band_hi_hz": "DOUBLE", "runout_phase_deg": "DOUBLE",
 }
 
 
@@ -57,7 +57,7 @@ class CampaignStore:
         self.con.execute(f"CREATE TABLE IF NOT EXISTS events ({cols})")
         self.con.execute(
             "CREATE OR REPLACE VIEW squeal AS SELECT e.*, a.section, a.mode, a.pressure_bar, a.temperature_c, "
-            "a.speed_kmh, a.runout_phase_deg, a.file FROM events e JOIN applications a USING (application)")
+            "a.speed_kmh, a.file FROM events e JOIN applications a USING (application)")
 
     def close(self) -> None:
         self.con.close()

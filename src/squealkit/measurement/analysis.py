@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -191,6 +191,8 @@ class MeasurementResult:
             event_end=("event", np.array([e.end_s for e in ev]), {"units": "s"}),
             event_frequency=("event", np.array([e.frequency_hz for e in ev]), {"units": "Hz"}),
             event_peak=("event", np.array([e.peak_dba for e in ev]), {"units": "dB(A)"}),
+            event_runout_phase=("event", np.array([np.nan if e.runout_phase_deg is None else e.runout_phase_deg
+                                                   for e in ev]), {"units": "deg"}),
         )
         ds.attrs = {k: int(v) if isinstance(v, bool) else v for k, v in self.to_dict().items()
                     if isinstance(v, int | float | str)}
@@ -461,6 +463,7 @@ def analyze_recording(
     ang_e = np.zeros(nb)
     ang_ecnt = np.zeros(nb)
     max_tan = 0.0
+    frame_turns = np.zeros(n_frames)  # disc position under the pin when each frame pair's sound left it
 
     # an in-memory recording is one block (windows are views of it); files are read block by block
     block = total if isinstance(src, _DatasetSource) else max(core, DEFAULT_BLOCK)
@@ -585,6 +588,8 @@ def analyze_recording(
         max_tan = max(max_tan, float(np.max(np.abs(tan_probe[ci]))))
         if f1 > f0:  # the disc position under the pin when the frame's sound left it
             centre = rotation.turns((np.arange(f0, f1) * hop + n / 2) / fs_ - s.acoustic_delay)
+            # the component weights are cross powers of a frame and its predecessor: centred half a hop earlier
+            frame_turns[f0:f1] = rotation.turns((np.arange(f0, f1) * hop + (n - hop) / 2) / fs_ - s.acoustic_delay)
             fb = ((centre % 1.0) * nb).astype(np.int64) % nb
             ang_e += np.bincount(fb, e_tot[f0:f1], nb)
             ang_ecnt += np.bincount(fb, minlength=nb)
@@ -593,7 +598,7 @@ def analyze_recording(
 
     cf, comp_f, comp_c = np.concatenate(comp_frame), np.concatenate(comp_freq), np.concatenate(comp_cross)
     frame_start = np.arange(n_frames) * hop / fs_
-    events, ev_frames = link_components(
+    events, ev_frames, ev_weights = link_components(
         cf, comp_f, np.concatenate(comp_level), np.concatenate(comp_pow),
         frame_start + half / fs_, hop / fs_, freq_tol=s.freq_tol, min_duration=s.min_duration,
     )
@@ -643,6 +648,11 @@ def analyze_recording(
         q_mean = np.divide(ang_macro, ang_cnt, out=np.full(nb, -np.inf), where=ang_cnt > 0)
         crest = angle_c[int(np.argmax(q_mean))]
         phase = float(np.degrees(np.angle(z * np.exp(-1j * crest))))
+        # each event's own place on the disc: its component's power per frame at the frame's disc angle
+        rot = np.exp(-1j * crest)
+        events = [replace(e, runout_phase_deg=float(np.degrees(np.angle(
+                      np.sum(w * np.exp(2j * math.pi * frame_turns[fr])) * rot))))
+                  for e, fr, w in zip(events, ev_frames, ev_weights, strict=True)]
     level = 10 * np.log10(np.maximum(level, 1e-300) / P_REF**2)
     peak = float(10 * np.log10(max(laf_max, 1e-300) / P_REF**2))
     t_frames = frame_start + n / 2 / fs_

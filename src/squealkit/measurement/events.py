@@ -37,12 +37,16 @@ class SquealEvent:
         Power-weighted mean refined frequency [Hz].
     peak_dba : float
         Highest tonal level [dB(A) re 20 uPa].
+    runout_phase_deg : float or None
+        Where on the disc this component sounds: the circular mean disc angle of its power
+        minus the angle of the macro run-out's crest [deg, -180 to 180] (None when unknown).
     """
 
     start_s: float
     end_s: float
     frequency_hz: float
     peak_dba: float
+    runout_phase_deg: float | None = None
 
     @property
     def duration_s(self) -> float:
@@ -139,12 +143,12 @@ def link_components(
     frame: NDArray[np.intp], freq: NDArray[np.float64], level: NDArray[np.float64], power: NDArray[np.float64],
     frame_start_s: NDArray[np.float64], frame_len_s: float, *, freq_tol: float = 100.0, max_gap: int = 1,
     min_duration: float = 0.0,
-) -> tuple[list[SquealEvent], list[NDArray[np.intp]]]:
+) -> tuple[list[SquealEvent], list[NDArray[np.intp]], list[NDArray[np.float64]]]:
     """Link components of successive frames into events, one per frequency track.
 
     A component joins the open track nearest in frequency within ``freq_tol`` [Hz]; a track
     closes after ``max_gap`` frames without a component. Returns the events (sorted by
-    start) and, for each, the frames it covers (ascending).
+    start) and, for each, the frames it covers (ascending) and its power in each of them.
     """
     order = np.lexsort((freq, frame))
     # a track is a list [first, last, wsum, fsum, freq, peak, frames] (plain Python: this loop is
@@ -165,7 +169,7 @@ def link_components(
             if d <= best_d and tr[1] != fr:
                 best, best_d = tr, d
         if best is None:
-            best = [fr, fr, 0.0, 0.0, f, -np.inf, []]
+            best = [fr, fr, 0.0, 0.0, f, -np.inf, [], []]
             open_tracks.append(best)
         best[1] = fr
         best[2] += w
@@ -174,13 +178,15 @@ def link_components(
         if lev > best[5]:
             best[5] = lev
         best[6].append(fr)
+        best[7].append(w)
     done.extend(open_tracks)
-    events, frames = [], []
-    for first, last, _, _, f_mean, peak, frs in sorted(done, key=lambda t: (t[0], t[4])):
+    events, frames, weights = [], [], []
+    for first, last, _, _, f_mean, peak, frs, ws in sorted(done, key=lambda t: (t[0], t[4])):
         start = float(frame_start_s[first])
         end = float(frame_start_s[last] + frame_len_s)
         if end - start + 1e-12 < min_duration:
             continue
         events.append(SquealEvent(start, end, f_mean, peak))
         frames.append(np.asarray(frs, dtype=np.intp))
-    return events, frames
+        weights.append(np.asarray(ws, dtype=np.float64))
+    return events, frames, weights
