@@ -5,10 +5,14 @@ Usage::
     python benchmarks/bench_measurement.py                 # 60 s recording + 1 h streamed
     python benchmarks/bench_measurement.py --long 600      # shorter long run
     python benchmarks/bench_measurement.py --short 0 --from-file   # 1 h written to netCDF, then analysed
+    python benchmarks/bench_measurement.py --long 0 --baseline-src /work/main/src   # against another version
 
 1. A 60 s two-channel 40 kHz SYNTHETIC recording: end-to-end time of
    ``analyze_recording`` from memory and from a netCDF file (read + analyse), as a
-   real-time factor (recording length / wall time). Target: >= 300x.
+   real-time factor (recording length / wall time). Target: >= 300x. Then a decelerating
+   stop at 48 kHz with a tacho channel, analysed with the tacho and, as the baseline of the
+   same run, at constant rpm (and, with ``--baseline-src``, by another squealkit version, e.g.
+   main's checkout, in a subprocess on the same file, interleaved so both see the same load).
 2. A long SYNTHETIC recording (default one hour) streamed block by block through the
    chunked analysis in a fresh subprocess; prints wall time (including generating the
    samples) and the subprocess's peak resident memory (``resource.getrusage``).
@@ -39,7 +43,19 @@ def _best(fn, repeat: int = 3) -> float:
     return best
 
 
-def short(duration: float) -> None:
+def _time_other(src: str, path: Path, rpm: float) -> float:
+    """Seconds another squealkit version (its ``src`` folder) takes to analyse ``path`` (after a warm-up)."""
+    code = ("import sys,time; sys.path.insert(0, sys.argv[1]); "
+            "from squealkit.measurement import analyze_recording as a; "
+            f"kw=dict(mic='mic', displacement='displacement', rpm={rpm}, radius=0.05); "
+            "a(sys.argv[2], **kw); "
+            "t0=time.perf_counter(); a(sys.argv[2], **kw); print(time.perf_counter()-t0)")
+    out = subprocess.run([sys.executable, "-c", code, src, str(path)], check=True, capture_output=True,
+                         text=True).stdout
+    return float(out.strip().splitlines()[-1])
+
+
+def short(duration: float, baseline_src: str | None = None) -> None:
     from squealkit.io import save_dataset
     from squealkit.measurement import analyze_recording, synthetic_recording
 
@@ -51,7 +67,38 @@ def short(duration: float) -> None:
     with tempfile.TemporaryDirectory() as d:
         path = save_dataset(rec, Path(d) / "rec.nc")
         t_file = _best(lambda: analyze_recording(path, **KW))
+        if baseline_src:  # interleaved with this version, three times each
+            t_file, t_other = float("inf"), float("inf")
+            for _ in range(3):
+                t_file = min(t_file, _best(lambda: analyze_recording(path, **KW), repeat=1))
+                t_other = min(t_other, _time_other(baseline_src, path, 900.0))
     print(f"from .nc  : {duration:g} s read + analysed in {t_file:.3f} s -> {duration / t_file:.0f}x real time")
+    if baseline_src:
+        print(f"baseline  : {baseline_src}: {t_other:.3f} s -> {duration / t_other:.0f}x real time; "
+              f"ratio this / baseline = {t_file / t_other:.2f} (time)")
+
+
+def tacho(duration: float, baseline_src: str | None) -> None:
+    from squealkit.io import save_dataset
+    from squealkit.measurement import analyze_recording, synthetic_recording
+
+    rec = synthetic_recording(duration=duration, seed=1, fs=48000.0, rpm_end=300.0)
+    with tempfile.TemporaryDirectory() as d:
+        path = save_dataset(rec, Path(d) / "stop.nc")
+        times: dict[str, float] = {}
+        for _ in range(3):  # interleaved: each contender sees the machine's load of the moment
+            for name, kw in (("constant rpm", dict(rpm=600.0)), ("tacho", dict(tacho="tacho"))):
+                t = _best(lambda kw=kw: analyze_recording(path, mic="mic", displacement="displacement",
+                                                          radius=0.05, **kw), repeat=1)
+                times[name] = min(times.get(name, float("inf")), t)
+            if baseline_src:
+                times["baseline"] = min(times.get("baseline", float("inf")), _time_other(baseline_src, path, 600.0))
+    for name, t in times.items():
+        print(f"stop .nc  : {duration:g} s @ 48 kHz, {name:13s}: {t:.3f} s -> {duration / t:.0f}x real time")
+    print(f"ratio     : tacho / constant rpm = {times['tacho'] / times['constant rpm']:.2f} (time)")
+    if baseline_src:
+        print(f"ratio     : tacho / baseline ({baseline_src}) = {times['tacho'] / times['baseline']:.2f}; "
+              f"constant rpm / baseline = {times['constant rpm'] / times['baseline']:.2f} (time)")
 
 
 def write_long_file(path: Path, duration: float) -> None:
@@ -95,6 +142,9 @@ def main() -> None:
     ap.add_argument("--long", type=float, default=3600.0, help="length of the streamed recording [s] (0: skip)")
     ap.add_argument("--from-file", action="store_true",
                     help="write the long recording to a temporary netCDF file first and analyse the file")
+    ap.add_argument("--tacho", type=float, default=30.0, help="length of the timed stop with a tacho [s] (0: skip)")
+    ap.add_argument("--baseline-src", default=None,
+                    help="src folder of another squealkit version to time in the same run (e.g. /work/main/src)")
     ap.add_argument("--child-long", type=float, default=None, help=argparse.SUPPRESS)
     ap.add_argument("--child-path", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -102,7 +152,9 @@ def main() -> None:
         long_child(args.child_long, args.child_path)
         return
     if args.short > 0:
-        short(args.short)
+        short(args.short, args.baseline_src)
+    if args.tacho > 0:
+        tacho(args.tacho, args.baseline_src)
     if args.long > 0:
         cmd = [sys.executable, __file__, "--child-long", str(args.long)]
         with tempfile.TemporaryDirectory() as d:

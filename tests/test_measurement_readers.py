@@ -137,3 +137,37 @@ def test_missing_file_and_unknown_channel(tmp_path, signals):
         open_recording(f, fs=FS).resolve("accel")
     with pytest.raises(InputError, match="fs"):
         open_recording(f, fs=-1)
+
+
+# -- DAQ formats written by squealkit synth: each reads back sample for sample, labelled SYNTHETIC ------------
+@pytest.mark.parametrize("suffix", [".wav", ".tdms", ".mf4", ".uff", ".csv"])
+def test_every_synth_format_reads_back(tmp_path, suffix):
+    from squealkit.measurement import synthetic_recording
+    from squealkit.measurement.writers import write_recording
+
+    rec = synthetic_recording(duration=0.5, seed=1, rpm_end=600.0)
+    path = write_recording(rec, tmp_path / f"r{suffix}")
+    src = open_recording(path)
+    assert src.fs == pytest.approx(40000.0, rel=1e-9) and src.n_samples == 20000
+    names = [src.resolve(c) for c in ("mic", "displacement", "tacho")] if suffix != ".wav" else list(src.channels)
+    blocks = list(src.iter_blocks(names, block=3001))  # blocks not aligned with the file's own
+    assert [b[0] for b in blocks] == list(range(0, 20000, 3001))
+    for n, m in zip(names, ("mic", "displacement", "tacho"), strict=True):
+        got = np.concatenate([b[1][n] for b in blocks])
+        # float32 WAV; 8 significant digits in CSV; UFF 58 ASCII E13.5-like fields
+        rel = {".wav": 1e-6, ".csv": 1e-7, ".uff": 1e-10}.get(suffix, 0.0)
+        assert np.max(np.abs(got - rec[m].values)) <= rel * np.max(np.abs(rec[m].values))
+    if suffix in (".tdms", ".mf4", ".uff"):
+        assert src.synthetic and src.units[names[0]] == "Pa"
+
+
+def test_mdf4_recording_analyses_like_the_dataset(tmp_path):
+    from squealkit.measurement import analyze_recording, synthetic_recording
+    from squealkit.measurement.writers import write_recording
+
+    rec = synthetic_recording(duration=2.0, seed=1, rpm_end=300.0)
+    path = write_recording(rec, tmp_path / "stop.mf4")
+    kw = dict(mic="mic", displacement="displacement", radius=0.05, tacho="tacho")
+    a, b = analyze_recording(rec, **kw), analyze_recording(path, **kw)
+    assert a.rising_fraction == pytest.approx(b.rising_fraction, abs=1e-9)
+    assert a.peak_dba == pytest.approx(b.peak_dba, abs=1e-9) and b.attrs["synthetic"]

@@ -156,6 +156,8 @@ def test_cli_report_with_own_recording(tmp_path):
     assert r.exit_code == 0, r.output
     out = json.loads(r.stdout)
     assert out["numbers"]["measurement"]["squeal_frequency_hz"] == pytest.approx(2388.0, abs=3.0)
-    assert "analysis of run1.nc" in (tmp_path / "r" / "report.html").read_text()
+    html = (tmp_path / "r" / "report.html").read_text()
+    assert "analysis of run1.nc" in html
+    assert "model onset (published column) against measured" in html  # the model's frequency beside the squeal
     r = CliRunner().invoke(cli, ["report", "--recording", str(rec)])
     assert r.exit_code == 2 and "needs --rpm and --radius" in r.stderr

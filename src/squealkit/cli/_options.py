@@ -204,3 +204,37 @@ def friction_json(fr: dict[str, Any]) -> dict[str, Any]:
         return {}
     law = fr["friction"]
     return {"stribeck": {"mu_static": law.mu_static, "v_stribeck": law.v_stribeck}, "speed": fr["speed"]}
+
+
+def criteria_options(f: F) -> F:
+    """--setup, --band, --threshold-dba, --time-weighting, --min-duration: what counts as squeal."""
+    f = click.option("--min-duration", type=float, default=0.01, show_default=True,
+                     help="Shortest tonal event [s] (no standard fixes one).")(f)
+    f = click.option("--time-weighting", type=click.Choice(["fast", "slow"]), default="fast", show_default=True,
+                     help="IEC 61672-1 time weighting of the level (Fast 125 ms, Slow 1 s).")(f)
+    f = click.option("--threshold-dba", type=float, default=70.0, show_default=True,
+                     help="Squeal threshold [dB(A)] (SAE J2521: 70).")(f)
+    f = click.option("--band", default=None, metavar="LOWER:UPPER",
+                     help="A user squeal band [Hz] instead of the setup's, e.g. 1000:16000.")(f)
+    f = click.option("--setup", type=click.Choice(["component", "corner"]), default=None,
+                     help="SAE J2521 setup: component (brake not on a full corner, e.g. pin-on-disc: 2-16 kHz; "
+                     "the default) or corner (full suspension corner or axle: 1.25-16 kHz).")(f)
+    return f
+
+
+def criteria_from_options(setup: str | None, band: str | None, threshold_dba: float, time_weighting: str,
+                          min_duration: float):
+    """The :class:`~squealkit.measurement.criteria.SquealCriteria` of the criteria options."""
+    from ..measurement.criteria import squeal_criteria
+
+    band_ = None
+    if band is not None:
+        lo, sep, hi = band.partition(":")
+        if not sep:
+            raise InputError(f"--band {band!r} must look like LOWER:UPPER in Hz, e.g. 1000:16000.")
+        try:
+            band_ = (float(lo), float(hi))
+        except ValueError:
+            raise InputError(f"--band {band!r} must be two numbers LOWER:UPPER in Hz, e.g. 1000:16000.") from None
+    return squeal_criteria(setup, band=band_, threshold_dba=threshold_dba, time_weighting=time_weighting,
+                           min_duration=min_duration)

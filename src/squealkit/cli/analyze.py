@@ -7,7 +7,16 @@ from pathlib import Path
 import click
 
 from .._validation import InputError, validate_finite
-from ._options import check_output_suffix, emit_json, progress_callback, scheduler_option, writable, writable_folder
+from ._options import (
+    check_output_suffix,
+    criteria_from_options,
+    criteria_options,
+    emit_json,
+    progress_callback,
+    scheduler_option,
+    writable,
+    writable_folder,
+)
 
 #: Show a progress bar for recordings longer than this [s].
 _PROGRESS_ABOVE_S = 60.0
@@ -23,23 +32,23 @@ def _pairs(option: str, items: tuple[str, ...]) -> dict[str, str]:
     return out
 
 
-def _band(text: str) -> tuple[float, float]:
-    lo, sep, hi = text.partition(":")
-    if not sep:
-        raise InputError(f"--band {text!r} must look like LOWER:UPPER in Hz, e.g. 1000:16000.")
-    return validate_finite("--band lower", lo), validate_finite("--band upper", hi)
-
-
 @click.command()
 @click.argument("files", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("--mic", required=True, help="Microphone channel [Pa]: name or 0-based index.")
 @click.option("--displacement", required=True, help="Eddy-current probe channel [m]: name or index.")
-@click.option("--rpm", type=float, required=True, help="Disc speed [rpm].")
+@click.option("--rpm", type=float, default=None, help="Disc speed [rpm] (constant; or give --tacho).")
 @click.option("--radius", type=float, required=True, help="Probe radius on the disc [m].")
-@click.option("--band", default="1000:16000", show_default=True, help="Criteria band LOWER:UPPER [Hz].")
-@click.option("--threshold-dba", type=float, default=70.0, show_default=True,
-              help="Squeal threshold [dB(A)] (SAE J2521: 70).")
-@click.option("--min-duration", type=float, default=0.01, show_default=True, help="Shortest event [s].")
+@click.option("--tacho", default=None, help="Tacho channel (name or index): disc angle and speed from it.")
+@click.option("--tacho-kind", type=click.Choice(["pulses", "angle"]), default="pulses", show_default=True,
+              help="Tacho channel: a pulse train or an angle (degrees).")
+@click.option("--pulses-per-rev", type=int, default=1, show_default=True, help="Tacho pulses per revolution.")
+@click.option("--probe-offset-deg", type=float, default=0.0, show_default=True,
+              help="The probe sits this far upstream of the pin [deg] (sees the surface earlier).")
+@click.option("--acoustic-delay", type=float, default=0.0, show_default=True,
+              help="Delay of the sound from the pin to the microphone [s].")
+@click.option("--polarity", type=click.Choice(["1", "-1"]), default="1", show_default=True,
+              help="-1 when the probe reads the run-out reversed.")
+@criteria_options
 @click.option("--fs", type=float, default=None, help="Sample rate [Hz] for a CSV without time column.")
 @click.option("--scale", "scales", multiple=True, metavar="CHANNEL=FACTOR",
               help="File value -> physical unit factor per channel (e.g. WAV full scale in Pa). Repeatable.")
@@ -55,15 +64,21 @@ def _band(text: str) -> tuple[float, float]:
               callback=writable,
               help="Write the campaign summary (one row per recording) as CSV.")
 @scheduler_option
-def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float, radius: float, band: str,
-            threshold_dba: float, min_duration: float, fs: float | None, scales: tuple[str, ...],
-            units: tuple[str, ...], as_json: bool, plot_dir: Path | None, out_path: Path | None,
-            summary_path: Path | None, scheduler: str | None) -> None:
+def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float | None, radius: float,
+            tacho: str | None, tacho_kind: str, pulses_per_rev: int, probe_offset_deg: float, acoustic_delay: float,
+            polarity: str, setup: str | None,
+            band: str | None, threshold_dba: float, time_weighting: str, min_duration: float, fs: float | None,
+            scales: tuple[str, ...], units: tuple[str, ...], as_json: bool, plot_dir: Path | None,
+            out_path: Path | None, summary_path: Path | None, scheduler: str | None) -> None:
     """Find squeal in rig recordings and relate it to the disc run-out (paper §5).
 
     Each FILE is .csv, .wav, .nc/.h5 or .tdms with a microphone and a displacement
-    channel. Squeal events follow SAE J2521 (A-weighted level in the band above the
-    threshold); rising_fraction is the share of squeal energy on rising run-out.
+    channel. Squeal follows SAE J2521 (--setup component, the default for a rig that is
+    not a full corner: 2-16 kHz; corner: 1.25-16 kHz): the A-weighted, Fast time-weighted
+    level in the band reaches the threshold; each tonal component is an event (VDA 303).
+    The criteria are named in every output. growth/slope correlation (the squeal's growth
+    rate against the run-out slope) is the primary run-out statistic; rising_fraction is
+    the share of squeal energy on rising run-out.
 
     \b
     Example:
@@ -83,7 +98,15 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float, ra
     from ..measurement import analyze_recording, open_recording
     from ..measurement.campaign import summarize_campaign
 
-    band_ = _band(band)
+    crit = criteria_from_options(setup, band, threshold_dba, time_weighting, min_duration)
+    crit_kw = dict(setup=crit.setup if crit.setup != "user" else None, band=crit.band,
+                   threshold_dba=crit.threshold_dba, time_weighting=crit.time_weighting, min_duration=crit.min_duration,
+                   probe_offset_deg=probe_offset_deg, acoustic_delay=acoustic_delay, polarity=int(polarity))
+    if tacho is not None:
+        crit_kw.update(tacho=int(tacho) if tacho.isdigit() else tacho, tacho_kind=tacho_kind,
+                       pulses_per_rev=pulses_per_rev)
+    elif rpm is None:
+        raise InputError("Give the disc speed --rpm, or a --tacho channel.")
     check_output_suffix(out_path, (".nc",), "--out")
     check_output_suffix(summary_path, (".csv",), "--summary")
     if out_path is not None and len(files) > 1:
@@ -100,12 +123,11 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float, ra
             raise InputError("--plot and --out work on this machine only; leave them out with --scheduler.")
         _campaign_on_cluster(files, scheduler, as_json, summary_path, fs=fs, scale=scale_map or None,
                              units=unit_map or None, mic=mic, displacement=displacement, rpm=rpm, radius=radius,
-                             band=band_, threshold_dba=threshold_dba, min_duration=min_duration)
+                             **crit_kw)
         return
     results = []
     for f, src in zip(files, sources, strict=True):
-        kwargs = dict(mic=mic, displacement=displacement, rpm=rpm, radius=radius, band=band_,
-                      threshold_dba=threshold_dba, min_duration=min_duration)
+        kwargs = dict(mic=mic, displacement=displacement, rpm=rpm, radius=radius, **crit_kw)
         if src.duration > _PROGRESS_ABOVE_S:
             from rich.progress import Progress
 
@@ -135,6 +157,7 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float, ra
 
 
 def _print_campaign(campaign) -> None:
+    click.echo(f"criteria: {campaign.criteria}")
     click.echo(f"campaign: {campaign.occurrence_percent:.1f}% of {len(campaign.rows)} recordings squeal, "
                f"{campaign.n_events} events; frequencies: "
                + (", ".join(f"{g['frequency_hz']:.0f} Hz ({g['n_events']})" for g in campaign.frequencies)
@@ -173,13 +196,17 @@ def _stderr_console():
 def _print_text(f: Path, r) -> None:
     tag = " [SYNTHETIC]" if r.attrs.get("synthetic") else ""
     click.echo(f"{f}{tag}: {r.duration_s:.3f} s at {r.fs:g} Hz")
+    click.echo(f"  criteria: {r.settings.criteria.describe()}")
     if not r.squeal:
-        click.echo(f"  no squeal above {r.settings.threshold_dba:g} dB(A) in {r.settings.band[0]:g}-"
-                   f"{r.settings.band[1]:g} Hz")
+        click.echo(f"  no squeal (peak {r.peak_dba:.1f} dB(A))")
     else:
+        corr = "n/a" if r.growth_slope_correlation is None else f"{r.growth_slope_correlation:.2f}"
         click.echo(f"  squeal {r.squeal_frequency_hz:.1f} Hz, peak {r.peak_dba:.1f} dB(A), {len(r.events)} events")
-        click.echo(f"  rising_fraction {r.rising_fraction:.3f} (share of squeal energy on rising run-out), "
-                   f"growth/slope correlation {r.growth_slope_correlation:.2f}")
+        click.echo(f"  growth/slope correlation {corr} (squeal growth rate against the run-out slope), "
+                   f"rising_fraction {r.rising_fraction:.3f} (share of squeal energy on rising run-out)")
+        if r.runout_phase_deg is not None:
+            click.echo(f"  run-out phase {r.runout_phase_deg:+.0f} deg (where the squeal sounds on the disc, from the "
+                       "run-out crest; negative: on the rising run-out)")
         for e in r.events[:10]:
             click.echo(f"    {e.start_s:8.4f}-{e.end_s:8.4f} s  {e.frequency_hz:8.1f} Hz  {e.peak_dba:6.1f} dB(A)")
         if len(r.events) > 10:

@@ -6,47 +6,77 @@ from pathlib import Path
 
 import click
 
-from ._options import check_output_suffix, emit_json, writable
+from ._options import check_output_suffix, emit_json
 
 
 @click.command()
-@click.argument("out", type=click.Path(dir_okay=False, path_type=Path), callback=writable)
+@click.argument("out", type=click.Path(path_type=Path))
 @click.option("--seed", type=int, default=1, show_default=True, help="Random seed (run-out phases, noise).")
 @click.option("--duration", type=float, default=2.0, show_default=True, help="Length [s].")
 @click.option("--fs", type=float, default=40000.0, show_default=True, help="Sample rate [Hz].")
-@click.option("--rpm", type=float, default=900.0, show_default=True, help="Disc speed [rpm].")
+@click.option("--rpm", type=float, default=900.0, show_default=True, help="Disc speed [rpm] (at the start).")
+@click.option("--rpm-end", type=float, default=None,
+              help="Disc speed at the end [rpm]: a decelerating stop (linear); default constant speed.")
+@click.option("--probe-offset-deg", type=float, default=0.0, show_default=True,
+              help="The probe sits this far upstream of the pin [deg].")
+@click.option("--polarity", type=click.Choice(["1", "-1"]), default="1", show_default=True,
+              help="-1: the probe reads the run-out reversed.")
+@click.option("--acoustic-delay", type=float, default=0.0, show_default=True, help="Pin to microphone delay [s].")
+@click.option("--tacho-ppr", type=int, default=1, show_default=True, help="Tacho pulses per revolution.")
 @click.option("--radius", type=float, default=0.05, show_default=True, help="Probe radius [m].")
 @click.option("--freq", type=float, default=2388.0, show_default=True, help="Squeal frequency [Hz].")
 @click.option("--level-dba", type=float, default=90.0, show_default=True, help="Saturated squeal level [dB(A)].")
 @click.option("--squeal-on", type=click.Choice(["rising", "falling", "none"]), default="rising",
               show_default=True, help="Run-out stage on which the squeal grows.")
+@click.option("--campaign", "n_campaign", type=int, default=None, metavar="N",
+              help="Write a SYNTHETIC J2521-like campaign of N applications into the folder OUT instead "
+              "(matrix.csv, recordings/, truth.json).")
+@click.option("--format", "fmt", type=click.Choice([".nc", ".mf4", ".tdms", ".uff", ".wav", ".csv"]), default=".nc",
+              show_default=True, help="Recording format of a --campaign.")
+@click.option("--condition-channels", is_flag=True,
+              help="A --campaign records pressure [bar] and temperature [C] as channels instead of matrix columns.")
 @click.option("--json", "as_json", is_flag=True, help="Print the truth as JSON.")
-def synth(out: Path, seed: int, duration: float, fs: float, rpm: float, radius: float, freq: float,
-          level_dba: float, squeal_on: str, as_json: bool) -> None:
+def synth(out: Path, seed: int, duration: float, fs: float, rpm: float, rpm_end: float | None,
+          probe_offset_deg: float, polarity: str, acoustic_delay: float, tacho_ppr: int, radius: float, freq: float,
+          level_dba: float, squeal_on: str, n_campaign: int | None, fmt: str, condition_channels: bool,
+          as_json: bool) -> None:
     """Write a SYNTHETIC pin-on-disc recording (mic [Pa], displacement [m]) with known truth.
 
-    OUT ends in .nc (netCDF, truth in attributes) or .csv (time column + channels).
+    OUT ends in .nc (netCDF, truth in attributes), .csv, .wav (32-bit float), .tdms, .mf4
+    (ASAM MDF4) or .uff (UFF 58): every format `analyze` reads. Channels: mic [Pa],
+    displacement [m], tacho [V] (5 V pulses, the first rising edge is the disc's angle 0).
 
     \b
     Example:
       squealkit synth rec.nc --seed 1 --duration 2
       squealkit analyze rec.nc --mic mic --displacement displacement --rpm 900 --radius 0.05
+      squealkit synth stop.mf4 --rpm 900 --rpm-end 300
+      squealkit analyze stop.mf4 --mic mic --displacement displacement --tacho tacho --radius 0.05
     """
-    import numpy as np
-
-    from ..io import save_dataset, write_text
     from ..measurement import synthetic_recording
+    from ..measurement.writers import FORMATS, write_recording
 
-    check_output_suffix(out, (".nc", ".csv"), "OUT")
+    if n_campaign is not None:
+        from ..campaign import synthetic_campaign
+
+        truth = synthetic_campaign(out, n_applications=n_campaign, duration=duration, fs=fs, suffix=fmt, seed=seed,
+                                   condition_channels=condition_channels)
+        if as_json:
+            emit_json({k: v for k, v in truth.items() if k != "by_application"} | {"out": str(out)})
+        else:
+            click.echo(f"wrote {out / 'matrix.csv'} and {n_campaign} SYNTHETIC recordings ({fmt}); truth: "
+                       f"occurrence {truth['occurrence_percent']:.1f} %, by line "
+                       + ", ".join(f"{float(k):g} Hz {v:.1f} %" for k, v in truth["line_occurrence_percent"].items()))
+        return
+
+    check_output_suffix(out, FORMATS, "OUT")
+    from ..io import check_output
+
+    check_output(out)  # before the work: the folder exists and takes a file, OUT is not a folder
     rec = synthetic_recording(duration=duration, fs=fs, rpm=rpm, radius=radius, freq=freq, level_dba=level_dba,
-                              squeal_on=squeal_on, seed=seed)
-    if out.suffix.lower() == ".nc":
-        save_dataset(rec, out)
-    else:
-        cols = np.column_stack([rec["time"].values, rec["mic"].values, rec["displacement"].values])
-        lines = ["time [s],mic [Pa],displacement [m]"]
-        lines += [f"{t:.8g},{p:.8g},{q:.8g}" for t, p, q in cols]
-        write_text(out, "\n".join(lines) + "\n")
+                              squeal_on=squeal_on, seed=seed, rpm_end=rpm_end, probe_offset_deg=probe_offset_deg,
+                              polarity=int(polarity), acoustic_delay=acoustic_delay, tacho_ppr=tacho_ppr)
+    write_recording(rec, out)
     truth = {k.removeprefix("truth_"): v for k, v in rec.attrs.items() if k.startswith("truth_")}
     if as_json:
         emit_json({"out": str(out), "synthetic": True, "truth": truth})

@@ -11,23 +11,27 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import xarray as xr
+from numba import njit
 from numpy.typing import NDArray
 from scipy import fft as sp_fft
 from scipy import signal
 
 from .. import __version__
-from .._validation import InputError, validate_finite, validate_fs, validate_positive
+from .._threads import thread_limit
+from .._validation import InputError, validate_fs, validate_positive
+from .criteria import SquealCriteria, band_weighted_signal, exponential_average, squeal_criteria
 from .events import SquealEvent, link_components, tonal_components
 from .filters import lowpass, lowpass_decimated
 from .readers import DEFAULT_BLOCK, RecordingSource, open_recording
 from .runout import revolution_frequency, surface_speed
 from .spectral import P_REF, a_weighting_db, phase_advance_freq, refine_peak
+from .tacho import ConstantSpeed, read_tacho
 
 __all__ = ["AnalysisSettings", "MeasurementResult", "analyze_recording"]
 
@@ -42,9 +46,7 @@ class AnalysisSettings:
 
     rpm: float
     radius: float
-    band: tuple[float, float] = (1000.0, 16000.0)
-    threshold_dba: float = 70.0
-    min_duration: float = 0.01
+    criteria: SquealCriteria = field(default_factory=squeal_criteria)
     lowpass_freq: float = 1000.0
     macro_orders: int = 10
     nperseg: int = 512
@@ -52,17 +54,39 @@ class AnalysisSettings:
     freq_tol: float = 100.0
     n_angle_bins: int = 72
     chunk_s: float = 10.0
+    probe_offset_deg: float = 0.0
+    acoustic_delay: float = 0.0
+    polarity: int = 1
+    tacho_kind: str = "pulses"
+    pulses_per_rev: int = 1
+    tacho_level: float | None = None
+    angle_unit: str = "deg"
+
+    @property
+    def band(self) -> tuple[float, float]:
+        """Squeal band [Hz] of the criteria."""
+        return self.criteria.band
+
+    @property
+    def threshold_dba(self) -> float:
+        """Squeal threshold [dB(A)] of the criteria."""
+        return self.criteria.threshold_dba
+
+    @property
+    def min_duration(self) -> float:
+        """Shortest tonal event [s] of the criteria."""
+        return self.criteria.min_duration
 
     def validated(self, fs: float) -> AnalysisSettings:
         validate_positive("rpm", self.rpm)
         validate_positive("radius", self.radius)
-        validate_finite("threshold_dba", self.threshold_dba)
-        validate_positive("min_duration", self.min_duration, allow_zero=True)
         validate_positive("chunk_s", self.chunk_s)
-        lo, hi = (validate_positive("band lower", self.band[0]), validate_positive("band upper", self.band[1]))
-        if not lo < hi:
-            raise InputError(f"Parameter band={self.band!r} must satisfy lower < upper.")
-        if hi >= fs / 2:
+        validate_positive("acoustic_delay", self.acoustic_delay, allow_zero=True)
+        if self.polarity not in (1, -1):
+            raise InputError(f"Parameter polarity={self.polarity!r} must be 1 or -1 (probe reading reversed).")
+        if not math.isfinite(self.probe_offset_deg) or abs(self.probe_offset_deg) >= 360:
+            raise InputError(f"Parameter probe_offset_deg={self.probe_offset_deg!r} must lie in (-360, 360).")
+        if self.band[1] >= fs / 2:
             raise InputError(f"Parameter band={self.band!r}: upper edge must lie below fs/2 = {fs / 2:g} Hz.")
         if not (isinstance(self.nperseg, int) and self.nperseg >= 16):
             raise InputError(f"Parameter nperseg={self.nperseg!r} must be a whole number >= 16.")
@@ -93,6 +117,14 @@ class MeasurementResult:
         rising run-out (``tan(theta) > 0``); 0.5 means no preference. None without squeal.
     growth_slope_correlation : float or None
         Pearson correlation of the squeal envelope's growth rate with the SRO slope.
+    runout_phase_deg : float or None
+        Where on the disc the squeal sounds, relative to the run-out: the circular mean disc
+        angle of the squeal-band energy minus the angle of the macro run-out's maximum
+        [deg, -180 to 180]; negative: before the crest, on the rising run-out. None without squeal.
+    peak_dba : float
+        The application's peak level (SAE J2521): the highest time-weighted (Fast unless the
+        criteria say Slow), A-weighted level in the criteria band [dB(A)], whether or not it
+        reached the threshold. Independent of the analysis frames.
     frames, revolutions, polar, spectrum : xarray.Dataset
         Per-frame level, ridge and slope; per-revolution run-out peak-to-peak; squeal level
         and run-out against disc angle; mean spectra.
@@ -103,7 +135,8 @@ class MeasurementResult:
     events: tuple[SquealEvent, ...]
     rising_fraction: float | None
     growth_slope_correlation: float | None
-    peak_dba: float | None
+    peak_dba: float
+    runout_phase_deg: float | None
     duration_s: float
     fs: float
     settings: AnalysisSettings
@@ -132,8 +165,9 @@ class MeasurementResult:
             "peak_dba": self.peak_dba,
             "n_events": len(self.events),
             "events": [e.to_dict() for e in self.events],
-            "rising_fraction": self.rising_fraction,
             "growth_slope_correlation": self.growth_slope_correlation,
+            "rising_fraction": self.rising_fraction,
+            "runout_phase_deg": self.runout_phase_deg,
             "runout": {
                 "n_revolutions": int(rev.sizes["revolution"]),
                 "sro_p2p_m": float(rev["sro_p2p"].median()) if rev.sizes["revolution"] else None,
@@ -141,6 +175,7 @@ class MeasurementResult:
                 "micro_p2p_m": float(rev["micro_p2p"].median()) if rev.sizes["revolution"] else None,
                 "max_tan_theta": float(self.attrs.get("max_tan_theta", float("nan"))),
             },
+            "criteria": self.settings.criteria.to_dict(),
             "settings": {
                 "rpm": self.settings.rpm, "radius_m": self.settings.radius, "band_hz": list(self.settings.band),
                 "threshold_dba": self.settings.threshold_dba, "min_duration_s": self.settings.min_duration,
@@ -156,10 +191,13 @@ class MeasurementResult:
             event_end=("event", np.array([e.end_s for e in ev]), {"units": "s"}),
             event_frequency=("event", np.array([e.frequency_hz for e in ev]), {"units": "Hz"}),
             event_peak=("event", np.array([e.peak_dba for e in ev]), {"units": "dB(A)"}),
+            event_runout_phase=("event", np.array([np.nan if e.runout_phase_deg is None else e.runout_phase_deg
+                                                   for e in ev]), {"units": "deg"}),
         )
         ds.attrs = {k: int(v) if isinstance(v, bool) else v for k, v in self.to_dict().items()
                     if isinstance(v, int | float | str)}
-        ds.attrs.update(squealkit_version=__version__, synthetic=int(bool(self.attrs.get("synthetic", False))))
+        ds.attrs.update(squealkit_version=__version__, synthetic=int(bool(self.attrs.get("synthetic", False))),
+                        criteria=self.settings.criteria.describe())
         return ds
 
 
@@ -168,6 +206,28 @@ def _refine_rows(power: NDArray[np.float64], k: NDArray[np.intp]) -> NDArray[np.
     kk = np.clip(k, 1, power.shape[1] - 2)
     mag3 = np.sqrt(np.take_along_axis(power, kk[:, None] + np.array([-1, 0, 1]), axis=1))
     return np.atleast_1d(refine_peak(mag3, np.ones(kk.size, np.intp))) - 1 + kk
+
+
+@njit(cache=True)
+def _ewma_rows(p, a, state, out):  # pragma: no cover - compiled
+    b = 1.0 - a
+    for j in range(p.shape[1]):
+        y = state[j]
+        for m in range(p.shape[0]):
+            y = a * y + b * p[m, j]
+            out[m, j] = y
+        state[j] = y
+
+
+def _time_weight_rows(p: NDArray, a: float, state: NDArray[np.float64]) -> tuple[NDArray, NDArray[np.float64]]:
+    """Exponential average over rows (frames): ``y_m = a y_(m-1) + (1 - a) p_m``; returns y and its last row.
+
+    A compiled loop: ``scipy.signal.lfilter`` along the frame axis took 9 % of the analysis.
+    """
+    out = np.empty_like(p)
+    st = np.array(state, dtype=np.float64)
+    _ewma_rows(p, a, st, out)
+    return out, st
 
 
 class _DatasetSource:
@@ -241,11 +301,14 @@ def analyze_recording(
     *,
     mic: str | int,
     displacement: str | int,
-    rpm: float,
+    rpm: float | None = None,
     radius: float,
-    band: tuple[float, float] = (1000.0, 16000.0),
+    tacho: str | int | None = None,
+    setup: str | None = None,
+    band: tuple[float, float] | None = None,
     threshold_dba: float = 70.0,
     min_duration: float = 0.01,
+    time_weighting: str = "fast",
     fs: float | None = None,
     progress: Callable[[int, int], None] | None = None,
     **options: Any,
@@ -259,23 +322,36 @@ def analyze_recording(
     mic, displacement : str or int
         Channel name or index of the calibrated microphone [Pa] and the eddy-current
         probe [m].
-    rpm : float
-        Disc speed [rpm] (paper: 900).
+    rpm : float, optional
+        Disc speed [rpm] (paper: 900) when there is no tacho (constant speed).
     radius : float
         Probe (and pin) radius on the disc [m].
-    band : (float, float)
-        Criteria band [Hz] for the A-weighted level (default 1-16 kHz).
+    tacho : str or int, optional
+        Tacho channel: disc angle and speed from it (:mod:`squealkit.measurement.tacho`;
+        options ``tacho_kind`` "pulses" or "angle", ``pulses_per_rev``, ``tacho_level``,
+        ``angle_unit``), so a decelerating stop is analysed at its actual speed; revolutions
+        and angles count from the first pulse.
+    setup : {"component", "corner"}, optional
+        SAE J2521 setup whose squeal band applies (default ``"component"``, 2-16 kHz: brakes
+        not on a full corner, such as a pin-on-disc rig; ``"corner"``: 1.25-16 kHz).
+    band : (float, float), optional
+        A user band [Hz] instead of the setup's.
     threshold_dba : float
         Squeal threshold [dB(A)] (SAE J2521: 70).
     min_duration : float
         Shortest event [s] (no standard fixes it).
+    time_weighting : {"fast", "slow"}
+        IEC 61672-1 time weighting of the level (default Fast, 125 ms).
     fs : float, optional
         Sample rate [Hz] where the recording does not carry one.
     progress : callable, optional
         Called as ``progress(samples_done, samples_total)``.
     **options
         Further :class:`AnalysisSettings` fields (``lowpass_freq``, ``macro_orders``,
-        ``nperseg``, ``hop``, ``freq_tol``, ``n_angle_bins``, ``chunk_s``).
+        ``nperseg``, ``hop``, ``freq_tol``, ``n_angle_bins``, ``chunk_s``), and the rig's
+        geometry: ``probe_offset_deg`` (the probe sits this far upstream of the pin, so it sees
+        the surface that much rotation before the pin), ``acoustic_delay`` [s] (pin to
+        microphone) and ``polarity`` (-1: the probe reads the run-out reversed).
 
     Returns
     -------
@@ -299,12 +375,25 @@ def analyze_recording(
     else:
         src = open_recording(recording, fs=fs)
         attrs = {"source": str(src.path), "synthetic": src.synthetic}
+    crit = squeal_criteria(setup, band=band, threshold_dba=threshold_dba, time_weighting=time_weighting,
+                           min_duration=min_duration)
+    fs_ = float(src.fs)
+    rotation: Any
+    if tacho is not None:
+        tk = {k: options[k] for k in ("tacho_kind", "pulses_per_rev", "tacho_level", "angle_unit") if k in options}
+        rotation = read_tacho(src, tacho, kind=tk.get("tacho_kind", "pulses"),
+                              pulses_per_rev=tk.get("pulses_per_rev", 1), level=tk.get("tacho_level"),
+                              angle_unit=tk.get("angle_unit", "deg"))
+        span = src.n_samples / fs_
+        rpm = 60.0 * float(rotation.turns(span) - rotation.turns(0.0)) / span  # mean speed
+    elif rpm is None:
+        raise InputError("Give the disc speed rpm, or a tacho channel.")
+    else:
+        rotation = ConstantSpeed(validate_positive("rpm", rpm))
     try:
-        s = AnalysisSettings(rpm=rpm, radius=radius, band=tuple(band), threshold_dba=threshold_dba,
-                             min_duration=min_duration, **options)
+        s = AnalysisSettings(rpm=rpm, radius=radius, criteria=crit, **options)
     except TypeError as e:
         raise InputError(f"Unknown analysis option: {e}") from e
-    fs_ = float(src.fs)
     s = s.validated(fs_)
     mic_n, disp_n = src.resolve(mic), src.resolve(displacement)
     if mic_n == disp_n:
@@ -325,20 +414,33 @@ def analyze_recording(
     w_a32 = w_a.astype(np.float32)
     pscale = 2.0 / (s.nperseg * float(np.sum(win**2)))
     thr_power = P_REF**2 * 10 ** (s.threshold_dba / 10)
+    n_threads = thread_limit()  # FFT threads: this process's share (one on a one-thread Dask worker)
+    half_width = max(2, int(0.5 * s.freq_tol * n / fs_))  # bins of a tonal component either side
+    # the Fast level is compared and stored as mean square until the end
     core = max(hop, round(s.chunk_s * fs_ / hop) * hop)
-    margin = max(n, int(0.25 * fs_), int(4 * fs_ / ((s.macro_orders + 0.5) * f_rev)))
+    # the slowest speed decides how far the probe's view of the pin's surface lies back in time
+    t_span = np.linspace(0.0, total / fs_, 257)
+    f_min = max(float(np.min(rotation.rev_per_s(t_span))), 1e-3 * f_rev)
+    lag = s.acoustic_delay + abs(s.probe_offset_deg) / 360.0 / f_min
+    margin = max(n, int(0.25 * fs_), int(4 * fs_ / ((s.macro_orders + 0.5) * f_rev)), int(lag * fs_) + n)
+    off_turns = s.probe_offset_deg / 360.0
     n_frames = (total - n) // hop + 1
     half = (n - hop) // 2  # frame "interval" [start + half, start + half + hop) for energy sums
     # run-out is analysed at fs / dec, dec a divisor of hop with fs / dec >= 4 lowpass_freq
     dec = max(d for d in range(1, hop + 1) if hop % d == 0 and fs_ / d >= 4 * s.lowpass_freq)
     fs_d = fs_ / dec
-    sos_hp = signal.butter(2, s.band[0], "highpass", fs=fs_, output="sos")
     f_macro = (s.macro_orders + 0.5) * f_rev
     if f_macro >= s.lowpass_freq:
         raise InputError(f"macro_orders={s.macro_orders} at {s.rpm:g} rpm puts the macro corner ({f_macro:g} Hz) "
                          f"above lowpass_freq={s.lowpass_freq:g} Hz.")
 
-    level = np.empty(n_frames)
+    level = np.full(n_frames, -np.inf)  # Fast (time-weighted) level: max over each frame's interval
+    leq = np.empty(n_frames)  # the frame's own A-weighted band level (Hann window)
+    laf_state = 0.0  # time-weighted mean square carried from core to core
+    laf_max = 0.0
+    spec_state = np.zeros(hi - lo)  # time-weighted A-weighted power spectrum carried likewise
+    a_frames = math.exp(-hop / fs_ / s.criteria.time_constant_s)
+    a_tw = s.criteria.time_constant_s
     ridge_f = np.empty(n_frames)
     e_tot = np.empty(n_frames)
     e_rise = np.empty(n_frames)
@@ -350,7 +452,8 @@ def analyze_recording(
     comp_cross: list[NDArray] = [np.empty(0, np.complex128)]
     mic_spec_sum = np.zeros(freq.size)  # summed over loud frames, band bins only
     mic_cross_sum = np.zeros(freq.size, np.complex128)  # X_m conj(X_m-1) summed likewise
-    n_rev = int((total - 1) * f_rev / fs_) + 1
+    rev0 = math.floor(float(rotation.turns(0.0)))  # revolutions count from the first mark (or t = 0)
+    n_rev = math.floor(float(rotation.turns((total - 1) / fs_))) - rev0 + 1
     rev_max = np.full((3, n_rev), -np.inf)  # sro, macro, micro per revolution
     rev_min = np.full((3, n_rev), np.inf)
     nb = s.n_angle_bins
@@ -360,6 +463,7 @@ def analyze_recording(
     ang_e = np.zeros(nb)
     ang_ecnt = np.zeros(nb)
     max_tan = 0.0
+    frame_turns = np.zeros(n_frames)  # disc position under the pin when each frame pair's sound left it
 
     # an in-memory recording is one block (windows are views of it); files are read block by block
     block = total if isinstance(src, _DatasetSource) else max(core, DEFAULT_BLOCK)
@@ -367,6 +471,24 @@ def analyze_recording(
         p, q = data[mic_n], data[disp_n]
         f0 = -(-c0 // hop)
         f1 = min(n_frames, (c1 - 1) // hop + 1)
+        # the run-out grid: every dec-th sample, from g0 (a multiple of dec: one grid for all cores)
+        o = (-w0) % dec
+        g0 = w0 + o
+        ci = slice(-(-(c0 - g0) // dec), -(-(c1 - g0) // dec))
+        # A-weighted band mean square on the grid, time weighted (IEC 61672-1) from the state of the
+        # previous core on, through this core and on into the margin (for the frames ending there)
+        pw = band_weighted_signal(p[o:], fs_, s.band, workers=n_threads)
+        m_full = pw.size // dec
+        ms = np.zeros(-(-(p.size - o) // dec))
+        ms[:m_full] = np.square(pw[:m_full * dec], dtype=np.float32).reshape(-1, dec).mean(axis=1, dtype=np.float64)
+        laf = exponential_average(ms[ci.start:], dec / fs_, a_tw, initial=laf_state)
+        if ci.stop > ci.start:
+            laf_state = float(laf[ci.stop - ci.start - 1])
+            laf_max = max(laf_max, float(laf[:ci.stop - ci.start].max()))
+        if f1 > f0:
+            a = -(-(np.arange(f0, f1) * hop + half - g0) // dec)
+            b = a + hop // dec
+            level[f0:f1] = np.maximum.reduceat(laf[:b[-1] - ci.start], a - ci.start)
         # frames [f0, f1) start inside the core; their samples lie in the window
         if f1 > f0:
             # frames [fp, f1): one before the core's first (its samples lie in the margin), so
@@ -375,29 +497,38 @@ def analyze_recording(
             seg = p[fp * hop - w0: (f1 - 1) * hop + n - w0]
             frames_ = np.lib.stride_tricks.sliding_window_view(seg.astype(np.float32), n)[::hop]
             # single precision (7 digits) for the framed spectra: levels, peaks and their refinement
-            spec_p = sp_fft.rfft(frames_ * win32, axis=-1, workers=-1)[:, lo:hi]
+            spec_p = sp_fft.rfft(frames_ * win32, axis=-1, workers=n_threads)[:, lo:hi]
             spec = spec_p[f0 - fp:]  # frames [f0, f1)
             pb = spec.real**2
             pb += spec.imag**2
             pb *= np.float32(pscale)  # [Pa^2] per bin
             pa = pb * w_a32
             lev = pa.sum(axis=1, dtype=np.float64)
-            level[f0:f1] = 10 * np.log10(np.maximum(lev, 1e-300) / P_REF**2)
+            leq[f0:f1] = 10 * np.log10(np.maximum(lev, 1e-300) / P_REF**2)
             ridge_f[f0:f1] = (_refine_rows(pb, np.argmax(pa, axis=1)) + lo) * fs_ / n
-            loud = np.flatnonzero(lev >= thr_power)  # a component cannot exceed its frame's level
+            # the A-weighted spectrum time weighted like the level (exponential over frames, same time
+            # constant): a component's level is the frame's Fast level times its share of this spectrum,
+            # so each tone's level is what the meter shows, split by what the meter has heard
+            pa_tw, spec_state = _time_weight_rows(pa, a_frames, spec_state)
+            loud = np.flatnonzero(level[f0:f1] >= thr_power)
+            share_scale = level[f0:f1][loud] / np.maximum(pa_tw[loud].sum(axis=1, dtype=np.float64), 1e-300)
             if loud.size:
                 # phase advance of every band bin from the previous frame (zero for frame 0)
                 prev = loud + (f0 - fp - 1)
                 cross = spec[loud] * np.conj(spec_p[np.maximum(prev, 0)])
                 cross[prev < 0] = 0
                 mic_cross_sum[lo:hi] += cross.sum(axis=0, dtype=np.complex128)
-                fr, ff, fl = tonal_components(pb[loud], pa[loud], lo, fs_, n, s.threshold_dba)
+                # components (and their coarse frequency) from the time-weighted spectrum
+                fr, ff, fl = tonal_components(pa_tw[loud], pa_tw[loud], lo, fs_, n, s.threshold_dba,
+                                              scale=share_scale, half_width=half_width)
                 # each component's frequency from its phase advance over the main lobe (unbiased
-                # for growing and decaying squeal, where the two-bin ratio is not)
+                # for growing and decaying squeal, where the two-bin ratio is not), where the tone is
+                # in the frame itself (a quarter of its time-weighted power), not only remembered
                 kc = np.clip(np.rint(ff * (n / fs_)).astype(np.intp) - lo, _LOBE, hi - lo - 1 - _LOBE)
                 lobe = kc[:, None] + np.arange(-_LOBE, _LOBE + 1)
                 c = cross[fr[:, None], lobe].sum(axis=1, dtype=np.complex128)
-                ff = np.where(prev[fr] >= 0, phase_advance_freq(c, ff, fs_, hop), ff)
+                now = pa[loud[fr][:, None], lobe].sum(axis=1) >= 0.25 * pa_tw[loud[fr][:, None], lobe].sum(axis=1)
+                ff = np.where((prev[fr] >= 0) & now, phase_advance_freq(c, ff, fs_, hop), ff)
                 # weights of the event's mean frequency: |c| (the cross power of the frame pair), so
                 # a pair whose earlier frame is still in the noise (squeal onset) counts little
                 wc = np.where(prev[fr] >= 0, np.abs(c) * pscale, pb[loud[fr][:, None], lobe].sum(axis=1))
@@ -413,45 +544,52 @@ def analyze_recording(
         # low-pass at lowpass_freq (paper Fig. 12), run at fs / dec after linear-phase anti-alias
         # FIRs that pass up to 1.5 lowpass_freq and remove, 80 dB down, whatever would fold below
         # it; so the corner keeps its meaning (lowpass_decimated; tests compare the full rate)
-        o = (-w0) % dec
         sro = lowpass_decimated(q[o:], s.lowpass_freq, fs_, dec)
-        g0 = w0 + o  # global index of sro[0]
+        if s.polarity < 0:
+            sro = -sro
         macro = lowpass(sro, f_macro, fs_d, order=2)
         micro = sro - macro
-        tan_t = np.gradient(sro) * fs_d / v
-        # sound energy above the band's lower edge per sample (causal 2nd-order high-pass: its delay of
-        # a fraction of a millisecond is negligible against a revolution), summed on the run-out grid
-        hp = signal.sosfilt(sos_hp, p[o:o + (p.size - o) // dec * dec])
-        hp *= hp
-        e_d = np.zeros(sro.size)
-        e_d[:hp.size // dec] = hp.reshape(-1, dec) @ np.ones(dec)  # sums of dec samples (matmul: fast)
+        # incline under the probe, dq / (r dphi) (paper eq. 11 with v = r dphi/dt at the actual speed)
+        t_d = (g0 + np.arange(sro.size) * dec) / fs_
+        # (a speed extrapolated past the last tacho mark of a stop is held above 1/1000 of the mean)
+        rps = np.maximum(rotation.rev_per_s(t_d), 1e-3 * f_rev)
+        tan_probe = np.gradient(sro) * fs_d / (2 * math.pi * s.radius * rps)
+        # incline under the pin when the sound heard at t_d left it: emitted at t_d - acoustic_delay,
+        # from the surface the probe saw probe_offset earlier in rotation
+        if s.acoustic_delay or off_turns:
+            t_src = rotation.time_at(rotation.turns(t_d - s.acoustic_delay) - off_turns)
+            tan_t = np.interp(t_src, t_d, tan_probe)
+        else:
+            tan_t = tan_probe
+        # A-weighted sound energy in the squeal band on the run-out grid (zero-phase: nothing shifted)
+        e_d = ms
         cs_e, cs_r, cs_t = np.zeros((3, sro.size + 1))  # cumulative sums from 0
         np.cumsum(e_d, out=cs_e[1:])
         np.cumsum(np.where(tan_t > 0, e_d, 0.0), out=cs_r[1:])
         np.cumsum(tan_t, out=cs_t[1:])
         if f1 > f0:
-            a = -(-(np.arange(f0, f1) * hop + half - g0) // dec)
-            b = a + hop // dec
             e_int = cs_e[b] - cs_e[a]
             share = np.divide(cs_r[b] - cs_r[a], e_int, out=np.full(e_int.shape, 0.5), where=e_int > 0)
             e_rise[f0:f1] = e_tot[f0:f1] * share
             slope_f[f0:f1] = (cs_t[b] - cs_t[a]) / (b - a)
-        ci = slice(-(-(c0 - g0) // dec), -(-(c1 - g0) // dec))
-        idx = g0 + np.arange(ci.start, ci.stop) * dec
-        turns = idx * (f_rev / fs_)
-        rev = turns.astype(np.int64)  # floor (turns >= 0)
+        # the probe sees disc position turns + probe offset (angle 0: the first mark, under the pin)
+        turns = rotation.turns(t_d[ci]) + off_turns
+        rev = np.floor(turns).astype(np.int64) - rev0
+        rev = np.clip(rev, 0, n_rev - 1)
         starts = np.concatenate([[0], np.flatnonzero(np.diff(rev)) + 1])
         r = rev[starts]  # distinct revolutions of this core; the next core may continue the last one
         for j, sig in enumerate((sro[ci], macro[ci], micro[ci])):
             rev_max[j, r] = np.maximum(rev_max[j, r], np.maximum.reduceat(sig, starts))
             rev_min[j, r] = np.minimum(rev_min[j, r], np.minimum.reduceat(sig, starts))
-        abin = ((turns - rev) * nb).astype(np.int64) % nb
+        abin = ((turns % 1.0) * nb).astype(np.int64) % nb
         ang_q += np.bincount(abin, sro[ci], nb)
         ang_macro += np.bincount(abin, macro[ci], nb)
         ang_cnt += np.bincount(abin, minlength=nb)
-        max_tan = max(max_tan, float(np.max(np.abs(tan_t[ci]))))
-        if f1 > f0:
-            centre = (np.arange(f0, f1) * hop + n / 2) * (f_rev / fs_)
+        max_tan = max(max_tan, float(np.max(np.abs(tan_probe[ci]))))
+        if f1 > f0:  # the disc position under the pin when the frame's sound left it
+            centre = rotation.turns((np.arange(f0, f1) * hop + n / 2) / fs_ - s.acoustic_delay)
+            # the component weights are cross powers of a frame and its predecessor: centred half a hop earlier
+            frame_turns[f0:f1] = rotation.turns((np.arange(f0, f1) * hop + (n - hop) / 2) / fs_ - s.acoustic_delay)
             fb = ((centre % 1.0) * nb).astype(np.int64) % nb
             ang_e += np.bincount(fb, e_tot[f0:f1], nb)
             ang_ecnt += np.bincount(fb, minlength=nb)
@@ -460,7 +598,7 @@ def analyze_recording(
 
     cf, comp_f, comp_c = np.concatenate(comp_frame), np.concatenate(comp_freq), np.concatenate(comp_cross)
     frame_start = np.arange(n_frames) * hop / fs_
-    events, ev_frames = link_components(
+    events, ev_frames, ev_weights = link_components(
         cf, comp_f, np.concatenate(comp_level), np.concatenate(comp_pow),
         frame_start + half / fs_, hop / fs_, freq_tol=s.freq_tol, min_duration=s.min_duration,
     )
@@ -468,7 +606,6 @@ def analyze_recording(
     harmonics: list[dict[str, float]] = []
     rising: float | None = None
     corr: float | None = None
-    peak: float | None = None
     if events:
         cover = np.zeros(n_frames + 1, np.int64)  # +1 at each event's first frame, -1 after its last
         np.add.at(cover, np.array([fr[0] for fr in ev_frames]), 1)
@@ -476,7 +613,6 @@ def analyze_recording(
         in_ev = np.cumsum(cover[:-1]) > 0
         tot = float(e_tot[in_ev].sum())
         rising = float(e_rise[in_ev].sum() / tot) if tot > 0 else None
-        peak = max(ev.peak_dba for ev in events)
         mag = np.sqrt(mic_spec_sum)
         k0 = lo + int(np.argmax(mic_spec_sum[lo:hi] * w_a))
         # the dominant line's phase advance over its own components only: the main lobe of another
@@ -499,19 +635,38 @@ def analyze_recording(
         with np.errstate(divide="ignore"):
             ln_e = np.log(np.maximum(e_tot, 1e-300))
         growth = np.gradient(ln_e) * 0.5 * fs_ / hop
-        sel = level >= s.threshold_dba - 20
+        sel = leq >= s.threshold_dba - 20
         if sel.sum() > 3 and np.std(growth[sel]) > 0 and np.std(slope_f[sel]) > 0:
             corr = float(np.corrcoef(growth[sel], slope_f[sel])[0, 1])
 
+    phase: float | None = None
+    if events and ang_ecnt.any() and ang_cnt.any():
+        # squeal energy's circular mean angle against the macro run-out's crest (both in the disc's frame)
+        angle_c = (np.arange(nb) + 0.5) * 2 * math.pi / nb
+        e_mean = np.divide(ang_e, ang_ecnt, out=np.zeros(nb), where=ang_ecnt > 0)
+        z = np.sum(e_mean * np.exp(1j * angle_c))
+        q_mean = np.divide(ang_macro, ang_cnt, out=np.full(nb, -np.inf), where=ang_cnt > 0)
+        crest = angle_c[int(np.argmax(q_mean))]
+        phase = float(np.degrees(np.angle(z * np.exp(-1j * crest))))
+        # each event's own place on the disc: its component's power per frame at the frame's disc angle
+        rot = np.exp(-1j * crest)
+        events = [replace(e, runout_phase_deg=float(np.degrees(np.angle(
+                      np.sum(w * np.exp(2j * math.pi * frame_turns[fr])) * rot))))
+                  for e, fr, w in zip(events, ev_frames, ev_weights, strict=True)]
+    level = 10 * np.log10(np.maximum(level, 1e-300) / P_REF**2)
+    peak = float(10 * np.log10(max(laf_max, 1e-300) / P_REF**2))
     t_frames = frame_start + n / 2 / fs_
     frames = xr.Dataset(
         {
-            "level_dba": ("time", level, {"units": "dB(A)",
-                                          "long_name": f"A-weighted level {s.band[0]:g}-{s.band[1]:g} Hz"}),
+            "level_dba": ("time", level, {"units": "dB(A)", "long_name":
+                                          f"L_A{s.criteria.time_weighting[0].upper()} {s.band[0]:g}-{s.band[1]:g} Hz "
+                                          "(max over the frame's interval)"}),
+            "leq_dba": ("time", leq, {"units": "dB(A)", "long_name": "A-weighted band level of the Hann frame"}),
             "ridge_freq": ("time", ridge_f, {"units": "Hz", "long_name": "strongest line in the band"}),
             "band_power": ("time", e_tot, {"units": "Pa^2", "long_name": "mean square in the band (Hann frame)"}),
             "rising_power": ("time", e_rise, {"units": "Pa^2", "long_name": "band_power x share on rising run-out"}),
             "tan_theta": ("time", slope_f, {"units": "1", "long_name": "mean SRO slope tan(theta)"}),
+            "rpm": ("time", 60.0 * rotation.rev_per_s(t_frames), {"units": "rpm", "long_name": "disc speed"}),
         },
         coords={"time": ("time", t_frames, {"units": "s", "long_name": "frame centre"})},
     )
@@ -543,6 +698,7 @@ def analyze_recording(
              "max_tan_theta": max_tan, "surface_speed": v}
     return MeasurementResult(
         squeal_frequency_hz=squeal_f, harmonics=tuple(harmonics), events=tuple(events), rising_fraction=rising,
-        growth_slope_correlation=corr, peak_dba=peak, duration_s=total / fs_, fs=fs_, settings=s,
+        growth_slope_correlation=corr, peak_dba=peak, runout_phase_deg=phase, duration_s=total / fs_, fs=fs_,
+        settings=s,
         frames=frames, revolutions=revolutions, polar=polar, spectrum=spectrum, attrs=attrs,
     )

@@ -34,27 +34,32 @@ class CampaignSummary:
     rows : tuple of dict
         One per recording, keys as in the CSV columns.
     occurrence_percent : float
-        Share of recordings with squeal [%].
+        Share of recordings (brake applications) with squeal [%]: a tonal component reached
+        the threshold (so the application's peak level did too), SAE J2521's occurrence.
     n_events : int
     frequencies : tuple of dict
         ``frequency_hz`` (event-count-weighted mean), ``n_events``, ``n_recordings``,
         ``max_peak_dba`` per frequency group.
+    criteria : str
+        The criteria every recording was analysed with (see ``SquealCriteria.describe``).
     """
 
     rows: tuple[dict[str, Any], ...]
     occurrence_percent: float
     n_events: int
     frequencies: tuple[dict[str, Any], ...]
+    criteria: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """Plain dict for JSON."""
-        return {"n_recordings": len(self.rows), "occurrence_percent": self.occurrence_percent,
+        return {"criteria": self.criteria, "n_recordings": len(self.rows),
+                "occurrence_percent": self.occurrence_percent,
                 "n_events": self.n_events, "frequencies": list(self.frequencies), "recordings": list(self.rows)}
 
     def to_csv(self) -> str:
         """CSV text: ``#`` comment lines with the totals, then one row per recording."""
         buf = io.StringIO()
-        buf.write(f"# squealkit campaign summary: n_recordings={len(self.rows)}, "
+        buf.write(f"# squealkit campaign summary ({self.criteria}): n_recordings={len(self.rows)}, "
                   f"occurrence_percent={self.occurrence_percent:.6g}, n_events={self.n_events}\n")
         for g in self.frequencies:
             buf.write(f"# frequency_hz={g['frequency_hz']:.6g}, n_events={g['n_events']}, "
@@ -92,7 +97,7 @@ def _row(name: str, r: MeasurementResult) -> dict[str, Any]:
             "duration_s": r.duration_s, "squeal": int(r.squeal), "n_events": len(r.events),
             "squeal_frequency_hz": r.squeal_frequency_hz, "peak_dba": r.peak_dba,
             "rising_fraction": r.rising_fraction,
-            "_events": [(e.frequency_hz, e.peak_dba) for e in r.events]}
+            "_events": [(e.frequency_hz, e.peak_dba) for e in r.events], "_criteria": r.settings.criteria.describe()}
 
 
 def _summarize(rows: Sequence[dict[str, Any]], freq_tol: float) -> CampaignSummary:
@@ -111,8 +116,11 @@ def _summarize(rows: Sequence[dict[str, Any]], freq_tol: float) -> CampaignSumma
                    "n_recordings": len(g["recordings"]), "max_peak_dba": g["max_peak_dba"]}
                   for g in sorted(groups, key=lambda g: -g["n_events"]))
     occ = 100.0 * sum(r["squeal"] for r in rows) / len(rows)
-    clean = tuple({k: v for k, v in r.items() if k != "_events"} for r in rows)
-    return CampaignSummary(clean, occ, sum(r["n_events"] for r in rows), freqs)
+    crit = sorted({r["_criteria"] for r in rows})
+    if len(crit) > 1:
+        raise InputError(f"The recordings were analysed with different criteria: {crit}.")
+    clean = tuple({k: v for k, v in r.items() if not k.startswith("_")} for r in rows)
+    return CampaignSummary(clean, occ, sum(r["n_events"] for r in rows), freqs, crit[0])
 
 
 def _analyze_one(arg: tuple) -> dict[str, Any]:

@@ -1,10 +1,12 @@
 """Squeal events by industry criteria (SAE J2521 threshold, VDA 303 several frequencies).
 
-A frame's tonal components are the local maxima of its A-weighted power spectrum in the
-criteria band (default 1-16 kHz) whose level, summed over the Hann main lobe, reaches the
-threshold (default 70 dB(A), SAE J2521). Components are linked across frames by frequency,
-so simultaneous squeal frequencies stay separate events (VDA 303); an event lasts at least
-the minimum duration (a setting: no standard fixes one).
+A frame's tonal components are the local maxima of the time-weighted (Fast, 125 ms)
+A-weighted power spectrum in the criteria band (SAE J2521 component setup by default:
+2-16 kHz) whose level reaches the threshold (default 70 dB(A)). A component's level is the
+frame's Fast band level times the component's share of that spectrum (its peak and the bins
+down to the valleys either side), so one tone alone reads the level a sound level meter shows.
+Components are linked across frames by frequency, so simultaneous squeal frequencies stay
+separate events (VDA 303); an event lasts at least the minimum duration (a setting: no standard fixes one).
 """
 
 from __future__ import annotations
@@ -35,12 +37,16 @@ class SquealEvent:
         Power-weighted mean refined frequency [Hz].
     peak_dba : float
         Highest tonal level [dB(A) re 20 uPa].
+    runout_phase_deg : float or None
+        Where on the disc this component sounds: the circular mean disc angle of its power
+        minus the angle of the macro run-out's crest [deg, -180 to 180] (None when unknown).
     """
 
     start_s: float
     end_s: float
     frequency_hz: float
     peak_dba: float
+    runout_phase_deg: float | None = None
 
     @property
     def duration_s(self) -> float:
@@ -54,7 +60,7 @@ class SquealEvent:
 
 def tonal_components(
     power: NDArray[np.float64], power_a: NDArray[np.float64], lo: int, fs: float, nperseg: int,
-    threshold_dba: float,
+    threshold_dba: float, *, scale: NDArray[np.float64] | None = None, half_width: int = 2,
 ) -> tuple[NDArray[np.intp], NDArray[np.float64], NDArray[np.float64]]:
     """Tonal components above the threshold in framed spectra.
 
@@ -66,6 +72,15 @@ def tonal_components(
         A-weighted power per bin [Pa^2] of the same bins.
     lo : int
         Index of the first band bin in the full spectrum.
+    scale : ndarray, shape (n_frames,), optional
+        Factor from each frame's spectrum power to the component's level: the frame's
+        time-weighted band mean square over its A-weighted band power (so a component's level
+        is the Fast level times its share of the frame). Default 1 (the frame's own level).
+    half_width : int
+        Bins either side of a peak that belong to its component (>= 2, the Hann main lobe).
+        A burst shorter than the frame spreads over about ``fs / duration`` Hz, wider than the
+        main lobe of a long frame, so the analysis passes ``freq_tol / 2`` in bins; a peak
+        must be the largest within its component.
 
     Returns
     -------
@@ -76,25 +91,51 @@ def tonal_components(
         return np.empty(0, np.intp), np.empty(0), np.empty(0)
     thr = P_REF**2 * 10 ** (threshold_dba / 10)
     pa = power_a
-    lobe = pa.copy()  # sum over bins k-2..k+2 (the Hann main lobe), zero beyond the band
-    lobe[:, 1:] += pa[:, :-1]
-    lobe[:, 2:] += pa[:, :-2]
-    lobe[:, :-1] += pa[:, 1:]
-    lobe[:, :-2] += pa[:, 2:]
-    # local maxima over k-2..k+2 among bins 1..n-2 (the band's edge bins never count)
-    c = pa[:, 1:-1]
-    is_max = (c >= pa[:, :-2]) & (c >= pa[:, 2:]) & (lobe[:, 1:-1] >= thr)
-    is_max[:, 1:] &= c[:, 1:] >= pa[:, :-3]
-    is_max[:, :-1] &= c[:, :-1] >= pa[:, 3:]
+    sc = np.ones(pa.shape[0]) if scale is None else np.asarray(scale, dtype=np.float64)
+    if half_width <= 2:
+        lobe = pa.copy()  # sum over bins k-2..k+2 (the Hann main lobe), zero beyond the band
+        lobe[:, 1:] += pa[:, :-1]
+        lobe[:, 2:] += pa[:, :-2]
+        lobe[:, :-1] += pa[:, 1:]
+        lobe[:, :-2] += pa[:, 2:]
+        # local maxima over k-2..k+2 among bins 1..n-2 (the band's edge bins never count)
+        c = pa[:, 1:-1]
+        is_max = (c >= pa[:, :-2]) & (c >= pa[:, 2:]) & (lobe[:, 1:-1] * sc[:, None] >= thr)
+        is_max[:, 1:] &= c[:, 1:] >= pa[:, :-3]
+        is_max[:, :-1] &= c[:, :-1] >= pa[:, 3:]
+    else:
+        from scipy.ndimage import maximum_filter1d
+
+        w = 2 * half_width + 1
+        cs = np.zeros((pa.shape[0], pa.shape[1] + 1), np.float64)
+        np.cumsum(pa, axis=1, out=cs[:, 1:])
+        i = np.arange(pa.shape[1])
+        lobe = cs[:, np.minimum(i + half_width + 1, pa.shape[1])] - cs[:, np.maximum(i - half_width, 0)]
+        c = pa[:, 1:-1]
+        peak = maximum_filter1d(pa, w, axis=1, mode="constant", cval=0.0)[:, 1:-1]
+        is_max = (c >= peak) & (lobe[:, 1:-1] * sc[:, None] >= thr)
     is_max &= c >= pa.max(axis=1, keepdims=True) * 10 ** (-_DYNAMIC_RANGE_DB / 10)
     frame, k = np.nonzero(is_max)
     k += 1
+    # a component's power: its peak bin and the bins either side (up to half_width) down to the valley
+    # towards a neighbouring peak, so a side peak never counts the main peak's bins as its own
+    own = pa[frame, k].astype(np.float64)
+    for side in (1, -1):
+        going = np.ones(k.size, bool)
+        for d in range(1, max(2, half_width) + 1):
+            j = k + side * d
+            inside = (j >= 0) & (j < pa.shape[1])
+            jj = np.clip(j, 0, pa.shape[1] - 1)
+            going &= inside & (pa[frame, jj] <= pa[frame, np.clip(j - side, 0, pa.shape[1] - 1)])
+            own += np.where(going, pa[frame, jj], 0.0)
+    keep = own * sc[frame] >= thr
+    frame, k, own = frame[keep], k[keep], own[keep]
     if frame.size:
         mag3 = np.sqrt(power[frame[:, None], k[:, None] + np.array([-1, 0, 1])])
         freq = (np.atleast_1d(refine_peak(mag3, np.ones(k.size, np.intp))) - 1 + k + lo) * fs / nperseg
     else:
         freq = np.empty(0)
-    level = 10 * np.log10(lobe[frame, k].astype(np.float64) / P_REF**2)
+    level = 10 * np.log10(own * sc[frame] / P_REF**2)
     return frame, freq.astype(np.float64), level
 
 
@@ -102,12 +143,12 @@ def link_components(
     frame: NDArray[np.intp], freq: NDArray[np.float64], level: NDArray[np.float64], power: NDArray[np.float64],
     frame_start_s: NDArray[np.float64], frame_len_s: float, *, freq_tol: float = 100.0, max_gap: int = 1,
     min_duration: float = 0.0,
-) -> tuple[list[SquealEvent], list[NDArray[np.intp]]]:
+) -> tuple[list[SquealEvent], list[NDArray[np.intp]], list[NDArray[np.float64]]]:
     """Link components of successive frames into events, one per frequency track.
 
     A component joins the open track nearest in frequency within ``freq_tol`` [Hz]; a track
     closes after ``max_gap`` frames without a component. Returns the events (sorted by
-    start) and, for each, the frames it covers (ascending).
+    start) and, for each, the frames it covers (ascending) and its power in each of them.
     """
     order = np.lexsort((freq, frame))
     # a track is a list [first, last, wsum, fsum, freq, peak, frames] (plain Python: this loop is
@@ -128,7 +169,7 @@ def link_components(
             if d <= best_d and tr[1] != fr:
                 best, best_d = tr, d
         if best is None:
-            best = [fr, fr, 0.0, 0.0, f, -np.inf, []]
+            best = [fr, fr, 0.0, 0.0, f, -np.inf, [], []]
             open_tracks.append(best)
         best[1] = fr
         best[2] += w
@@ -137,13 +178,15 @@ def link_components(
         if lev > best[5]:
             best[5] = lev
         best[6].append(fr)
+        best[7].append(w)
     done.extend(open_tracks)
-    events, frames = [], []
-    for first, last, _, _, f_mean, peak, frs in sorted(done, key=lambda t: (t[0], t[4])):
+    events, frames, weights = [], [], []
+    for first, last, _, _, f_mean, peak, frs, ws in sorted(done, key=lambda t: (t[0], t[4])):
         start = float(frame_start_s[first])
         end = float(frame_start_s[last] + frame_len_s)
         if end - start + 1e-12 < min_duration:
             continue
         events.append(SquealEvent(start, end, f_mean, peak))
         frames.append(np.asarray(frs, dtype=np.intp))
-    return events, frames
+        weights.append(np.asarray(ws, dtype=np.float64))
+    return events, frames, weights

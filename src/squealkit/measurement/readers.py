@@ -1,4 +1,4 @@
-"""Reading rig recordings: CSV, multi-channel WAV, netCDF/HDF5 (xarray) and NI TDMS.
+"""Reading rig recordings: CSV, multi-channel WAV, netCDF/HDF5 (xarray), NI TDMS, ASAM MDF4, UFF 58.
 
 A recording is a set of equally sampled channels (e.g. a microphone in Pa and an
 eddy-current probe in m, paper §5.1). :func:`open_recording` inspects a file without
@@ -170,6 +170,58 @@ class RecordingSource:
                 sub = ds[names].isel({dim: slice(start, start + block)}).load()
                 yield start, {n: sub[n].values for n in names}
 
+    def _blocks_mdf4(self, names: list[str], block: int):
+        from asammdf import MDF
+
+        # asammdf yields each channel in the chunks of its data blocks; cut them into equal blocks
+        with MDF(self.path) as mdf:
+            its = {n: mdf.iter_get(n, group=self._extra["where"][n][0], index=self._extra["where"][n][1],
+                                   samples_only=True) for n in names}
+            buf: dict[str, list[NDArray]] = {n: [] for n in names}
+            have = dict.fromkeys(names, 0)
+            start = 0
+            done = False
+            while not done:
+                for n in names:
+                    while have[n] < block:
+                        try:
+                            samples = np.asarray(next(its[n])[0], dtype=np.float64)
+                        except StopIteration:
+                            done = True
+                            break
+                        buf[n].append(samples)
+                        have[n] += samples.size
+                m = min(have.values())
+                if m == 0:
+                    return
+                take = min(m, block)
+                out = {}
+                for n in names:
+                    joined = np.concatenate(buf[n])
+                    out[n], rest = joined[:take], joined[take:]
+                    buf[n], have[n] = [rest], rest.size
+                yield start, out
+                start += take
+                if done:
+                    while min(have.values()) > 0:
+                        take = min(min(have.values()), block)
+                        out = {}
+                        for n in names:
+                            joined = np.concatenate(buf[n])
+                            out[n], rest = joined[:take], joined[take:]
+                            buf[n], have[n] = [rest], rest.size
+                        yield start, out
+                        start += take
+
+    def _blocks_uff(self, names: list[str], block: int):
+        import pyuff
+
+        # a UFF 58 function is one record: read each wanted channel's record once (only those)
+        uff = pyuff.UFF(str(self.path))
+        data = {n: np.asarray(uff.read_sets(self._extra["sets"][n])["data"], dtype=np.float64) for n in names}
+        for start in range(0, self.n_samples, block):
+            yield start, {n: d[start:start + block] for n, d in data.items()}
+
     def _blocks_tdms(self, names: list[str], block: int):
         from nptdms import TdmsFile
 
@@ -206,7 +258,10 @@ def open_recording(
     path : path-like
         ``.csv``/``.txt`` (header row; a time column named ``time``/``t``, or give ``fs``),
         ``.wav`` (multi-channel PCM or float), ``.nc``/``.h5``/``.hdf5`` (written by
-        xarray; a 1-D time dimension) or ``.tdms`` (NI; ``group/channel`` names).
+        xarray; a 1-D time dimension), ``.tdms`` (NI; ``group/channel`` names), ``.mf4``
+        (ASAM MDF4, read with asammdf block by block; channels of one sample rate) or
+        ``.uff``/``.unv`` (universal file, dataset 58 time histories, read with pyuff one
+        channel record at a time).
     fs : float, optional
         Sample rate [Hz]; required for a CSV without a time column, otherwise overrides.
     scale : float, sequence or mapping, optional
@@ -238,8 +293,13 @@ def open_recording(
             src = _open_netcdf(p, fs)
         elif suffix == ".tdms":
             src = _open_tdms(p, fs)
+        elif suffix in (".mf4", ".mdf"):
+            src = _open_mdf4(p, fs)
+        elif suffix in (".uff", ".unv"):
+            src = _open_uff(p, fs)
         else:
-            raise InputError(f"Recording {str(p)!r} has an unknown format; use .csv, .wav, .nc/.h5 or .tdms.")
+            raise InputError(f"Recording {str(p)!r} has an unknown format; use .csv, .wav, .nc/.h5, .tdms, "
+                             ".mf4 or .uff/.unv.")
     except InputError:
         raise
     except Exception as e:  # any parser failure is a user's unreadable file
@@ -347,6 +407,7 @@ def _open_tdms(p: Path, fs: float | None) -> RecordingSource:
     from nptdms import TdmsFile
 
     with TdmsFile.open(p) as f:
+        synthetic = bool(int(f.properties.get("synthetic", 0) or 0))
         chans, units, lengths, incs = [], {}, [], []
         for g in f.groups():
             for c in g.channels():
@@ -364,7 +425,74 @@ def _open_tdms(p: Path, fs: float | None) -> RecordingSource:
         if not incs:
             raise InputError(f"Recording {str(p)!r} has no wf_increment property; give fs.")
         fs = 1.0 / validate_positive("wf_increment", incs[0])
-    return RecordingSource(p, "tdms", float(fs), lengths[0], tuple(chans), units)
+    return RecordingSource(p, "tdms", float(fs), lengths[0], tuple(chans), units, {}, {"synthetic": synthetic})
+
+
+def _open_mdf4(p: Path, fs: float | None) -> RecordingSource:
+    try:
+        from asammdf import MDF
+    except ImportError as e:
+        raise InputError("Reading MDF4 needs asammdf: pip install 'squealkit[daq]'.") from e
+    with MDF(p) as mdf:
+        where: dict[str, tuple[int, int]] = {}
+        units: dict[str, str] = {}
+        n_samples, rate = None, None
+        for gi, group in enumerate(mdf.groups):
+            for ci, ch in enumerate(group.channels):
+                if ch.name in where or ch.name.lower() in _TIME_NAMES or ci == mdf.masters_db.get(gi):
+                    continue
+                sig = mdf.get(group=gi, index=ci, raw=True) if n_samples is None else None
+                if sig is not None:
+                    n_samples = len(sig.timestamps)
+                    rate = float(np.round(1.0 / float(np.median(np.diff(sig.timestamps[:64]))), 6))
+                where[ch.name] = (gi, ci)
+                units[ch.name] = str(ch.unit)
+        synthetic = "SYNTHETIC" in str(mdf.header.comment)
+    if not where or n_samples is None:
+        raise InputError(f"Recording {str(p)!r} has no channel.")
+    counts = {n: int(mdf_len) for n, mdf_len in _mdf_lengths(p, where).items()}
+    if len(set(counts.values())) != 1:
+        raise InputError(f"Channels of {str(p)!r} have different lengths {sorted(set(counts.values()))}; "
+                         "give channels of one sample rate.")
+    return RecordingSource(p, "mdf4", float(fs or rate), n_samples, tuple(where), units, {},
+                           {"where": where, "synthetic": synthetic})
+
+
+def _mdf_lengths(p: Path, where: Mapping[str, tuple[int, int]]) -> dict[str, int]:
+    from asammdf import MDF
+
+    with MDF(p) as mdf:
+        return {n: int(mdf.groups[g].channel_group.cycles_nr) for n, (g, _) in where.items()}
+
+
+def _open_uff(p: Path, fs: float | None) -> RecordingSource:
+    try:
+        import pyuff
+    except ImportError as e:
+        raise InputError("Reading UFF needs pyuff: pip install 'squealkit[daq]'.") from e
+    uff = pyuff.UFF(str(p))
+    types = list(uff.get_set_types())
+    sets: dict[str, int] = {}
+    units: dict[str, str] = {}
+    lengths, incs, synthetic = [], [], False
+    for i, t in enumerate(types):
+        if int(t) != 58:
+            continue
+        d = uff.read_sets(i)
+        name = str(d.get("id1", "")).strip() or f"ch{len(sets)}"
+        if name in sets:
+            name = f"{name}_{i}"
+        sets[name] = i
+        units[name] = str(d.get("ordinate_axis_units_lab", "")).strip()
+        lengths.append(int(d["num_pts"]))
+        incs.append(float(d["abscissa_inc"]))
+        synthetic |= "SYNTHETIC" in str(d.get("id2", ""))
+    if not sets:
+        raise InputError(f"Recording {str(p)!r} has no dataset 58 (function at nodal DOF).")
+    if len(set(lengths)) != 1:
+        raise InputError(f"Channels of {str(p)!r} have different lengths {sorted(set(lengths))}.")
+    return RecordingSource(p, "uff", float(fs or 1.0 / validate_positive("abscissa_inc", incs[0])), lengths[0],
+                           tuple(sets), units, {}, {"sets": sets, "synthetic": synthetic})
 
 
 def recording_dataset(

@@ -14,6 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import signal
 
 from .._validation import InputError, validate_fs
+from .criteria import P_REF, a_weighting_db
 
 __all__ = [
     "P_REF",
@@ -24,30 +25,6 @@ __all__ = [
     "ridge",
     "spectrogram",
 ]
-
-#: Reference sound pressure [Pa] for dB SPL.
-P_REF = 20e-6
-# IEC 61672-1:2013 Annex E constants: pole frequencies [Hz] and the 1 kHz normalisation.
-_F1, _F2, _F3, _F4 = 20.598997, 107.65265, 737.86223, 12194.217
-_A1000 = -2.000
-
-
-def a_weighting_db(freq: ArrayLike) -> NDArray[np.float64]:
-    """A-weighting A(f) [dB] per IEC 61672-1 (analytic form, Annex E).
-
-    Examples
-    --------
-    >>> round(float(a_weighting_db(1000.0)), 2)
-    0.0
-    >>> round(float(a_weighting_db(100.0)), 1)
-    -19.1
-    """
-    f = np.asarray(freq, dtype=np.float64)
-    f2 = f * f
-    with np.errstate(divide="ignore"):
-        ra = (_F4**2 * f2 * f2) / ((f2 + _F1**2) * np.sqrt((f2 + _F2**2) * (f2 + _F3**2)) * (f2 + _F4**2))
-        return 20.0 * np.log10(ra) - _A1000
-
 
 def frame_power(x: NDArray[np.float64], nperseg: int, hop: int) -> tuple[NDArray[np.complex128], NDArray[np.float64]]:
     """Hann-windowed framed spectra of ``x`` and their power per bin [unit^2].

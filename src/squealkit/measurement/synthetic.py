@@ -22,8 +22,8 @@ import xarray as xr
 from numpy.typing import NDArray
 
 from .._validation import InputError, validate_fs, validate_positive
+from .criteria import P_REF, a_weighting_db, exponential_average
 from .readers import DEFAULT_BLOCK, RecordingSource, recording_dataset
-from .spectral import P_REF, a_weighting_db
 
 __all__ = ["SyntheticSource", "synthetic_recording"]
 
@@ -53,8 +53,13 @@ class SyntheticSource:
     sro_amps: NDArray[np.float64] = field(repr=False)
     sro_phases: NDArray[np.float64] = field(repr=False)
     log_env: NDArray[np.float64] = field(repr=False)  # ln(envelope / amp_pa) over one revolution
-    channels: tuple[str, ...] = ("mic", "displacement")
-    units: dict[str, str] = field(default_factory=lambda: {"mic": "Pa", "displacement": "m"})
+    rpm_end: float | None = None  # speed at the end [rpm]: a linear deceleration from rpm (None: constant)
+    probe_offset_deg: float = 0.0  # the probe sits this far upstream of the pin (sees the surface earlier)
+    polarity: int = 1  # -1: the probe reads the run-out reversed
+    acoustic_delay: float = 0.0  # [s] from the pin to the microphone
+    tacho_ppr: int = 1  # pulses per revolution of the tacho channel
+    channels: tuple[str, ...] = ("mic", "displacement", "tacho")
+    units: dict[str, str] = field(default_factory=lambda: {"mic": "Pa", "displacement": "m", "tacho": "V"})
     path: Path = Path("<synthetic>")
     fmt: str = "synthetic"
 
@@ -63,6 +68,14 @@ class SyntheticSource:
     @property
     def duration(self) -> float:
         return self.n_samples / self.fs
+
+    def turns(self, t: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Disc position [rev] at times ``t`` [s]: 0 at t = 0, constant speed or a linear deceleration."""
+        f0 = self.rpm / 60.0
+        if self.rpm_end is None:
+            return t * f0
+        f1 = self.rpm_end / 60.0
+        return f0 * t + 0.5 * (f1 - f0) / self.duration * t * t
 
     def surface(self, turns: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """True run-out [m] and its slope tan(theta) at disc positions ``turns`` (revolutions)."""
@@ -81,20 +94,32 @@ class SyntheticSource:
         """Samples ``start:stop`` of both channels (noise seeded by block start)."""
         idx = np.arange(start, stop)
         t = idx / self.fs
-        turns = t * self.rpm / 60.0
+        turns = self.turns(t)
         env = self.envelope(turns)
         grid = np.arange(_N_ANGLE + 1) / _N_ANGLE
         q_grid, _ = self.surface(grid)  # periodic surface, interpolated (error < 1e-3 of the micro part)
-        q = np.interp(turns % 1.0, grid, q_grid)
+        q = self.polarity * np.interp((turns + self.probe_offset_deg / 360.0) % 1.0, grid, q_grid)
         ph = 2 * np.pi * self.freq * t
         tone = np.sin(ph)
         for h, a in enumerate(self.harmonics, start=2):
             tone = tone + a * np.sin(h * ph + 0.3 * h)
         rng = np.random.default_rng([self.seed if self.seed is not None else 0, start])
-        mic = env * tone + self.noise_pa * rng.standard_normal(idx.size)
+        if self.acoustic_delay:
+            te = t - self.acoustic_delay
+            ph_e = 2 * np.pi * self.freq * te
+            tone_e = np.sin(ph_e)
+            for h, a in enumerate(self.harmonics, start=2):
+                tone_e = tone_e + a * np.sin(h * ph_e + 0.3 * h)
+            mic = self.envelope(self.turns(te)) * tone_e * (te >= 0)
+        else:
+            mic = env * tone
+        mic = mic + self.noise_pa * rng.standard_normal(idx.size)
         disp = q + self.disp_squeal_m * (env / self.amp_pa) * np.sin(ph - 0.5) \
             + self.noise_m * rng.standard_normal(idx.size)
-        return {"mic": mic, "displacement": disp}
+        # tacho: a 5 V pulse per mark, 5 % of a revolution wide (1 per revolution) or 50 % duty (encoders)
+        width = 0.05 if self.tacho_ppr == 1 else 0.5
+        tacho = 5.0 * (((turns * self.tacho_ppr) % 1.0) < width)
+        return {"mic": mic, "displacement": disp, "tacho": tacho}
 
     def iter_blocks(self, channels: Sequence[str | int], *, block: int = DEFAULT_BLOCK
                     ) -> Iterator[tuple[int, dict[str, NDArray[np.float64]]]]:
@@ -103,13 +128,23 @@ class SyntheticSource:
             data = self.block(s, min(self.n_samples, s + block))
             yield s, {n: data[n] for n in names}
 
-    def truth(self, threshold_dba: float = 70.0, merge_gap: float = 0.01) -> dict[str, object]:
-        """Known answers: frequency, event intervals above ``threshold_dba``, rising fraction."""
-        t = np.arange(0, self.n_samples, 8) / self.fs
-        turns = t * self.rpm / 60.0
+    def truth(self, threshold_dba: float = 70.0, merge_gap: float = 0.01, time_constant: float = 0.125
+              ) -> dict[str, object]:
+        """Known answers: frequency, event intervals above ``threshold_dba``, rising fraction, peak level.
+
+        Levels are those of the noise-free squeal (fundamental and harmonics), A-weighted and
+        time weighted with ``time_constant`` [s] (IEC 61672-1 Fast: 0.125), as a sound level
+        meter shows them.
+        """
+        step = 8
+        t = np.arange(0, self.n_samples, step) / self.fs
+        turns = self.turns(t)
         env = self.envelope(turns)
         _, tan_t = self.surface(turns)
-        level = 20 * np.log10(np.maximum(env, 1e-30) / math.sqrt(2) / P_REF) + float(a_weighting_db(self.freq))
+        gain = 10 ** (a_weighting_db(self.freq) / 10) + sum(
+            a * a * 10 ** (a_weighting_db(h * self.freq) / 10) for h, a in enumerate(self.harmonics, start=2))
+        ms = exponential_average(env**2 / 2 * gain, step / self.fs, time_constant)
+        level = 10 * np.log10(np.maximum(ms, 1e-300) / P_REF**2)
         on = level >= threshold_dba
         edges = np.flatnonzero(np.diff(np.concatenate([[0], on.astype(np.int8), [0]])))
         starts, ends = t[edges[::2]], t[np.minimum(edges[1::2], t.size - 1)]
@@ -119,8 +154,16 @@ class SyntheticSource:
             starts = starts[keep]
         e = env**2 * on
         rising = float((e * (tan_t > 0)).sum() / e.sum()) if e.sum() > 0 else None
+        # where the squeal sounds against the macro run-out's crest (orders <= 10), in the disc's frame
+        ang = (np.arange(_N_ANGLE) + 0.5) / _N_ANGLE
+        macro = self.sro_orders <= 10
+        q_macro = np.sin(2 * np.pi * np.multiply.outer(ang, self.sro_orders[macro]) + self.sro_phases[macro]) \
+            @ self.sro_amps[macro]
+        z = np.sum(self.envelope(ang) ** 2 * np.exp(2j * np.pi * ang))
+        phase = float(np.degrees(np.angle(z * np.exp(-2j * np.pi * ang[np.argmax(q_macro)]))))
         return {"frequency_hz": self.freq if on.any() else None, "event_starts_s": starts, "event_ends_s": ends,
                 "rising_fraction": rising, "threshold_dba": threshold_dba,
+                "runout_phase_deg": phase if on.any() else None,
                 "peak_dba": float(level.max()) if on.any() else None}
 
 
@@ -129,6 +172,7 @@ def synthetic_source(
     duration: float = 2.0,
     fs: float = 40000.0,
     rpm: float = 900.0,
+    rpm_end: float | None = None,
     radius: float = 0.05,
     freq: float = 2388.0,
     level_dba: float = 90.0,
@@ -145,11 +189,24 @@ def synthetic_source(
     noise_m: float = 0.05e-6,
     seed: int | None = None,
     rng: np.random.Generator | None = None,
+    probe_offset_deg: float = 0.0,
+    polarity: int = 1,
+    acoustic_delay: float = 0.0,
+    tacho_ppr: int = 1,
 ) -> SyntheticSource:
     """Build a :class:`SyntheticSource` (see :func:`synthetic_recording` for parameters)."""
     fs = validate_fs(fs)
     duration = validate_positive("duration", duration)
     validate_positive("rpm", rpm)
+    if rpm_end is not None:
+        validate_positive("rpm_end", rpm_end)
+    if polarity not in (1, -1):
+        raise InputError(f"Parameter polarity={polarity!r} must be 1 or -1.")
+    validate_positive("acoustic_delay", acoustic_delay, allow_zero=True)
+    if not isinstance(tacho_ppr, int) or tacho_ppr < 1:
+        raise InputError(f"Parameter tacho_ppr={tacho_ppr!r} must be a whole number >= 1.")
+    extra = dict(rpm_end=None if rpm_end is None else float(rpm_end), probe_offset_deg=float(probe_offset_deg),
+                 polarity=int(polarity), acoustic_delay=float(acoustic_delay), tacho_ppr=tacho_ppr)
     validate_positive("radius", radius)
     validate_positive("freq", freq)
     if freq * (len(harmonics) + 1) >= fs / 2:
@@ -168,7 +225,7 @@ def synthetic_source(
     phases = rng.uniform(0, 2 * np.pi, orders.size)
     amp_pa = math.sqrt(2) * P_REF * 10 ** ((level_dba - float(a_weighting_db(freq))) / 20)
     src = SyntheticSource(fs, n_samples, float(rpm), float(radius), float(freq), amp_pa, tuple(harmonics),
-                          disp_squeal_m, noise_pa, noise_m, seed, orders, amps, phases, np.zeros(_N_ANGLE))
+                          disp_squeal_m, noise_pa, noise_m, seed, orders, amps, phases, np.zeros(_N_ANGLE), **extra)
     # envelope: d ln A / dt = growth_rate * s where s = +-tan(theta) / max|tan(theta)| > 0 (unstable
     # stage), decay_rate * s where s < 0 (stable stage: damping wins), clipped to [-range, 0]
     turns = np.arange(_N_ANGLE) / _N_ANGLE
@@ -187,7 +244,7 @@ def synthetic_source(
                 x = min(0.0, max(floor, x + rate[i] * dt))
                 log_env[i] = x
     return SyntheticSource(fs, n_samples, float(rpm), float(radius), float(freq), amp_pa, tuple(harmonics),
-                           disp_squeal_m, noise_pa, noise_m, seed, orders, amps, phases, log_env)
+                           disp_squeal_m, noise_pa, noise_m, seed, orders, amps, phases, log_env, **extra)
 
 
 def synthetic_recording(*, threshold_dba: float = 70.0, **kwargs) -> xr.Dataset:
@@ -201,6 +258,19 @@ def synthetic_recording(*, threshold_dba: float = 70.0, **kwargs) -> xr.Dataset:
         Sample rate [Hz] (paper: 40 kHz).
     rpm, radius : float
         Disc speed [rpm] (paper: 900) and probe radius [m].
+    rpm_end : float, optional
+        Speed at the end [rpm]: the disc slows down linearly from ``rpm`` (a decelerating stop).
+        The squeal envelope and the run-out are functions of the disc angle.
+    probe_offset_deg : float
+        The probe sits this many degrees upstream of the pin: it sees each point of the surface
+        that much rotation before the pin does.
+    polarity : {1, -1}
+        -1: the probe reads the run-out reversed.
+    acoustic_delay : float
+        Delay [s] of the sound from the pin to the microphone.
+    tacho_ppr : int
+        Pulses per revolution of the ``tacho`` channel (5 V pulses; the first edge of a
+        once-per-revolution tacho is the disc's angle 0).
     freq : float
         Squeal frequency [Hz] (paper: about 2388 Hz, the coupled pin/disc mode).
     level_dba : float
@@ -223,7 +293,7 @@ def synthetic_recording(*, threshold_dba: float = 70.0, **kwargs) -> xr.Dataset:
     Returns
     -------
     xarray.Dataset
-        Channels ``mic`` [Pa] and ``displacement`` [m] on ``time`` [s]; attrs ``synthetic=1``,
+        Channels ``mic`` [Pa], ``displacement`` [m] and ``tacho`` [V] on ``time`` [s]; attrs ``synthetic=1``,
         ``fs`` and ``truth_*`` (frequency, event starts/ends, rising fraction, run-out
         ``truth_sro``-free summary).
 
@@ -248,6 +318,12 @@ def synthetic_recording(*, threshold_dba: float = 70.0, **kwargs) -> xr.Dataset:
         "truth_event_starts_s": np.asarray(tr["event_starts_s"]),
         "truth_event_ends_s": np.asarray(tr["event_ends_s"]),
         "truth_rising_fraction": float("nan") if tr["rising_fraction"] is None else tr["rising_fraction"],
+        "truth_runout_phase_deg": float("nan") if tr["runout_phase_deg"] is None else tr["runout_phase_deg"],
         "truth_threshold_dba": threshold_dba,
+        "rpm_end": float("nan") if src.rpm_end is None else src.rpm_end,
+        "probe_offset_deg": src.probe_offset_deg,
+        "polarity": src.polarity,
+        "acoustic_delay": src.acoustic_delay,
+        "tacho_ppr": src.tacho_ppr,
     }
     return recording_dataset(data, src.fs, src.units, attrs)

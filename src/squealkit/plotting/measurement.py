@@ -18,6 +18,7 @@ __all__ = [
     "polar_plot",
     "runout_plot",
     "spectrogram_plot",
+    "squeal_views",
     "time_history_plot",
 ]
 
@@ -123,11 +124,13 @@ def level_plot(result: Any):
     ax = fig.subplots()
     fr = result.frames
     ax.plot(fr["time"], fr["level_dba"], lw=0.6)
-    ax.axhline(result.settings.threshold_dba, color="k", ls="--", lw=0.8, label="threshold")
+    c = result.settings.criteria
+    ax.axhline(c.threshold_dba, color="k", ls="--", lw=0.8,
+               label=f"{c.threshold_dba:g} dB(A), {c.band[0]:g}-{c.band[1]:g} Hz ({c.setup})")
     for e in result.events:
         ax.axvspan(e.start_s, e.end_s, color="C3", alpha=0.2, lw=0)
     ax.set_xlabel("time [s]")
-    ax.set_ylabel("level [dB(A)]")
+    ax.set_ylabel(f"L_A{c.time_weighting[0].upper()} [dB(A)]")
     ax.legend(loc="lower right")
     ax.set_title(f"Squeal level and events ({len(result.events)})" + _tag(result))
     return fig
@@ -151,18 +154,50 @@ def polar_plot(result: Any):
     return fig
 
 
+def squeal_views(result: Any, t_end: float, *, revolutions: float = 3.0) -> dict[str, Any]:
+    """Where the figures look: a zoom over ``revolutions`` turns at the actual speed from the squeal's
+    onset, the vibration band around the detected squeal frequency, the spectrogram's top.
+
+    Without squeal: the first revolutions from the start, the paper's 1000-2500 Hz band (Fig. 13).
+    """
+    fr = result.frames
+    fs = result.fs
+    t = fr["time"].values
+    rpm = fr["rpm"].values if "rpm" in fr else np.full(t.size, result.settings.rpm)
+    f_sq = result.squeal_frequency_hz
+    if f_sq is not None:
+        loud = np.flatnonzero(fr["leq_dba"].values >= result.settings.threshold_dba)
+        i = int(loud[0]) if loud.size else int(np.argmax(fr["leq_dba"].values))
+        turn = 60.0 / float(rpm[i])
+        t0 = max(0.0, float(t[i]) - 0.5 * turn)
+        band = (max(result.settings.lowpass_freq, 0.6 * f_sq), min(1.25 * f_sq, 0.45 * fs))
+        freq_max = min(0.5 * fs, max(10000.0, 2.5 * f_sq))
+    else:
+        turn = 60.0 / float(rpm[0])
+        t0, band, freq_max = 0.0, (1000.0, 2500.0), min(10000.0, 0.5 * fs)
+    t1 = min(t_end, t0 + revolutions * turn)
+    return {"zoom": (t0, t1), "band": band, "freq_max": freq_max}
+
+
 def measurement_figures(rec: xr.Dataset, result: Any, *, mic: str = "mic", displacement: str = "displacement",
-                        zoom: tuple[float, float] = (0.1, 0.3)) -> dict[str, Any]:
-    """All figures of a measurement, keyed by a short name (for ``analyze --plot``)."""
+                        zoom: tuple[float, float] | None = None) -> dict[str, Any]:
+    """All figures of a measurement, keyed by a short name (for ``analyze --plot``).
+
+    The zoom, the band-pass of Fig. 13 and the spectrogram follow the squeal found
+    (:func:`squeal_views`): three revolutions at the actual disc speed from the onset of the squeal,
+    the band around its frequency. ``zoom`` overrides the time range.
+    """
     rpm = result.settings.rpm
-    z = zoom if rec["time"].values[-1] >= zoom[1] else None
+    views = squeal_views(result, float(rec["time"].values[-1]))
+    z = zoom if zoom is not None else views["zoom"]
     return {
         "time": time_history_plot(rec, mic=mic, displacement=displacement),
-        "spectrogram": spectrogram_plot(rec, result, mic=mic, displacement=displacement),
+        "spectrogram": spectrogram_plot(rec, result, mic=mic, displacement=displacement,
+                                        freq_max=views["freq_max"]),
         "zoom": time_history_plot(rec, mic=mic, displacement=displacement, t_range=z),
         "runout": runout_plot(rec, displacement=displacement, rpm=rpm, t_range=z,
                               lowpass_freq=result.settings.lowpass_freq, macro_orders=result.settings.macro_orders),
-        "band": band_vs_pressure_plot(rec, mic=mic, displacement=displacement, t_range=z),
+        "band": band_vs_pressure_plot(rec, mic=mic, displacement=displacement, t_range=z, band=views["band"]),
         "level": level_plot(result),
         "polar": polar_plot(result),
     }

@@ -82,7 +82,8 @@ def _paper_steps(
     else:
         r = recording
         steps.append(("Figs. 6-13 your recording", lambda fig, dat: recording_step(
-            r.path, fig, dat, mic=r.mic, displacement=r.displacement, rpm=r.rpm, radius=r.radius, fs=r.fs)))
+            r.path, fig, dat, mic=r.mic, displacement=r.displacement, rpm=r.rpm, radius=r.radius, fs=r.fs,
+            model=model)))
     return steps
 
 

@@ -1,0 +1,91 @@
+"""Throughput of ``squealkit campaign`` on a SYNTHETIC J2521-like campaign (not part of the tests).
+
+Usage::
+
+    python benchmarks/bench_campaign.py                   # 40 applications of 10 s at 48 kHz
+    python benchmarks/bench_campaign.py --applications 200 --duration 10
+
+Each application is a 10 s recording at 48 kHz with a microphone, an eddy-current probe and a
+tacho (conditions such as pressure and temperature come from the test matrix). Timed in one
+run, on the same files:
+
+1. baseline: a plain loop of ``analyze_recording`` over the files (no database, no summary);
+2. ``run_campaign`` here, one application after another (DuckDB store, summary.json);
+3. ``run_campaign`` on a local Dask cluster with 1 worker, then with 2 workers (1 thread each).
+
+Prints each time, the ratios against the baseline, the 1 -> 2 worker speed-up, and the time a
+2,000-application matrix would take at the measured rate.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+
+KW = dict(mic="mic", displacement="displacement", radius=0.05, tacho="tacho")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--applications", type=int, default=40)
+    ap.add_argument("--duration", type=float, default=10.0, help="length of each application [s]")
+    ap.add_argument("--fs", type=float, default=48000.0)
+    args = ap.parse_args()
+
+    from distributed import Client, LocalCluster
+
+    from squealkit.campaign import read_matrix, run_campaign, synthetic_campaign
+    from squealkit.measurement import analyze_recording
+
+    n, dur = args.applications, args.duration
+    with tempfile.TemporaryDirectory() as d:
+        d = Path(d)
+        t0 = time.perf_counter()
+        truth = synthetic_campaign(d, n_applications=n, duration=dur, fs=args.fs, seed=1)
+        t_gen = time.perf_counter() - t0
+        print(f"generated : {n} SYNTHETIC applications of {dur:g} s @ {args.fs / 1000:g} kHz in {t_gen:.1f} s")
+        apps = read_matrix(d / "matrix.csv")
+        analyze_recording(apps[0].file, **KW)  # warm-up (imports, numba caches)
+
+        t0 = time.perf_counter()
+        for a in apps:
+            analyze_recording(a.file, **KW)
+        t_base = time.perf_counter() - t0
+
+        t0 = time.perf_counter()
+        s = run_campaign(d / "matrix.csv", d / "out-serial", report=False, **KW)
+        t_serial = time.perf_counter() - t0
+        assert abs(s["occurrence_percent"] - truth["occurrence_percent"]) < 1e-9
+
+        t_dask = {}
+        for workers in (1, 2):
+            with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                              dashboard_address=None) as cluster, Client(cluster) as client:
+                client.run(lambda: __import__("squealkit.measurement"))
+                out = d / f"out-dask{workers}"
+                t0 = time.perf_counter()
+                run_campaign(d / "matrix.csv", out, client=client, report=False, **KW)
+                t_dask[workers] = time.perf_counter() - t0
+                shutil.rmtree(out)
+
+    audio = n * dur
+    print(f"baseline  : analyze_recording loop      {t_base:7.2f} s  ({audio / t_base:5.0f}x real time)")
+    print(f"campaign  : run_campaign, serial         {t_serial:7.2f} s  ({audio / t_serial:5.0f}x real time), "
+          f"ratio to baseline {t_serial / t_base:.2f}")
+    for w, t in t_dask.items():
+        print(f"campaign  : run_campaign, Dask {w} worker(s) {t:7.2f} s  ({audio / t:5.0f}x real time), "
+              f"ratio to baseline {t / t_base:.2f}")
+    print(f"scaling   : 1 -> 2 Dask workers: {t_dask[1] / t_dask[2]:.2f}x")
+    best = min(t_serial, *t_dask.values())
+    print(f"2000 apps : about {2000 / n * best / 60:.1f} min at the best rate measured here "
+          f"({2000 * dur / 3600:.1f} h of recordings)")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,13 @@
+"""Brake noise campaigns: a test matrix of applications, analysed into a DuckDB store, summarised.
+
+Start with :func:`run_campaign`; try it on :func:`synthetic_campaign` when you have no data.
+"""
+
+from .matrix import Application, read_matrix
+from .run import run_campaign
+from .store import CampaignStore
+from .summary import campaign_summary, third_octave_bands
+from .synthetic import synthetic_campaign
+
+__all__ = ["Application", "CampaignStore", "campaign_summary", "read_matrix", "run_campaign", "synthetic_campaign",
+           "third_octave_bands"]

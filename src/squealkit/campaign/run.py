@@ -1,0 +1,177 @@
+"""Analyse every application of a test matrix into the campaign store, then summarise and report."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from .._validation import InputError
+from ..measurement.criteria import squeal_criteria
+from .matrix import read_matrix
+from .store import CampaignStore
+from .summary import band_of, campaign_summary, third_octave_bands
+
+__all__ = ["run_campaign"]
+
+
+def _analyze_application(item: dict[str, Any]) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """One task: analyse one application's recording; keep its row and its events (small)."""
+    from ..measurement import analyze_recording
+
+    app, kw, bands = item["app"], item["analysis"], item["bands"]
+    row = {**app, "error": None}
+    try:
+        for col, channel in item.get("condition_channels", {}).items():
+            if not math.isfinite(row[col]):  # the matrix does not say: the channel's mean over the application
+                row[col] = _channel_mean(app["file"], channel)
+        res = analyze_recording(app["file"], **kw)
+    except (InputError, OSError) as e:
+        row["error"] = str(e).splitlines()[0][:500]
+        return row, []
+    d = res.to_dict()
+    row.update(duration_s=res.duration_s, synthetic=bool(d["synthetic"]), squeal=res.squeal, peak_dba=res.peak_dba,
+               squeal_frequency_hz=res.squeal_frequency_hz, n_events=len(res.events),
+               growth_slope_correlation=res.growth_slope_correlation, rising_fraction=res.rising_fraction,
+               runout_phase_deg=res.runout_phase_deg, mean_rpm=res.settings.rpm,
+               criteria=res.settings.criteria.describe())
+    events = []
+    for i, e in enumerate(res.events):
+        b = band_of(e.frequency_hz, bands)
+        events.append({"application": app["application"], "event": i, "start_s": e.start_s, "end_s": e.end_s,
+                       "duration_s": e.duration_s, "frequency_hz": e.frequency_hz, "peak_dba": e.peak_dba,
+                       "band_center_hz": b[0] if b else math.nan, "band_lo_hz": b[1] if b else math.nan,
+                       "band_hi_hz": b[2] if b else math.nan, "runout_phase_deg": e.runout_phase_deg})
+    return row, events
+
+
+def _channel_mean(path: str, channel: str) -> float:
+    from ..measurement import open_recording
+
+    src = open_recording(path)
+    name = src.resolve(channel)
+    total = 0.0
+    for _, blk in src.iter_blocks([name]):
+        total += float(blk[name].sum())
+    return total / src.n_samples
+
+
+def run_campaign(
+    matrix: str | Path,
+    out: str | Path,
+    *,
+    mic: str | int,
+    displacement: str | int,
+    radius: float,
+    tacho: str | int | None = None,
+    rpm: float | None = None,
+    setup: str | None = None,
+    band: tuple[float, float] | None = None,
+    threshold_dba: float = 70.0,
+    time_weighting: str = "fast",
+    min_duration: float = 0.01,
+    client: Any = None,
+    progress: Callable[[int, int], None] | None = None,
+    report: bool = True,
+    pressure_channel: str | None = None,
+    temperature_channel: str | None = None,
+    **options: Any,
+) -> dict[str, Any]:
+    """Analyse a campaign: every application of ``matrix`` into ``out/campaign.duckdb``.
+
+    Applications already in the store with the same criteria and an unchanged file (size and
+    modification time) are skipped, so re-running updates an output without losing earlier
+    results and a killed run resumes where it stopped (each application is committed as it
+    finishes). Writes ``out/summary.json`` and, with ``report``, ``out/report.html`` with its
+    figures in ``out/figures``.
+
+    Parameters
+    ----------
+    matrix : path
+        Test matrix CSV (:func:`squealkit.campaign.read_matrix`).
+    out : path
+        Output folder (created).
+    mic, displacement, radius, tacho, rpm
+        As for :func:`squealkit.measurement.analyze_recording`; a matrix column ``rpm``
+        gives each application's speed where there is no tacho.
+    setup, band, threshold_dba, time_weighting, min_duration
+        The squeal criteria (:func:`squealkit.measurement.squeal_criteria`).
+    client : distributed.Client, optional
+        Analyse the applications on a Dask cluster (the files must be readable there).
+    progress : callable, optional
+        ``progress(done, total)`` in applications still to analyse.
+    pressure_channel, temperature_channel : str, optional
+        Channels [bar], [C] whose mean over an application gives its condition where the
+        matrix leaves ``pressure_bar`` or ``temperature_c`` empty.
+    **options
+        Further analysis options (``probe_offset_deg``, ``pulses_per_rev``, ``nperseg``, ...).
+
+    Returns
+    -------
+    dict
+        The summary written to ``summary.json``.
+    """
+    from ..io import atomic_path
+
+    crit = squeal_criteria(setup, band=band, threshold_dba=threshold_dba, time_weighting=time_weighting,
+                           min_duration=min_duration)
+    apps = read_matrix(matrix)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    bands = third_octave_bands(crit.band)
+    kw_base = dict(mic=mic, displacement=displacement, radius=radius, setup=crit.setup if crit.setup != "user"
+                   else None, band=crit.band, threshold_dba=crit.threshold_dba, time_weighting=crit.time_weighting,
+                   min_duration=crit.min_duration, **options)
+    with CampaignStore(out / "campaign.duckdb") as store:
+        done = store.done(crit.describe())
+        items = []
+        for a in apps:
+            st = a.file.stat() if a.file.is_file() else None
+            sig = (st.st_size, st.st_mtime_ns) if st else (None, None)
+            if st is not None and done.get(a.application) == sig:
+                continue
+            row = {"application": a.application, "file": str(a.file), "section": a.section, "mode": a.mode,
+                   "pressure_bar": a.pressure_bar, "temperature_c": a.temperature_c, "speed_kmh": a.speed_kmh,
+                   "criteria": crit.describe(), "file_size": sig[0], "file_mtime_ns": sig[1]}
+            kw = dict(kw_base)
+            if tacho is not None:
+                kw["tacho"] = tacho
+            elif math.isfinite(a.rpm):
+                kw["rpm"] = a.rpm
+            elif rpm is not None:
+                kw["rpm"] = rpm
+            if st is None:
+                store.put({**row, "error": f"Recording {str(a.file)!r} does not exist."}, [])
+                continue
+            cond = {c: ch for c, ch in (("pressure_bar", pressure_channel), ("temperature_c", temperature_channel))
+                    if ch is not None}
+            items.append({"app": row, "analysis": kw, "bands": bands, "condition_channels": cond})
+        from ..scale import map_tasks
+
+        for _, (row, events) in map_tasks(_analyze_application, items, client=client, progress=progress,
+                                          name="squealkit-application"):
+            store.put(row, events)
+        summary = campaign_summary(store, crit.band, crit.describe())
+        summary["analysed_now"] = len(items)
+        with atomic_path(out / "summary.json") as tmp:
+            tmp.write_text(json.dumps(_clean(summary), indent=2, allow_nan=False))
+        if report:
+            from .report import write_campaign_report
+
+            write_campaign_report(store, summary, out, threshold_dba=crit.threshold_dba)
+    return summary
+
+
+def _clean(obj: Any) -> Any:
+    """JSON-ready: NaN and infinities become None, NumPy scalars plain numbers."""
+    if isinstance(obj, dict):
+        return {k: _clean(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_clean(v) for v in obj]
+    if hasattr(obj, "item") and not isinstance(obj, str):
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj

@@ -1,0 +1,97 @@
+"""The campaign's events and applications in an embedded analytical database (DuckDB).
+
+Why DuckDB and not Parquet files: results arrive one application at a time from the workers
+and are written by the one process that runs the campaign. A DuckDB file takes each
+application as one ACID transaction, so a killed run leaves every finished application in
+place and a re-run skips them (resume); a re-analysed application replaces its rows
+atomically. Parquet files are immutable: the same would need one small file per application
+(2,000 for a J2521 matrix) or batches that lose their progress when killed, and a compaction
+step. The file is queried with plain SQL from DuckDB (Python, CLI, or any tool with a DuckDB
+driver), and ``COPY applications TO 'apps.parquet'`` exports it when Parquet is wanted.
+
+Tables: ``applications`` (one row per brake application: its conditions and results),
+``events`` (one row per squeal event, VDA 303 tonal component), and the view ``squeal``
+(events with their application's conditions), e.g.::
+
+    SELECT * FROM squeal WHERE peak_dba > 75 AND frequency_hz BETWEEN 6000 AND 8000 AND temperature_c > 150
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from .._validation import InputError
+
+__all__ = ["APPLICATION_COLUMNS", "EVENT_COLUMNS", "CampaignStore"]
+
+APPLICATION_COLUMNS = {
+    "application": "VARCHAR PRIMARY KEY", "file": "VARCHAR", "section": "VARCHAR", "mode": "VARCHAR",
+    "pressure_bar": "DOUBLE", "temperature_c": "DOUBLE", "speed_kmh": "DOUBLE", "duration_s": "DOUBLE",
+    "synthetic": "BOOLEAN", "squeal": "BOOLEAN", "peak_dba": "DOUBLE", "squeal_frequency_hz": "DOUBLE",
+    "n_events": "INTEGER", "growth_slope_correlation": "DOUBLE", "rising_fraction": "DOUBLE",
+    "runout_phase_deg": "DOUBLE", "mean_rpm": "DOUBLE", "criteria": "VARCHAR", "file_size": "BIGINT",
+    "file_mtime_ns": "BIGINT", "error": "VARCHAR",
+}
+EVENT_COLUMNS = {
+    "application": "VARCHAR", "event": "INTEGER", "start_s": "DOUBLE", "end_s": "DOUBLE", "duration_s": "DOUBLE",
+    "frequency_hz": "DOUBLE", "peak_dba": "DOUBLE", "band_center_hz": "DOUBLE", "band_lo_hz": "DOUBLE",
+    "band_hi_hz": "DOUBLE", "runout_phase_deg": "DOUBLE",
+}
+
+
+class CampaignStore:
+    """A DuckDB file holding a campaign's applications and events (see the module docstring)."""
+
+    def __init__(self, path: str | Path):
+        try:
+            import duckdb
+        except ImportError as e:
+            raise InputError("Campaigns need DuckDB: pip install 'squealkit[campaign]'.") from e
+        self.path = Path(path)
+        self.con = duckdb.connect(str(self.path))
+        cols = ", ".join(f"{k} {v}" for k, v in APPLICATION_COLUMNS.items())
+        self.con.execute(f"CREATE TABLE IF NOT EXISTS applications ({cols})")
+        cols = ", ".join(f"{k} {v}" for k, v in EVENT_COLUMNS.items())
+        self.con.execute(f"CREATE TABLE IF NOT EXISTS events ({cols})")
+        self.con.execute(
+            "CREATE OR REPLACE VIEW squeal AS SELECT e.*, a.section, a.mode, a.pressure_bar, a.temperature_c, "
+            "a.speed_kmh, a.file FROM events e JOIN applications a USING (application)")
+
+    def close(self) -> None:
+        self.con.close()
+
+    def __enter__(self) -> CampaignStore:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def done(self, criteria: str) -> dict[str, tuple[int, int]]:
+        """``{application: (file_size, file_mtime_ns)}`` of applications analysed with ``criteria``."""
+        rows = self.con.execute("SELECT application, file_size, file_mtime_ns FROM applications "
+                                "WHERE criteria = ? AND error IS NULL", [criteria]).fetchall()
+        return {a: (s, m) for a, s, m in rows}
+
+    def put(self, app: Mapping[str, Any], events: Sequence[Mapping[str, Any]]) -> None:
+        """Replace one application's rows, in one transaction."""
+        a_cols, e_cols = list(APPLICATION_COLUMNS), list(EVENT_COLUMNS)
+        self.con.execute("BEGIN TRANSACTION")
+        try:
+            self.con.execute("DELETE FROM events WHERE application = ?", [app["application"]])
+            self.con.execute("DELETE FROM applications WHERE application = ?", [app["application"]])
+            self.con.execute(f"INSERT INTO applications ({', '.join(a_cols)}) VALUES ({', '.join('?' * len(a_cols))})",
+                             [app.get(c) for c in a_cols])
+            if events:
+                self.con.executemany(
+                    f"INSERT INTO events ({', '.join(e_cols)}) VALUES ({', '.join('?' * len(e_cols))})",
+                    [[e.get(c) for c in e_cols] for e in events])
+            self.con.execute("COMMIT")
+        except Exception:
+            self.con.execute("ROLLBACK")
+            raise
+
+    def query(self, sql: str, params: Sequence[Any] = ()):
+        """Rows of a SQL query as a pandas DataFrame."""
+        return self.con.execute(sql, list(params)).df()

@@ -1,0 +1,80 @@
+"""``squealkit campaign``: a test matrix of brake applications into a database, summary and report."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from ._options import criteria_from_options, criteria_options, emit_json, progress_callback, scheduler_option
+
+
+@click.command()
+@click.argument("matrix", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
+              help="Output folder: campaign.duckdb, summary.json, report.html, figures/.")
+@click.option("--mic", required=True, help="Microphone channel [Pa]: name or 0-based index.")
+@click.option("--displacement", required=True, help="Eddy-current probe channel [m]: name or index.")
+@click.option("--radius", type=float, required=True, help="Probe radius on the disc [m].")
+@click.option("--tacho", default=None, help="Tacho channel (name or index); else --rpm or the matrix's rpm column.")
+@click.option("--pulses-per-rev", type=int, default=1, show_default=True, help="Tacho pulses per revolution.")
+@click.option("--rpm", type=float, default=None, help="Disc speed [rpm] where there is no tacho nor rpm column.")
+@click.option("--probe-offset-deg", type=float, default=0.0, show_default=True,
+              help="The probe sits this far upstream of the pin [deg].")
+@click.option("--polarity", type=click.Choice(["1", "-1"]), default="1", show_default=True,
+              help="-1 when the probe reads the run-out reversed.")
+@click.option("--pressure-channel", default=None,
+              help="Channel [bar] whose mean gives an application's pressure where the matrix leaves it empty.")
+@click.option("--temperature-channel", default=None,
+              help="Channel [C] whose mean gives an application's temperature where the matrix leaves it empty.")
+@click.option("--no-report", is_flag=True, help="Skip the HTML report and its figures.")
+@criteria_options
+@scheduler_option
+@click.option("--json", "as_json", is_flag=True, help="Print summary.json on stdout.")
+def campaign(matrix: Path, out_dir: Path, mic: str, displacement: str, radius: float, tacho: str | None,
+             pulses_per_rev: int, rpm: float | None, probe_offset_deg: float, polarity: str,
+             pressure_channel: str | None, temperature_channel: str | None, no_report: bool,
+             setup: str | None, band: str | None, threshold_dba: float, time_weighting: str, min_duration: float,
+             scheduler: str | None, as_json: bool) -> None:
+    """Analyse every brake application of a test matrix (SAE J2521 occurrence, VDA 303 events).
+
+    MATRIX is a CSV with one row per application: application, file (relative to the
+    matrix), and optionally section, mode (drag|stop), pressure_bar, temperature_c,
+    speed_kmh, rpm. Events and applications go into OUT/campaign.duckdb (query it with SQL:
+    the view 'squeal' joins events and conditions); OUT/summary.json holds the occurrence,
+    overall and per 1/3-octave band; OUT/report.html the figures. Re-running skips the
+    applications already analysed with the same criteria (a killed run resumes).
+
+    \b
+    Example:
+      squealkit synth camp --campaign 100
+      squealkit campaign camp/matrix.csv --out camp/out --mic mic --displacement displacement \\
+          --tacho tacho --radius 0.05
+      duckdb camp/out/campaign.duckdb "SELECT * FROM squeal WHERE peak_dba > 75 AND \\
+          frequency_hz BETWEEN 6000 AND 8000 AND temperature_c > 150"
+    """
+    from ..campaign import run_campaign
+    from ..scale import cluster_client
+
+    crit = criteria_from_options(setup, band, threshold_dba, time_weighting, min_duration)
+    kw = dict(mic=mic, displacement=displacement, radius=radius, rpm=rpm, setup=crit.setup if crit.setup != "user"
+              else None, band=crit.band, threshold_dba=crit.threshold_dba, time_weighting=crit.time_weighting,
+              min_duration=crit.min_duration, probe_offset_deg=probe_offset_deg, polarity=int(polarity),
+              report=not no_report, pressure_channel=pressure_channel, temperature_channel=temperature_channel)
+    if tacho is not None:
+        kw.update(tacho=int(tacho) if tacho.isdigit() else tacho, pulses_per_rev=pulses_per_rev)
+    with cluster_client(scheduler) as client, progress_callback("applications", enabled=not as_json) as cb:
+        summary = run_campaign(matrix, out_dir, client=client, progress=cb, **kw)
+    if as_json:
+        emit_json(summary)
+        return
+    click.echo(f"criteria: {summary['criteria']}")
+    click.echo(f"{summary['applications']} applications ({summary['analysed_now']} analysed now), "
+               f"{summary['applications_with_squeal']} with squeal: occurrence {summary['occurrence_percent']:.1f} %")
+    for b in summary["by_band"]:
+        if b["occurrence_percent"] > 0:
+            click.echo(f"  {b['band_hz'][0]:7.0f}-{b['band_hz'][1]:7.0f} Hz: {b['occurrence_percent']:5.1f} %")
+    for f in summary["failed"]:
+        click.echo(f"  failed {f['application']}: {f['error']}")
+    click.echo(f"wrote {out_dir / 'campaign.duckdb'}, {out_dir / 'summary.json'}"
+               + ("" if no_report else f", {out_dir / 'report.html'}"))

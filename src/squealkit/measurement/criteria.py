@@ -1,0 +1,276 @@
+"""Squeal criteria as the standards write them: SAE J2521 setups, A-weighting, time weighting.
+
+SAE J2521 calls a brake application noisy when its peak sound level reaches 70 dB(A) within
+the squeal band: 1.25-16 kHz for tests on full suspension corners or axles (``"corner"``),
+2-16 kHz for brakes not on a full corner (``"component"``, which a pin-on-disc rig is, and the
+default here). Occurrence is the percentage of applications whose peak exceeded the threshold.
+VDA 303 describes a noisy application by its separate tonal components (several frequencies,
+each with its level and duration).
+
+Levels are A-weighted (IEC 61672-1:2013, the analytic weighting of its Annex E) and time
+weighted (IEC 61672-1: exponential averaging of the squared pressure with the time constant
+of Fast, 125 ms, or Slow, 1 s), so a burst's level is the level a sound level meter shows and
+does not depend on any analysis frame length.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from functools import lru_cache
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy import fft as sp_fft
+from scipy import signal
+
+from .._validation import InputError, validate_finite, validate_fs, validate_positive
+
+__all__ = [
+    "P_REF",
+    "SETUPS",
+    "TIME_CONSTANTS",
+    "SquealCriteria",
+    "a_weighting_db",
+    "band_weighted_signal",
+    "exponential_average",
+    "squeal_criteria",
+    "time_weighted_level",
+]
+
+#: Reference sound pressure [Pa] for dB SPL.
+P_REF = 20e-6
+#: SAE J2521 squeal bands [Hz] by test setup.
+SETUPS: dict[str, tuple[float, float]] = {"corner": (1250.0, 16000.0), "component": (2000.0, 16000.0)}
+#: IEC 61672-1 exponential time constants [s].
+TIME_CONSTANTS: dict[str, float] = {"fast": 0.125, "slow": 1.0}
+_SETUP_NAMES = {
+    "corner": "SAE J2521 corner (full suspension corner or axle, 1.25-16 kHz)",
+    "component": "SAE J2521 component (brake not on a full corner, e.g. pin-on-disc, 2-16 kHz)",
+}
+#: Width [Hz] of the raised-cosine transition centred on each band edge of the level's band
+#: filter: short enough to keep 1.2 kHz out of a 1.25 kHz band, long enough that the filter
+#: rings for only a few tens of milliseconds.
+EDGE_HZ = 50.0
+
+# IEC 61672-1:2013 Annex E constants: pole frequencies [Hz] and the 1 kHz normalisation.
+_F1, _F2, _F3, _F4 = 20.598997, 107.65265, 737.86223, 12194.217
+_A1000 = -2.000
+
+
+def a_weighting_db(freq: ArrayLike) -> NDArray[np.float64]:
+    """A-weighting A(f) [dB] per IEC 61672-1 (analytic form, Annex E).
+
+    Examples
+    --------
+    >>> round(float(a_weighting_db(1000.0)), 2)
+    0.0
+    >>> round(float(a_weighting_db(100.0)), 1)
+    -19.1
+    """
+    f = np.asarray(freq, dtype=np.float64)
+    f2 = f * f
+    with np.errstate(divide="ignore"):
+        ra = (_F4**2 * f2 * f2) / ((f2 + _F1**2) * np.sqrt((f2 + _F2**2) * (f2 + _F3**2)) * (f2 + _F4**2))
+        return 20.0 * np.log10(ra) - _A1000
+
+
+@dataclass(frozen=True)
+class SquealCriteria:
+    """What counts as squeal: setup, band, threshold, weightings and minimum duration.
+
+    Build it with :func:`squeal_criteria`, which validates it.
+
+    Attributes
+    ----------
+    setup : {"corner", "component", "user"}
+        SAE J2521 test setup whose band applies, or ``"user"`` for a band of one's own.
+    band : (float, float)
+        Squeal band ``(freq_lower, freq_upper)`` [Hz].
+    threshold_dba : float
+        Peak level [dB(A)] an application must reach (SAE J2521: 70).
+    time_weighting : {"fast", "slow"}
+        IEC 61672-1 exponential time weighting of the level.
+    min_duration : float
+        Shortest tonal event [s]; no standard fixes one, so it is a setting.
+    """
+
+    setup: str
+    band: tuple[float, float]
+    threshold_dba: float = 70.0
+    time_weighting: str = "fast"
+    min_duration: float = 0.01
+
+    @property
+    def time_constant_s(self) -> float:
+        """Exponential time constant [s] (Fast 0.125, Slow 1)."""
+        return TIME_CONSTANTS[self.time_weighting]
+
+    @property
+    def name(self) -> str:
+        """The criteria's name, e.g. ``SAE J2521 component (...)``."""
+        if self.setup in _SETUP_NAMES and self.band == SETUPS[self.setup]:
+            return _SETUP_NAMES[self.setup]
+        return f"SAE J2521 threshold on a user band ({self.band[0]:g}-{self.band[1]:g} Hz)"
+
+    def describe(self) -> str:
+        """One line naming everything that decides squeal."""
+        return (f"{self.name}: L_A{self.time_weighting[0].upper()} >= {self.threshold_dba:g} dB(A) "
+                f"in {self.band[0]:g}-{self.band[1]:g} Hz, {self.time_weighting.capitalize()} "
+                f"({self.time_constant_s * 1000:g} ms), tonal events >= {self.min_duration * 1000:g} ms (VDA 303)")
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain dict for JSON (stable keys)."""
+        d = asdict(self)
+        return {"name": self.name, "setup": self.setup, "band_hz": list(self.band),
+                "threshold_dba": d["threshold_dba"], "frequency_weighting": "A (IEC 61672-1)",
+                "time_weighting": self.time_weighting.capitalize(), "time_constant_s": self.time_constant_s,
+                "min_duration_s": d["min_duration"], "description": self.describe()}
+
+
+def squeal_criteria(
+    setup: str | None = None, *, band: tuple[float, float] | None = None, threshold_dba: float = 70.0,
+    time_weighting: str = "fast", min_duration: float = 0.01,
+) -> SquealCriteria:
+    """Validated squeal criteria for a J2521 setup, or a user band.
+
+    Parameters
+    ----------
+    setup : {"component", "corner"}, optional
+        SAE J2521 setup (default ``"component"``: brakes not on a full corner, 2-16 kHz;
+        ``"corner"``: full corners or axles, 1.25-16 kHz). With ``band`` and no setup, the
+        setup is ``"user"``.
+    band : (float, float), optional
+        Squeal band [Hz] overriding the setup's.
+    threshold_dba : float
+        Threshold [dB(A)] (SAE J2521: 70).
+    time_weighting : {"fast", "slow"}
+        IEC 61672-1 exponential time weighting (default Fast, 125 ms).
+    min_duration : float
+        Shortest tonal event [s].
+
+    Examples
+    --------
+    >>> squeal_criteria().band
+    (2000.0, 16000.0)
+    >>> squeal_criteria("corner").name
+    'SAE J2521 corner (full suspension corner or axle, 1.25-16 kHz)'
+    """
+    if setup is not None and setup not in SETUPS and setup != "user":
+        raise InputError(f"Parameter setup={setup!r} must be 'component' (2-16 kHz) or 'corner' (1.25-16 kHz).")
+    if setup == "user" and band is None:
+        raise InputError("Parameter setup='user' needs a band (freq_lower, freq_upper) in Hz.")
+    if band is None:
+        setup = setup or "component"
+        band = SETUPS[setup]
+    else:
+        try:
+            lo, hi = (float(b) for b in band)
+        except (TypeError, ValueError) as e:
+            raise InputError(f"Parameter band={band!r} must be two frequencies (freq_lower, freq_upper) in Hz.") from e
+        lo, hi = validate_positive("band lower", lo), validate_positive("band upper", hi)
+        if not lo < hi:
+            raise InputError(f"Parameter band={band!r} must satisfy lower < upper.")
+        band = (lo, hi)
+        if setup is None:
+            setup = next((k for k, v in SETUPS.items() if v == band), "user")
+        elif band != SETUPS.get(setup):
+            setup = "user"
+    if time_weighting not in TIME_CONSTANTS:
+        raise InputError(f"Parameter time_weighting={time_weighting!r} must be 'fast' or 'slow'.")
+    validate_finite("threshold_dba", threshold_dba)
+    validate_positive("min_duration", min_duration, allow_zero=True)
+    return SquealCriteria(setup, (float(band[0]), float(band[1])), float(threshold_dba), time_weighting,
+                          float(min_duration))
+
+
+@lru_cache(maxsize=16)
+def _band_gain(nfft: int, fs: float, band: tuple[float, float]) -> NDArray[np.float32]:
+    """A-weighting amplitude times the band mask, on the ``rfft`` bins of ``nfft`` samples."""
+    f = sp_fft.rfftfreq(nfft, 1 / fs)
+    gain = 10 ** (a_weighting_db(f) / 20)
+    gain[0] = 0.0
+    mask = np.ones_like(f)
+    for edge, rising in ((band[0], True), (band[1], False)):
+        x = np.clip((f - edge) / EDGE_HZ + 0.5, 0.0, 1.0)  # 0 -> 1 across the transition
+        ramp = 0.5 - 0.5 * np.cos(np.pi * x)
+        mask *= ramp if rising else 1.0 - ramp
+    out = (gain * mask).astype(np.float32)
+    out.setflags(write=False)
+    return out
+
+
+def band_weighted_signal(x: ArrayLike, fs: float, band: tuple[float, float], *, workers: int | None = None
+                         ) -> NDArray[np.float32]:
+    """A-weighted signal limited to ``band`` (zero-phase, by FFT; single precision).
+
+    The gain is the IEC 61672-1 A-weighting times a band mask with raised-cosine edges
+    (:data:`EDGE_HZ` wide, centred on each edge, so the edge itself passes at -6 dB). The
+    signal is zero-padded, so nothing wraps around; it behaves as if silent beyond its ends.
+
+    Parameters
+    ----------
+    x : array_like, shape (n,)
+        Sound pressure [Pa].
+    fs : float
+        Sample rate [Hz].
+    band : (float, float)
+        ``(freq_lower, freq_upper)`` [Hz], upper below ``fs / 2``.
+    workers : int, optional
+        FFT threads (default: squealkit's thread limit, see ``SQUEALKIT_THREADS``).
+    """
+    if workers is None:
+        from .._threads import thread_limit
+
+        workers = thread_limit()
+    arr = np.asarray(x, dtype=np.float32)
+    pad = max(2048, int(0.05 * fs))
+    nfft = sp_fft.next_fast_len(arr.size + pad, real=True)
+    spec = sp_fft.rfft(arr, nfft, workers=workers)
+    spec *= _band_gain(nfft, float(fs), (float(band[0]), float(band[1])))
+    return sp_fft.irfft(spec, nfft, workers=workers)[: arr.size]
+
+
+def exponential_average(
+    x: ArrayLike, dt: float, tau: float, *, initial: float = 0.0
+) -> NDArray[np.float64]:
+    """Exponential time weighting of a mean-square sequence (IEC 61672-1).
+
+    ``y_n = a y_(n-1) + (1 - a) x_n`` with ``a = exp(-dt / tau)``: exact for the response of
+    ``tau dy/dt = x - y`` when ``x`` is constant over each step of ``dt`` seconds.
+
+    Parameters
+    ----------
+    x : array_like, shape (n,)
+        Mean square per step [unit^2].
+    dt : float
+        Step [s].
+    tau : float
+        Time constant [s] (Fast 0.125, Slow 1).
+    initial : float
+        ``y`` before the first step (to carry the state from one block to the next).
+    """
+    a = math.exp(-dt / tau)
+    y, _ = signal.lfilter([1.0 - a], [1.0, -a], np.asarray(x, dtype=np.float64), zi=[a * initial])
+    return y
+
+
+def time_weighted_level(x: ArrayLike, fs: float, criteria: SquealCriteria) -> NDArray[np.float64]:
+    """Time-weighted A-weighted sound level L_AF(t) [dB(A)] in the criteria band, per sample.
+
+    Examples
+    --------
+    >>> fs = 40000.0
+    >>> t = np.arange(40000) / fs
+    >>> x = np.sqrt(2) * 20e-6 * 10 ** (80 / 20) * np.sin(2 * np.pi * 1000.0 * t)  # 80 dB at 1 kHz
+    >>> lev = time_weighted_level(x, fs, squeal_criteria(band=(500.0, 16000.0)))
+    >>> round(float(lev[36000]), 2)  # after 0.9 s (7 time constants)
+    80.0
+    """
+    fs = validate_fs(fs)
+    if criteria.band[1] >= fs / 2:
+        raise InputError(f"Band {criteria.band} Hz: upper edge must lie below fs/2 = {fs / 2:g} Hz.")
+    w = band_weighted_signal(x, fs, criteria.band).astype(np.float64)
+    y = exponential_average(w * w, 1.0 / fs, criteria.time_constant_s)
+    with np.errstate(divide="ignore"):
+        return 10 * np.log10(np.maximum(y, 1e-300) / P_REF**2)
