@@ -182,3 +182,60 @@ def friction_json(fr: dict[str, Any]) -> dict[str, Any]:
         return {}
     law = fr["friction"]
     return {"stribeck": {"mu_static": law.mu_static, "v_stribeck": law.v_stribeck}, "speed": fr["speed"]}
+
+
+def fe_options(*, band: bool = True, rpm_help: str = "Disc speeds in rpm (omega = 2 pi rpm/60): N points from "
+               "START to STOP, or one number. FE models only.") -> Callable[[F], F]:
+    """--rpm, --band, --method and --modes: the disc speed axis and the solver of FE models."""
+
+    def deco(f: F) -> F:
+        f = click.option("--modes", "n_modes", type=int, default=None, metavar="N",
+                         help="Reduced basis size for --method modal|pod (FE models).")(f)
+        f = click.option("--method", type=click.Choice(["auto", "dense", "sparse", "modal", "pod"]), default="auto",
+                         show_default=True,
+                         help="FE solver: dense (all modes), sparse (a band, shift-invert), modal or pod (reduced "
+                         "basis, every eigenpair checked in the full model); auto = dense up to 1000 DOFs.")(f)
+        if band:
+            f = click.option("--band", "band_spec", default=None, metavar="LO:HI",
+                             help="Frequency band in Hz (FE models; sparse default 1000:16000, others all modes).")(f)
+        f = click.option("--rpm", "rpm_spec", default=None, metavar="START:STOP:N", help=rpm_help)(f)
+        return f
+
+    return deco
+
+
+def fe_kwargs_from_options(model: Any, rpm_spec: str | None, band_spec: str | None, method: str,
+                           n_modes: int | None, *, need_rpm: bool = True) -> dict[str, Any]:
+    """``rpm``, ``band``, ``method``, ``n_modes`` for the FE functions; {} for other models (and an
+    error if FE options were given to them)."""
+    from .._validation import parse_range
+    from ..models import FEModel
+
+    if not isinstance(model, FEModel):
+        given = [o for o, v in (("--rpm", rpm_spec), ("--band", band_spec), ("--modes", n_modes)) if v is not None]
+        if method != "auto":
+            given.append("--method")
+        if given:
+            raise InputError(f"{given[0]} applies to FE models only (model = \"fe\" in the --config file).")
+        return {}
+    if rpm_spec is None and need_rpm:
+        raise InputError("An FE model needs disc speeds: --rpm START:STOP:N (rpm).")
+    out: dict[str, Any] = {"method": method, "n_modes": n_modes}
+    if rpm_spec is not None:
+        rpm = parse_range("--rpm", rpm_spec)
+        if np.any(rpm <= 0):
+            raise InputError(f"--rpm {rpm_spec!r}: disc speeds must be > 0 rpm.")
+        out["rpm"] = rpm
+    if band_spec is not None:
+        lo, sep, hi = band_spec.partition(":")
+        try:
+            out["band"] = (float(lo), float(hi))
+        except ValueError:
+            raise InputError(f"--band {band_spec!r} must be LO:HI in Hz, e.g. 1000:16000.") from None
+        if not sep:
+            raise InputError(f"--band {band_spec!r} must be LO:HI in Hz, e.g. 1000:16000.")
+    else:
+        out["band"] = None
+    if n_modes is not None and n_modes < 1:
+        raise InputError(f"--modes {n_modes} must be >= 1.")
+    return out
