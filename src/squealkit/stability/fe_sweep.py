@@ -38,7 +38,6 @@ from .sparse import (
     band_eigs,
     dense_eigs,
     dense_parts,
-    mass_cholesky,
     validate_band,
 )
 
@@ -118,14 +117,13 @@ class FESolver:
         self.solve_model = solve_model
         if self.method != "sparse":
             self.parts = dense_parts(solve_model)
-            self.chol = mass_cholesky(self.parts["M"])
 
     def solve(self, omega: float, mu: float, tan_theta: float = 0.0, *, vectors: bool = True) -> EigenSolution:
         """Eigenvalues (and right eigenvectors in the full model's DOFs) at one operating point."""
         if self.method == "sparse":
             return band_eigs(self.model, omega, mu, tan_theta, band=self.band, sigma_reach=self.sigma_reach)
         need_x = vectors or self.basis is not None
-        sol = dense_eigs(self.solve_model, omega, mu, tan_theta, vectors=need_x, parts=self.parts, chol=self.chol)
+        sol = dense_eigs(self.solve_model, omega, mu, tan_theta, vectors=need_x, parts=self.parts)
         lam, X = sol.eigenvalues, sol.vectors
         if self.band is not None:
             f = lam.imag / (2 * math.pi)
@@ -195,6 +193,7 @@ def fe_stability_map(
     band: tuple[float, float] | None = None,
     n_modes: int | None = None,
     sigma_reach: float = 0.0,
+    track: bool = True,
     workers: int | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> xr.Dataset:
@@ -217,6 +216,9 @@ def fe_stability_map(
         Reduced basis size for ``modal``/``pod``.
     sigma_reach : float
         ``sparse`` only: see :func:`~squealkit.stability.sparse.band_eigs`.
+    track : bool
+        Follow each mode across the grid by MAC on its right eigenvector; otherwise modes
+        are ordered by frequency at each point and no eigenvectors are computed (faster).
     workers : int, optional
         Points solved at once (threads; LAPACK and SuperLU release the GIL); default: the
         thread limit of :mod:`squealkit._threads`.
@@ -261,10 +263,14 @@ def fe_stability_map(
     workers = thread_limit() if workers is None else max(1, int(workers))
 
     def solve(ij):
-        return solver.solve(omegas[ij[0]], mu_a[ij[1]], t)
+        return solver.solve(omegas[ij[0]], mu_a[ij[1]], t, vectors=track)
 
     def record(ij, sol, prev):
-        slots = tracker.first(sol) if prev is None else tracker.match(prev, sol)
+        if not track:
+            slots = np.arange(sol.eigenvalues.size)
+            tracker.n_slots = max(tracker.n_slots, slots.size)
+        else:
+            slots = tracker.first(sol) if prev is None else tracker.match(prev, sol)
         results[ij] = (slots, sol.eigenvalues, sol.residuals)
         return slots, sol.eigenvalues, sol.vectors
 
@@ -290,7 +296,7 @@ def fe_stability_map(
                 done += len(chunk)
                 if progress is not None:
                     progress(done, total)
-    return _fe_dataset(solver, rpm_a, omegas, mu_a, theta, t, results, tracker.n_slots)
+    return _fe_dataset(solver, rpm_a, omegas, mu_a, theta, t, results, tracker.n_slots, tracked=track)
 
 
 def _point_arrays(lam: NDArray, res: NDArray, valid: NDArray):
@@ -309,7 +315,8 @@ def _point_arrays(lam: NDArray, res: NDArray, valid: NDArray):
     return err, unstable, verdict, thr
 
 
-def _fe_dataset(solver, rpm, omegas, mu, theta, t, results, n_slots, *, lock_in_rtol: float = 1e-3) -> xr.Dataset:
+def _fe_dataset(solver, rpm, omegas, mu, theta, t, results, n_slots, *, tracked: bool,
+                lock_in_rtol: float = 1e-3) -> xr.Dataset:
     n_r, n_m = rpm.size, mu.size
     lam = np.full((n_r, n_m, n_slots), np.nan + 1j * np.nan)
     res = np.full((n_r, n_m, n_slots), np.nan)
@@ -317,7 +324,9 @@ def _fe_dataset(solver, rpm, omegas, mu, theta, t, results, n_slots, *, lock_in_
         lam[i, j, slots] = ev
         res[i, j, slots] = r
     valid = np.isfinite(lam)
-    err, unstable, verdict, _thr = _point_arrays(np.where(valid, lam, 0.0), np.where(valid, res, 0.0), valid)
+    # no residual (eigenvalues without vectors): LAPACK's QR is backward stable, eta ~ eps
+    err, unstable, verdict, _thr = _point_arrays(np.where(valid, lam, 0.0), np.where(np.isfinite(res), res, 0.0),
+                                                 valid)
     err = np.where(valid, err, np.nan)
     sigma, omega = lam.real, lam.imag
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -342,7 +351,8 @@ def _fe_dataset(solver, rpm, omegas, mu, theta, t, results, n_slots, *, lock_in_
             "growth_rate_error": (dims, err, {"units": "1/s", "long_name": "error radius of the eigenvalue "
                                               "(16 x backward error x |lambda|)"}),
             "residual": (dims, res, {"units": "1", "long_name": "backward error of the eigenpair in the full model"}),
-            "trusted": (dims, valid & (res <= RESIDUAL_TOL), {"long_name": "backward error below residual_tol"}),
+            "trusted": (dims, valid & ~(res > RESIDUAL_TOL),
+                        {"long_name": "backward error below residual_tol (or not computed: dense, no vectors)"}),
             "unstable": (dims, unstable,
                          {"long_name": "mode unstable (sigma beyond 1e-9 |lambda|_max by more than its error)"}),
             "verdict": (("rpm", "mu"), verdict,
@@ -361,7 +371,8 @@ def _fe_dataset(solver, rpm, omegas, mu, theta, t, results, n_slots, *, lock_in_
             "theta": ((), float(theta), {"units": "rad", "long_name": "run-out incline angle"}),
             "theta_deg": ((), math.degrees(theta), {"units": "deg", "long_name": "run-out incline angle"}),
             "tan_theta": ((), t, {"units": "1", "long_name": "run-out slope"}),
-            "mode": ("mode", np.arange(n_slots), {"long_name": "mode index (tracked by MAC)"}),
+            "mode": ("mode", np.arange(n_slots),
+                     {"long_name": "mode index (tracked by MAC)" if tracked else "mode index (by frequency)"}),
         },
         attrs={
             "title": "Complex eigenvalues of an FE brake model over disc speed and friction",
@@ -371,7 +382,7 @@ def _fe_dataset(solver, rpm, omegas, mu, theta, t, results, n_slots, *, lock_in_
             "band_hz": list(solver.band) if solver.band is not None else "all",
             "basis_size": 0 if solver.basis is None else int(solver.basis.shape[1]),
             "damped": 1,
-            "tracked": 1,
+            "tracked": int(tracked),
             "unstable_rtol": UNSTABLE_RTOL,
             "residual_tol": RESIDUAL_TOL,
             "reference": "C(omega, mu) = D1 + (mu_e/mu_ref)(omega_ref/omega) DR + (omega/omega_ref) DG + D4/f_ref; "

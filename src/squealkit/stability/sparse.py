@@ -33,12 +33,12 @@ from ..models.fe import FEModel
 
 __all__ = [
     "BAND_HZ",
+    "DenseParts",
     "EigenSolution",
     "backward_errors",
     "band_eigs",
     "dense_eigs",
     "dense_parts",
-    "mass_cholesky",
     "validate_band",
 ]
 
@@ -116,36 +116,51 @@ def _one_per_mode(lam: NDArray, X: NDArray | None, n: int) -> NDArray[np.intp]:
     return keep[np.lexsort((lam.real[keep], np.abs(lam.imag[keep])))]
 
 
-def _state_matrix(C: NDArray, K: NDArray, L: NDArray) -> NDArray:
-    """``[[0, I], [-L^-1 K L^-T, -L^-1 C L^-T]]`` for ``M = L L^T``: a similarity of the state
-    matrix that keeps symmetric parts symmetric (more accurate than ``M^-1 K``)."""
-    n = K.shape[0]
+@dataclass(frozen=True)
+class DenseParts:
+    """A model's matrices as dense arrays, prepared once for many dense solves.
+
+    ``parts`` are the matrices as given; where M is positive definite (``L`` its lower
+    Cholesky factor, else False) ``congruent`` holds ``L^-1 P L^-T`` of every other matrix,
+    so that the state matrix ``[[0, I], [-L^-1 K L^-T, -L^-1 C L^-T]]`` of any operating
+    point is a weighted sum: a similarity of the usual state matrix that keeps symmetric
+    parts symmetric (more accurate than ``M^-1 K``: 1e-10 against 3e-9 relative on
+    disk_brake100).
+    """
+
+    parts: dict[str, NDArray]
+    L: NDArray | bool
+    congruent: dict[str, NDArray]
+
+
+def dense_parts(model: FEModel) -> DenseParts:
+    """The model's matrices prepared for repeated dense solves (:class:`DenseParts`)."""
+    parts = {name: getattr(model, name).toarray() for name in model.present}
+    try:
+        L = np.linalg.cholesky(parts["M"])
+    except np.linalg.LinAlgError:
+        return DenseParts(parts, False, {})
 
     def congruent(X):
         return sla.solve_triangular(L, sla.solve_triangular(L, X, lower=True).T, lower=True).T
 
-    A = np.zeros((2 * n, 2 * n))
-    A[:n, n:] = np.eye(n)
-    A[n:, :n] = -congruent(K)
-    A[n:, n:] = -congruent(C)
-    return A
+    return DenseParts(parts, L, {k: congruent(v) for k, v in parts.items() if k != "M"})
 
 
-def mass_cholesky(M: NDArray) -> NDArray | bool:
-    """Lower Cholesky factor of a dense M, or False where M is singular."""
-    try:
-        return np.linalg.cholesky(M)
-    except np.linalg.LinAlgError:
-        return False
+def _weighted(mats: dict[str, NDArray], f: dict[str, float], names: tuple[str, ...], n: int) -> NDArray:
+    out = np.zeros((n, n))
+    for k in names:
+        if k in f and f[k] != 0.0:
+            out += f[k] * mats[k]
+    return out
 
 
-def dense_parts(model: FEModel) -> dict[str, NDArray]:
-    """The model's present matrices as dense arrays (for repeated dense solves)."""
-    return {name: getattr(model, name).toarray() for name in model.present}
+_C_NAMES = ("D1", "DR", "DG", "D4")
+_K_NAMES = ("K1", "KR", "KGeo")
 
 
 def dense_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *, vectors: bool = True,
-               parts: dict[str, NDArray] | None = None, chol: NDArray | bool | None = None) -> EigenSolution:
+               parts: DenseParts | None = None) -> EigenSolution:
     """All eigenvalues of the model at ``(omega, mu)`` by LAPACK on the 2n state matrix.
 
     Parameters
@@ -158,15 +173,14 @@ def dense_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, 
     tan_theta : float
         Run-out slope tan(theta).
     vectors : bool
-        Also return right eigenvectors (needed for mode tracking and shapes).
-    parts, chol
-        Dense matrices (:func:`dense_parts`) and the Cholesky factor of M (``False`` if M is
-        singular), reused across points.
+        Also return right eigenvectors (needed for mode tracking and shapes) and backward errors.
+    parts : DenseParts, optional
+        :func:`dense_parts` of the model, reused across points.
 
     Returns
     -------
     EigenSolution
-        n eigenvalues, one per mode (see :func:`_one_per_mode`).
+        n eigenvalues, one per mode (see :func:`_one_per_mode`); residuals NaN without vectors.
 
     Examples
     --------
@@ -178,20 +192,19 @@ def dense_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, 
     parts = dense_parts(model) if parts is None else parts
     f = model.factors(omega, mu, tan_theta)
     n = model.n_dof
-    M = parts["M"]
-    C = sum((f[k] * parts[k] for k in ("D1", "DR", "DG", "D4") if k in f), np.zeros((n, n)))
-    K = sum((f[k] * parts[k] for k in ("K1", "KR", "KGeo") if k in f), np.zeros((n, n)))
-    chol = mass_cholesky(M) if chol is None else chol
-    if chol is not False:
-        A = _state_matrix(C, K, chol)
+    if parts.L is not False:
+        A = np.zeros((2 * n, 2 * n))
+        A[:n, n:] = np.eye(n)
+        A[n:, :n] = -_weighted(parts.congruent, f, _K_NAMES, n)
+        A[n:, n:] = -_weighted(parts.congruent, f, _C_NAMES, n)
         if vectors:
             lam, Z = sla.eig(A, check_finite=False, overwrite_a=True)
-            Z[:n] = sla.solve_triangular(chol, Z[:n], lower=True, trans="T")  # x = L^-T y
         else:
             lam, Z = sla.eigvals(A, check_finite=False, overwrite_a=True), None
     else:  # singular M: the pencil (A, B); its infinite eigenvalues are dropped
-        A = np.block([[np.zeros((n, n)), np.eye(n)], [-K, -C]])
-        B = sla.block_diag(np.eye(n), M)
+        A = np.block([[np.zeros((n, n)), np.eye(n)],
+                      [-_weighted(parts.parts, f, _K_NAMES, n), -_weighted(parts.parts, f, _C_NAMES, n)]])
+        B = sla.block_diag(np.eye(n), parts.parts["M"])
         if vectors:
             lam, Z = sla.eig(A, B, check_finite=False)
         else:
@@ -204,9 +217,12 @@ def dense_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, 
     if Z is None:
         return EigenSolution(lam, None, np.full(lam.size, np.nan))
     X = Z[:n, keep]
+    if parts.L is not False:
+        X = sla.solve_triangular(parts.L, X, lower=True, trans="T")  # x = L^-T y
     X = X / np.linalg.norm(X, axis=0)
-    res = _residuals_dense(M, C, K, lam, X)
-    return EigenSolution(lam, X, res)
+    C = _weighted(parts.parts, f, _C_NAMES, n)
+    K = _weighted(parts.parts, f, _K_NAMES, n)
+    return EigenSolution(lam, X, _residuals_dense(parts.parts["M"], C, K, lam, X))
 
 
 def _residuals_dense(M, C, K, lam, X):
