@@ -400,3 +400,24 @@ def test_cli_fe_bad_input(run, brake_toml, args, message):
     assert "Traceback" not in r.output
     if message is not None:
         assert message in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_unstable_mode_shapes_to_vtk(tmp_path):
+    meshio = pytest.importorskip("meshio")
+    pts = np.array([[0.0, 0, 0], [1.0, 0, 0]])
+    mesh = meshio.Mesh(pts, [("line", np.array([[0, 1]]))])
+    # 6 DOFs = 2 points x (ux, uy, uz); x-motion of point 0 and y-motion of point 1 coupled by friction
+    K1 = np.diag([1.2, 5.0, 5.0, 5.0, 1.0, 5.0])
+    KR = np.zeros((6, 6))
+    KR[0, 4], KR[4, 0] = 1.0, -1.0
+    fe = FEModel.from_matrices(M=np.eye(6), K1=K1, KR=KR, mesh=mesh)
+    ds = fe_modes(fe, 60.0, 0.5, unstable_only=True)
+    assert ds.sizes["mode"] == 1
+    from squealkit.stability.fe_sweep import modes_to_vtk
+
+    modes_to_vtk(ds, fe, tmp_path / "m.vtu")
+    back = meshio.read(tmp_path / "m.vtu")
+    shape = back.point_data["mode0_re"] + 1j * back.point_data["mode0_im"]
+    assert shape.shape == (2, 3)
+    np.testing.assert_allclose(np.abs(shape).max(), 1.0)
+    assert np.abs(shape[0, 0]) > 0.5 and np.abs(shape[1, 1]) > 0.5 and np.abs(shape[0, 1]) < 1e-12
