@@ -12,6 +12,7 @@ eigenpair checked by its backward error in the full model); ``auto`` is dense up
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
@@ -111,8 +112,14 @@ class FESolver:
             else:
                 if self.samples is None:
                     raise InputError("method 'pod' needs sample operating points (omegas, mus).")
-                kw = {} if self.n_modes is None else {"n_modes": self.n_modes}
-                self.basis = np.asarray(red.pod_basis(self.model, *self.samples, **kw))
+                # pod_basis(model, omegas, mus, *, band=..., n_modes=...): pass what it takes; a basis
+                # ordered by singular value is truncated to n_modes where it has no such argument
+                accepts = inspect.signature(red.pod_basis).parameters
+                kw = {} if self.band is None else {"band": self.band}
+                if self.n_modes is not None and "n_modes" in accepts:
+                    kw["n_modes"] = self.n_modes
+                V = np.asarray(red.pod_basis(self.model, *self.samples, **kw))
+                self.basis = V if self.n_modes is None or "n_modes" in accepts else V[:, : self.n_modes]
             solve_model = self.model.project(self.basis)
         self.solve_model = solve_model
         if self.method != "sparse":

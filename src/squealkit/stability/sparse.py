@@ -27,6 +27,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
+from threadpoolctl import threadpool_limits
 
 from .._validation import InputError, validate_finite, validate_positive
 from ..models.fe import FEModel
@@ -232,12 +233,19 @@ def _residuals_dense(M, C, K, lam, X):
     return np.linalg.norm(R, axis=0) / ((a**2 * nM + a * nC + nK) * np.linalg.norm(X, axis=0))
 
 
-def _shift_solution(M, C, K, s: complex, k: int, v0=None):
-    """The k eigenvalues nearest ``s`` (and their x) by shift-invert on the companion form."""
+def _shift_operator(M, C, K, s: complex) -> spla.LinearOperator:
+    """``(A - s B)^-1 B`` of the companion form ``A = [[0, I], [-K, -C]]``, ``B = diag(I, M)``,
+    applied with one sparse LU of ``P(s) = s^2 M + s C + K``:
+    ``w1 = -P(s)^-1 (M v2 + (C + s M) v1)``, ``w2 = v1 + s w1``."""
     n = M.shape[0]
     P = (s * s) * M + s * C + K
-    lu = spla.splu(sp.csc_matrix(P, dtype=np.complex128))
-    CsM = C + s * M
+    # FE matrices are structurally symmetric: minimum degree on A^T + A fills far less than
+    # SuperLU's default COLAMD (disc + pads, 1566 DOFs: factor 0.06 s against 2.4-5.9 s)
+    try:
+        lu = spla.splu(sp.csc_matrix(P, dtype=np.complex128), permc_spec="MMD_AT_PLUS_A")
+    except RuntimeError as e:  # exactly singular: an eigenvalue at the shift itself
+        raise InputError(f"P(s) is singular at the shift s = {s:.6g} (an eigenvalue there): {e}") from e
+    CsM = (C + s * M).tocsr()
 
     def matvec(v):
         v = np.asarray(v).ravel()
@@ -245,9 +253,14 @@ def _shift_solution(M, C, K, s: complex, k: int, v0=None):
         w1 = -lu.solve(M @ v2 + CsM @ v1)
         return np.concatenate([w1, v1 + s * w1])
 
-    op = spla.LinearOperator((2 * n, 2 * n), matvec=matvec, dtype=np.complex128)
-    theta, Z = spla.eigs(op, k=k, which="LM", v0=v0, ncv=min(2 * n, max(2 * k + 1, 20)))
-    return s + 1.0 / theta, Z[:n]
+    return spla.LinearOperator((2 * n, 2 * n), matvec=matvec, dtype=np.complex128)
+
+
+def _nearest(op: spla.LinearOperator, s: complex, k: int):
+    """The k eigenvalues nearest ``s`` (and their x) from the shift-inverted operator."""
+    n2 = op.shape[0]
+    theta, Z = spla.eigs(op, k=k, which="LM", ncv=min(n2, max(2 * k + 1, 20)))
+    return s + 1.0 / theta, Z[: n2 // 2]
 
 
 def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *,
@@ -295,13 +308,22 @@ def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *
     C = model.damping_matrix(omega, mu, tan_theta)
     K = model.stiffness_matrix(omega, mu, tan_theta)
     w_lo, w_hi = 2 * math.pi * lo, 2 * math.pi * hi
+    with threadpool_limits(1, user_api="blas"):  # ARPACK's BLAS-2 calls: threads only stall on shared cores
+        return _band_walk(model, omega, mu, tan_theta, M, C, K, n, w_lo, w_hi, k, sigma_reach, max_shifts)
+
+
+def _band_walk(model, omega, mu, tan_theta, M, C, K, n, w_lo, w_hi, k, sigma_reach, max_shifts) -> EigenSolution:
+    """The shift walk of :func:`band_eigs`."""
     lams, xs, chords = [], [], []
     edge = w_lo  # lower edge of the current shift's slice
     center = w_lo
     kk = k
+    op, op_center = None, None
     for _ in range(max_shifts):
         kk = min(kk, 2 * n - 3)
-        lam, X = _shift_solution(M, C, K, 1j * center, kk)
+        if op_center != center:  # one LU per shift, kept when k grows
+            op, op_center = _shift_operator(M, C, K, 1j * center), center
+        lam, X = _nearest(op, 1j * center, kk)
         dist = np.abs(lam - 1j * center)
         r = float(np.max(dist)) * (1.0 - 1e-6)
         below = center - edge
@@ -321,9 +343,10 @@ def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *
         chords.append(math.sqrt(max(r * r - reach * reach, 0.0)))
         if last:
             break
-        edge, center, kk = top, 2 * top - center, k
+        edge, center, kk = top, min(2 * top - center, w_hi), k  # never past the band's top
     else:
-        raise InputError(f"The band {lo:g}-{hi:g} Hz needs more than {max_shifts} shifts; narrow it.")
+        raise InputError(f"The band {w_lo / (2 * math.pi):g}-{w_hi / (2 * math.pi):g} Hz needs more than "
+                         f"{max_shifts} shifts; narrow it.")
     lam = np.concatenate(lams) if lams else np.zeros(0, complex)
     X = np.concatenate(xs, axis=1) if xs else np.zeros((n, 0), complex)
     order = np.lexsort((lam.real, lam.imag))
