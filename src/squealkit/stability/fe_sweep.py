@@ -27,8 +27,9 @@ from threadpoolctl import threadpool_limits
 
 from .. import __version__
 from .._threads import thread_limit
-from .._validation import InputError, validate_array_finite, validate_positive
+from .._validation import InputError, validate_angle, validate_array_finite, validate_positive
 from ..models.fe import FEModel, rpm_to_omega
+from ._kernels import derived_quantities
 from ._solve import VERDICTS
 from .eigen import UNSTABLE_RTOL
 from .sparse import (
@@ -185,8 +186,6 @@ def _validate_grid(name: str, values: ArrayLike) -> NDArray[np.float64]:
 
 
 def _tan_theta(theta: float) -> float:
-    from .._validation import validate_angle
-
     return math.tan(validate_angle("theta", theta))
 
 
@@ -332,21 +331,18 @@ def _fe_dataset(solver, rpm, omegas, mu, theta, t, results, n_slots, *, tracked:
         res[i, j, slots] = r
     valid = np.isfinite(lam)
     # no residual (eigenvalues without vectors): LAPACK's QR is backward stable, eta ~ eps
-    err, unstable, verdict, _thr = _point_arrays(np.where(valid, lam, 0.0), np.where(np.isfinite(res), res, 0.0),
+    err, _unstable, verdict, thr = _point_arrays(np.where(valid, lam, 0.0), np.where(np.isfinite(res), res, 0.0),
                                                  valid)
     err = np.where(valid, err, np.nan)
-    sigma, omega = lam.real, lam.imag
-    with np.errstate(invalid="ignore", divide="ignore"):
-        zeta = np.where(np.abs(lam) > 0, -sigma / np.abs(lam), 0.0)
-        smax = np.nanmax(np.where(valid, sigma, -np.inf), axis=-1)
-    any_u = (verdict == 1) | (verdict == 2)
-    w = np.where(valid, omega, np.nan)
-    with np.errstate(invalid="ignore"):
-        close = np.abs(w[..., :, None] - w[..., None, :]) <= lock_in_rtol * np.maximum(np.abs(w[..., :, None]),
-                                                                                        np.abs(w[..., None, :]))
-    pair_u = unstable[..., :, None] | unstable[..., None, :]
-    off = ~np.eye(n_slots, dtype=bool)
-    locked = np.any(close & pair_u & off, axis=(-1, -2))
+    flat = (n_r * n_m, n_slots)
+    # the small models' kernel for the derived quantities; modes outside the band (NaN) are
+    # never unstable nor locked in, their damping ratio NaN and the largest growth rate skips them
+    sigma, omega, zeta, unstable, _smax, any_u, locked = (
+        a.reshape((n_r, n_m, *a.shape[1:]))
+        for a in derived_quantities(np.ascontiguousarray(lam.reshape(flat)), np.ascontiguousarray(err.reshape(flat)),
+                                    thr.ravel(), verdict.ravel(), lock_in_rtol))
+    zeta = np.where(valid, zeta, np.nan)
+    smax = np.max(np.where(valid, sigma, -np.inf), axis=-1, initial=-np.inf)
     dims = ("rpm", "mu", "mode")
     model = solver.model
     ds = xr.Dataset(

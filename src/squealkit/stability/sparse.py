@@ -90,13 +90,9 @@ def validate_band(band: object) -> tuple[float, float]:
     return lo, hi
 
 
-def backward_errors(model: FEModel, omega: float, mu: float, lam: NDArray, X: NDArray,
-                    tan_theta: float = 0.0) -> NDArray[np.float64]:
-    """Backward error ``eta`` of each eigenpair ``(lam[k], X[:, k])`` (module docstring)."""
-    M = model.mass_matrix()
-    C = model.damping_matrix(omega, mu, tan_theta)
-    K = model.stiffness_matrix(omega, mu, tan_theta)
-    nM, nC, nK = (float(spla.norm(a)) for a in (M, C, K))
+def _backward(M, C, K, lam: NDArray, X: NDArray) -> NDArray[np.float64]:
+    """Backward errors of the pairs ``(lam[k], X[:, k])`` for dense or sparse M, C, K."""
+    nM, nC, nK = (float(spla.norm(A) if sp.issparse(A) else np.linalg.norm(A)) for A in (M, C, K))
     lam = np.asarray(lam)
     R = (M @ X) * lam**2 + (C @ X) * lam + K @ X
     a = np.abs(lam)
@@ -105,7 +101,14 @@ def backward_errors(model: FEModel, omega: float, mu: float, lam: NDArray, X: ND
         return np.where(den > 0, np.linalg.norm(R, axis=0) / den, np.inf)
 
 
-def _one_per_mode(lam: NDArray, X: NDArray | None, n: int) -> NDArray[np.intp]:
+def backward_errors(model: FEModel, omega: float, mu: float, lam: NDArray, X: NDArray,
+                    tan_theta: float = 0.0) -> NDArray[np.float64]:
+    """Backward error ``eta`` of each eigenpair ``(lam[k], X[:, k])`` (module docstring)."""
+    return _backward(model.mass_matrix(), model.damping_matrix(omega, mu, tan_theta),
+                     model.stiffness_matrix(omega, mu, tan_theta), lam, X)
+
+
+def _one_per_mode(lam: NDArray, n: int) -> NDArray[np.intp]:
     """Indices of one eigenvalue per mode among the 2n: of each conjugate pair the one with
     omega > 0; of the real roots (even in number) the larger half, so a growing real root is kept."""
     scale = np.max(np.abs(lam)) if lam.size else 1.0
@@ -213,7 +216,7 @@ def dense_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, 
         fin = np.isfinite(lam)
         lam = lam[fin]
         Z = Z[:, fin] if Z is not None else None
-    keep = _one_per_mode(lam, Z, n)
+    keep = _one_per_mode(lam, n)
     lam = lam[keep]
     if Z is None:
         return EigenSolution(lam, None, np.full(lam.size, np.nan))
@@ -223,14 +226,7 @@ def dense_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, 
     X = X / np.linalg.norm(X, axis=0)
     C = _weighted(parts.parts, f, _C_NAMES, n)
     K = _weighted(parts.parts, f, _K_NAMES, n)
-    return EigenSolution(lam, X, _residuals_dense(parts.parts["M"], C, K, lam, X))
-
-
-def _residuals_dense(M, C, K, lam, X):
-    nM, nC, nK = (np.linalg.norm(a) for a in (M, C, K))
-    R = (M @ X) * lam**2 + (C @ X) * lam + K @ X
-    a = np.abs(lam)
-    return np.linalg.norm(R, axis=0) / ((a**2 * nM + a * nC + nK) * np.linalg.norm(X, axis=0))
+    return EigenSolution(lam, X, _backward(parts.parts["M"], C, K, lam, X))
 
 
 def _shift_operator(M, C, K, s: complex) -> spla.LinearOperator:
