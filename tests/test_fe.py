@@ -189,6 +189,34 @@ def test_tracking_follows_modes_through_a_crossing():
     np.testing.assert_allclose(w[:, 0] ** 2 + 0.005**2, 1 + 2 * np.linspace(0, 1, 11), rtol=1e-9)  # mode 0: x1
 
 
+def test_sparse_sweep_with_an_empty_band(run, brake_toml):
+    # disk_brake100's scaled frequencies are all below 1 Hz: nothing in the default 1-16 kHz band
+    r = run("stability", "--config", str(brake_toml), "--rpm", "60", "--method", "sparse", "--json")
+    assert r.exit_code == 0, r.output
+    out = json.loads(r.stdout)
+    assert out["unstable_fraction"] == 0.0 and out["unstable_frequency_hz"] is None
+    assert out["band_hz"] == [1000.0, 16000.0]
+
+
+def test_sparse_sweep_tracks_band_modes():
+    # a 40-DOF modal model with two friction-coupled modes at 2.0 and 2.1 kHz: the sparse sweep
+    # equals the dense sweep restricted to the band, mode by mode
+    n = 40
+    w = 2 * np.pi * np.linspace(500, 9000, n)
+    w[10], w[11] = 2 * np.pi * 2000, 2 * np.pi * 2100
+    KR = sp.lil_matrix((n, n))
+    KR[10, 11], KR[11, 10] = 0.2 * w[10] ** 2, -0.2 * w[10] ** 2
+    fe = FEModel.from_matrices(M=sp.eye(n), K1=sp.diags(w**2), KR=KR.tocsr(), D1=sp.diags(1e-4 * w))
+    band = (1500.0, 4000.0)
+    sp_ds = fe_stability_map(fe, [100.0, 200.0], np.linspace(0.0, 1.0, 6), method="sparse", band=band)
+    de_ds = fe_stability_map(fe, [100.0, 200.0], np.linspace(0.0, 1.0, 6), method="dense", band=band)
+    np.testing.assert_array_equal(sp_ds.any_unstable.values, de_ds.any_unstable.values)
+    assert sp_ds.any_unstable.values[:, -1].all() and not sp_ds.any_unstable.values[:, 0].any()
+    np.testing.assert_allclose(np.sort(sp_ds.frequency.values, axis=-1), np.sort(de_ds.frequency.values, axis=-1),
+                               rtol=1e-10)
+    np.testing.assert_allclose(sp_ds.max_growth_rate.values, de_ds.max_growth_rate.values, rtol=1e-8, atol=1e-9)
+
+
 def test_sweep_bad_input():
     fe, _, _ = two_dof()
     with pytest.raises(InputError, match="method"):

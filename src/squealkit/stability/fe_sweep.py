@@ -302,7 +302,8 @@ def fe_stability_map(
                 done += len(chunk)
                 if progress is not None:
                     progress(done, total)
-    return _fe_dataset(solver, rpm_a, omegas, mu_a, theta, t, results, tracker.n_slots, tracked=track)
+    # at least one (NaN) mode: a band without eigenvalues gives a map that is stable everywhere
+    return _fe_dataset(solver, rpm_a, omegas, mu_a, theta, t, results, max(1, tracker.n_slots), tracked=track)
 
 
 def _point_arrays(lam: NDArray, res: NDArray, valid: NDArray):
