@@ -449,3 +449,53 @@ def test_unstable_mode_shapes_to_vtk(tmp_path):
     assert shape.shape == (2, 3)
     np.testing.assert_allclose(np.abs(shape).max(), 1.0)
     assert np.abs(shape[0, 0]) > 0.5 and np.abs(shape[1, 1]) > 0.5 and np.abs(shape[0, 1]) < 1e-12
+
+
+@pytest.fixture()
+def stub_reduction(monkeypatch):
+    """A stand-in for squealkit.stability.reduction (delivered on its own branch), with its interface:
+    modal_basis(model, *, freq_max=None, n_modes=None) and pod_basis(model, omegas, mus, *, band=..., tol=...)."""
+    import sys
+    import types
+
+    import squealkit.stability as stab
+
+    mod = types.ModuleType("squealkit.stability.reduction")
+    calls = {}
+
+    def modal_basis(model, *, freq_max=None, n_modes=None):
+        calls["modal"] = (freq_max, n_modes)
+        w2, V = sla.eigh(model.K1.toarray(), model.M.toarray())
+        keep = np.arange(w2.size) if n_modes is None else np.arange(n_modes)
+        return V[:, keep]
+
+    def pod_basis(model, omegas, mus, *, band=(1e3, 16e3), tol=1e-10):
+        calls["pod"] = (np.asarray(omegas), np.asarray(mus), band)
+        X = np.hstack([dense_eigs(model, w, m).vectors for w in omegas for m in mus])
+        U, s, _ = np.linalg.svd(np.hstack([X.real, X.imag]), full_matrices=False)
+        return U[:, s > tol * s[0]]
+
+    mod.modal_basis, mod.pod_basis = modal_basis, pod_basis
+    monkeypatch.setitem(sys.modules, "squealkit.stability.reduction", mod)
+    monkeypatch.setattr(stab, "reduction", mod, raising=False)
+    return calls
+
+
+def test_reduced_methods_plumbing(stub_reduction):
+    n = 8
+    rng = np.random.default_rng(3)
+    K1 = np.diag(np.linspace(1.0, 3.0, n) * 1e6)
+    KR = 2e5 * rng.normal(size=(n, n))
+    fe = FEModel.from_matrices(M=np.eye(n), K1=K1, KR=KR, D1=1e-2 * np.eye(n))
+    rpm, mu = [60.0, 120.0], [0.2, 0.5]
+    dense = fe_stability_map(fe, rpm, mu)
+    full = fe_stability_map(fe, rpm, mu, method="modal")  # the complete modal basis: exact
+    np.testing.assert_allclose(np.sort(full.growth_rate.values, -1), np.sort(dense.growth_rate.values, -1),
+                               rtol=1e-8, atol=1e-6)
+    assert full.attrs["basis_size"] == n and bool(full.trusted.all())
+    cut = fe_stability_map(fe, rpm, mu, method="modal", n_modes=4)  # truncated: the residual check flags it
+    assert cut.attrs["basis_size"] == 4 and not bool(cut.trusted.all())
+    assert stub_reduction["modal"] == (None, 4)
+    pod = fe_stability_map(fe, rpm, mu, theta=math.radians(2.0), method="pod", n_modes=n)
+    np.testing.assert_allclose(stub_reduction["pod"][1], np.array(mu) + math.tan(math.radians(2.0)))
+    assert pod.attrs["basis_size"] == n and float(np.nanmax(pod.residual.values)) < 1e-10

@@ -76,7 +76,8 @@ class FESolver:
     n_modes : int, optional
         Basis size for ``modal``/``pod``.
     samples : (omegas, mus), optional
-        Operating points the ``pod`` basis is built from.
+        Operating points the ``pod`` basis is built from (``mus`` with the run-out slope added:
+        the friction the friction matrices see).
     sigma_reach : float
         For ``sparse``: find every mode in the band with ``|sigma|`` up to this [1/s].
     """
@@ -260,7 +261,7 @@ def fe_stability_map(
     if method == "pod":
         pick = [0, len(omegas) // 2, len(omegas) - 1]
         pick_mu = [0, len(mu_a) // 2, len(mu_a) - 1]
-        samples = (np.unique(omegas[pick]), np.unique(mu_a[pick_mu]))
+        samples = (np.unique(omegas[pick]), np.unique(mu_a[pick_mu]) + t)  # pod_basis takes mu_e
     solver = FESolver(model, method, band, n_modes, samples, sigma_reach)
     n_r, n_m = rpm_a.size, mu_a.size
     results: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
@@ -484,7 +485,7 @@ def fe_critical_friction(
     if isinstance(n_scan, bool) or int(n_scan) != n_scan or n_scan < 2:
         raise InputError(f"Parameter n_scan={n_scan!r} must be an integer >= 2.")
     omegas = rpm_to_omega(rpm_a)
-    samples = (omegas, np.array([0.0, mu_max / 2, mu_max])) if method == "pod" else None
+    samples = (omegas, np.array([0.0, mu_max / 2, mu_max]) + t) if method == "pod" else None
     solver = FESolver(model, method, band, n_modes, samples)
     grid = np.linspace(0.0, mu_max, int(n_scan))
     with threadpool_limits(1, user_api="blas"):
@@ -534,7 +535,7 @@ def fe_modes(
     mu = float(model.mu_ref if mu is None else mu)
     t = _tan_theta(theta)
     omega = float(rpm_to_omega(rpm))
-    samples = (np.array([omega]), np.array([mu])) if method == "pod" else None
+    samples = (np.array([omega]), np.array([mu + t])) if method == "pod" else None
     solver = FESolver(model, method, band, n_modes, samples)
     with threadpool_limits(1, user_api="blas"):
         sol = solver.solve(omega, mu, t)
