@@ -499,3 +499,23 @@ def test_reduced_methods_plumbing(stub_reduction):
     pod = fe_stability_map(fe, rpm, mu, theta=math.radians(2.0), method="pod", n_modes=n)
     np.testing.assert_allclose(stub_reduction["pod"][1], np.array(mu) + math.tan(math.radians(2.0)))
     assert pod.attrs["basis_size"] == n and float(np.nanmax(pod.residual.values)) < 1e-10
+
+
+def test_sweep_on_dask_is_identical_to_local(brake):
+    distributed = pytest.importorskip("distributed")
+    # a sparse band sweep in which modes enter the band inside rows (new indices) and a dense one
+    n = 40
+    w = 2 * np.pi * np.linspace(500, 9000, n)
+    KR = sp.lil_matrix((n, n))
+    KR[10, 11], KR[11, 10] = 0.3 * w[10] ** 2, -0.3 * w[10] ** 2
+    KR[12, 12] = -0.5 * w[12] ** 2  # mode 12 falls into the band as friction grows
+    fe = FEModel.from_matrices(M=sp.eye(n), K1=sp.diags(w**2), KR=KR.tocsr(), D1=sp.diags(1e-4 * w))
+    cases = [(fe, {"method": "sparse", "band": (1500.0, 3000.0)}), (brake, {})]
+    with distributed.Client(processes=False, n_workers=2, threads_per_worker=1, dashboard_address=None) as client:
+        for model, kw in cases:
+            rpm, mu = [60.0, 120.0, 180.0], np.linspace(0.0, 1.0, 5)
+            local = fe_stability_map(model, rpm, mu, **kw)
+            remote = fe_stability_map(model, rpm, mu, client=client, **kw)
+            xr_equal = local.identical(remote)
+            assert xr_equal, (local, remote)
+    assert local.sizes["mode"] == brake.n_dof

@@ -68,13 +68,14 @@ def stability(ctx, preset, config, sets, mu_spec, theta_spec, damped, stribeck_s
     store must be on a file system the workers share) with identical numbers.
 
     \b
-    \b
     FE models (model = "fe" in --config): the grid is disc speed --rpm x friction --mu
     (default: the model's mu_ref) at one --theta (default 0; mu_e = mu + tan theta);
     damping is always included. --method dense|sparse|modal|pod (auto: dense up to
     1000 DOFs), --band LO:HI in Hz (sparse default 1000:16000), --modes N for the
     reduced bases. --plot draws growth rate against frequency of every mode in the
     band per speed (unstable ones marked), --plot-map the speed x friction map.
+    --scheduler solves the rpm rows on a Dask cluster (same numbers); the map is
+    gathered in memory, then written.
       squealkit stability --config brake.toml --rpm 60:240:10 --mu 0:1:20 --plot g.png --plot-map m.png
 
     \b
@@ -151,19 +152,21 @@ def _stability_fe(ctx, model, fe, mu_spec, theta_spec, stribeck_spec, scheduler,
 
     from .._validation import InputError, parse_range
     from ..io import save_dataset, save_figure
+    from ..scale import cluster_client
     from ..stability import fe_stability_map, stability_summary
 
-    if stribeck_spec is not None or scheduler is not None:
-        raise InputError("--stribeck and --scheduler do not apply to FE models yet.")
+    if stribeck_spec is not None:
+        raise InputError("--stribeck does not apply to FE models yet.")
     default = click.core.ParameterSource.DEFAULT
     mu = [model.mu_ref] if ctx.get_parameter_source("mu_spec") == default else parse_range("--mu", mu_spec)
     theta_deg = [0.0] if ctx.get_parameter_source("theta_spec") == default else parse_range("--theta", theta_spec)
     if len(theta_deg) != 1 or abs(theta_deg[0]) >= 90.0:
         raise InputError(f"--theta {theta_spec!r}: an FE model takes one angle strictly between -90 and 90 deg.")
     n_pts = len(fe["rpm"]) * len(mu)
-    with progress_callback("eigenvalues", enabled=not as_json and n_pts > 200) as cb:
+    with cluster_client(scheduler) as client, \
+            progress_callback("eigenvalues", enabled=not as_json and n_pts > 200) as cb:
         ds = fe_stability_map(model, fe["rpm"], mu, math.radians(float(theta_deg[0])), method=fe["method"],
-                              band=fe["band"], n_modes=fe["n_modes"], progress=cb)
+                              band=fe["band"], n_modes=fe["n_modes"], progress=cb, client=client)
     summary = stability_summary(ds)
     valid = np.isfinite(ds["residual"].values)
     summary.update(rpm_range=[float(ds.rpm.min()), float(ds.rpm.max())], method=ds.attrs["method"],

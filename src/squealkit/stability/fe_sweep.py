@@ -202,6 +202,7 @@ def fe_stability_map(
     sigma_reach: float = 0.0,
     track: bool = True,
     workers: int | None = None,
+    client: Any = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> xr.Dataset:
     """Complex eigenvalues of an FE brake model over disc speed and friction.
@@ -229,6 +230,9 @@ def fe_stability_map(
     workers : int, optional
         Points solved at once (threads; LAPACK and SuperLU release the GIL); default: the
         thread limit of :mod:`squealkit._threads`.
+    client : distributed.Client, optional
+        Solve the rpm rows on this Dask cluster (one task per row, after the first column
+        here): the same numbers as the local run.
     progress : callable, optional
         ``progress(done, total)`` with point counts.
 
@@ -293,7 +297,26 @@ def fe_stability_map(
         done += n_r
         if progress is not None:
             progress(done, total)
-        for i in range(n_r):
+        if client is not None:
+            from ..scale import map_tasks
+
+            items = [(solver, omegas[i], mu_a, t, firsts[i], track) for i in range(n_r)]
+            rows = dict(map_tasks(_row_task, items, client=client, name="squealkit-fe-rows",
+                                  progress=None if progress is None else lambda d, _t: progress(n_r + d, total),
+                                  weights=[n_m - 1] * n_r))
+            for i in range(n_r):  # new modes numbered in row order: the numbers of the local run
+                fresh: dict[int, int] = {}
+                for j, (slots, lam, res) in enumerate(rows[i], start=1):
+                    if track:
+                        for k in np.flatnonzero(slots >= _PROVISIONAL):
+                            if slots[k] not in fresh:
+                                fresh[int(slots[k])] = tracker.n_slots
+                                tracker.n_slots += 1
+                            slots[k] = fresh[int(slots[k])]
+                    else:
+                        tracker.n_slots = max(tracker.n_slots, slots.size)
+                    results[(i, j)] = (slots, lam, res)
+        for i in range(n_r if client is None else 0):
             prev = firsts[i]
             todo = [(i, j) for j in range(1, n_m)]
             for a in range(0, len(todo), 4 * workers):  # bounded memory: a few points' vectors at a time
@@ -305,6 +328,29 @@ def fe_stability_map(
                     progress(done, total)
     # at least one (NaN) mode: a band without eigenvalues gives a map that is stable everywhere
     return _fe_dataset(solver, rpm_a, omegas, mu_a, theta, t, results, max(1, tracker.n_slots), tracked=track)
+
+
+#: Provisional indices of modes that enter the band inside a row computed on a worker.
+_PROVISIONAL = 1 << 40
+
+
+def _row_task(item: tuple) -> list[tuple[NDArray, NDArray, NDArray]]:
+    """One rpm row of an FE map after its first point (a Dask task): solved and tracked along mu.
+
+    Modes new to the row get provisional indices from ``_PROVISIONAL`` up, renumbered by the caller.
+    """
+    solver, omega, mus, t, first, track = item
+    tracker = _Tracker()
+    tracker.n_slots = _PROVISIONAL
+    out = []
+    prev = first
+    with threadpool_limits(1, user_api="blas"):
+        for mu in mus[1:]:
+            sol = solver.solve(omega, mu, t, vectors=track)
+            slots = tracker.match(prev, sol) if track else np.arange(sol.eigenvalues.size)
+            prev = (slots, sol.eigenvalues, sol.vectors)
+            out.append((slots, sol.eigenvalues, sol.residuals))
+    return out
 
 
 def _point_arrays(lam: NDArray, res: NDArray, valid: NDArray):
