@@ -65,11 +65,22 @@ def scheduler_option(f: F) -> F:
     )(f)
 
 
-def build_model_from_options(preset: str | None, config: Path | None, sets: tuple[str, ...]):
-    """The model named by --preset/--config with the --set overrides applied."""
-    from ..models import build_model, parse_assignments
+#: Subcommands that work on FE models (model = "fe").
+FE_COMMANDS = ("stability", "critical", "modes", "tolerance")
 
-    return build_model(preset, config, parse_assignments(sets))
+
+def build_model_from_options(preset: str | None, config: Path | None, sets: tuple[str, ...], *,
+                             allow_fe: bool = False):
+    """The model named by --preset/--config with the --set overrides applied.
+
+    An FE model (``model = "fe"``) is refused unless ``allow_fe``: only :data:`FE_COMMANDS` take one.
+    """
+    from ..models import FEModel, build_model, parse_assignments
+
+    model = build_model(preset, config, parse_assignments(sets))
+    if isinstance(model, FEModel) and not allow_fe:
+        raise InputError(f"FE models (model = \"fe\") work with {', '.join(FE_COMMANDS)} only.")
+    return model
 
 
 def _jsonable(obj: Any) -> Any:

@@ -79,7 +79,7 @@ def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed
     from .._validation import InputError, parse_range
     from ..stability import critical_friction, critical_friction_curve, critical_friction_sensitivity
 
-    model = build_model_from_options(preset, config, sets)
+    model = build_model_from_options(preset, config, sets, allow_fe=True)
     fe = fe_kwargs_from_options(model, rpm_spec, band_spec, method, n_modes)
     theta_deg = parse_range("--theta", theta_spec)
     if any(abs(t) >= 90.0 for t in theta_deg):

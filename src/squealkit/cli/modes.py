@@ -77,7 +77,7 @@ def modes(preset, config, sets, mu, theta_deg, damped, at_onset, rpm_spec, band_
     theta_deg = validate_finite("--theta", theta_deg)
     if abs(theta_deg) >= 90.0:
         raise InputError(f"--theta {theta_deg!r}: the angle must lie strictly between -90 and 90 deg.")
-    model = build_model_from_options(preset, config, sets)
+    model = build_model_from_options(preset, config, sets, allow_fe=True)
     theta = math.radians(theta_deg)
     fe = fe_kwargs_from_options(model, rpm_spec, band_spec, method, n_modes)
     if fe:

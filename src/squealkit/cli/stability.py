@@ -95,7 +95,7 @@ def stability(ctx, preset, config, sets, mu_spec, theta_spec, damped, stribeck_s
     check_output_suffix(out_path, (".nc", ".zarr"), "--out")
     check_output_suffix(plot_path, (".png", ".svg", ".pdf"), "--plot")
     check_output_suffix(map_path, (".png", ".svg", ".pdf"), "--plot-map")
-    model = build_model_from_options(preset, config, sets)
+    model = build_model_from_options(preset, config, sets, allow_fe=True)
     fe = fe_kwargs_from_options(model, rpm_spec, band_spec, method, n_modes)
     if fe:
         return _stability_fe(ctx, model, fe, mu_spec, theta_spec, stribeck_spec, scheduler, map_path, as_json,

@@ -45,7 +45,7 @@ def tolerance(preset, config, sets, mu_spec, wavelength, damped, rpm_spec, band_
     from .._validation import parse_range
     from ..stability import runout_tolerance
 
-    model = build_model_from_options(preset, config, sets)
+    model = build_model_from_options(preset, config, sets, allow_fe=True)
     mus = parse_range("--mu", mu_spec)
     fe = fe_kwargs_from_options(model, rpm_spec, band_spec, method, n_modes)
     if fe:
