@@ -87,11 +87,22 @@ def scheduler_option(f: F) -> F:
     )(f)
 
 
-def build_model_from_options(preset: str | None, config: Path | None, sets: tuple[str, ...]):
-    """The model named by --preset/--config with the --set overrides applied."""
-    from ..models import build_model, parse_assignments
+#: Subcommands that work on FE models (model = "fe").
+FE_COMMANDS = ("stability", "critical", "modes", "tolerance")
 
-    return build_model(preset, config, parse_assignments(sets))
+
+def build_model_from_options(preset: str | None, config: Path | None, sets: tuple[str, ...], *,
+                             allow_fe: bool = False):
+    """The model named by --preset/--config with the --set overrides applied.
+
+    An FE model (``model = "fe"``) is refused unless ``allow_fe``: only :data:`FE_COMMANDS` take one.
+    """
+    from ..models import FEModel, build_model, parse_assignments
+
+    model = build_model(preset, config, parse_assignments(sets))
+    if isinstance(model, FEModel) and not allow_fe:
+        raise InputError(f"FE models (model = \"fe\") work with {', '.join(FE_COMMANDS)} only.")
+    return model
 
 
 def _jsonable(obj: Any) -> Any:
@@ -238,3 +249,60 @@ def criteria_from_options(setup: str | None, band: str | None, threshold_dba: fl
             raise InputError(f"--band {band!r} must be two numbers LOWER:UPPER in Hz, e.g. 1000:16000.") from None
     return squeal_criteria(setup, band=band_, threshold_dba=threshold_dba, time_weighting=time_weighting,
                            min_duration=min_duration)
+
+
+def fe_options(*, band: bool = True, rpm_help: str = "Disc speeds in rpm (omega = 2 pi rpm/60): N points from "
+               "START to STOP, or one number. FE models only.") -> Callable[[F], F]:
+    """--rpm, --band, --method and --modes: the disc speed axis and the solver of FE models."""
+
+    def deco(f: F) -> F:
+        f = click.option("--modes", "n_modes", type=int, default=None, metavar="N",
+                         help="Reduced basis size for --method modal|pod (FE models).")(f)
+        f = click.option("--method", type=click.Choice(["auto", "dense", "sparse", "modal", "pod"]), default="auto",
+                         show_default=True,
+                         help="FE solver: dense (all modes), sparse (a band, shift-invert), modal or pod (reduced "
+                         "basis, every eigenpair checked in the full model); auto = dense up to 1000 DOFs.")(f)
+        if band:
+            f = click.option("--band", "band_spec", default=None, metavar="LO:HI",
+                             help="Frequency band in Hz (FE models; sparse default 1000:16000, others all modes).")(f)
+        f = click.option("--rpm", "rpm_spec", default=None, metavar="START:STOP:N", help=rpm_help)(f)
+        return f
+
+    return deco
+
+
+def fe_kwargs_from_options(model: Any, rpm_spec: str | None, band_spec: str | None, method: str,
+                           n_modes: int | None, *, need_rpm: bool = True) -> dict[str, Any]:
+    """``rpm``, ``band``, ``method``, ``n_modes`` for the FE functions; {} for other models (and an
+    error if FE options were given to them)."""
+    from .._validation import parse_range
+    from ..models import FEModel
+
+    if not isinstance(model, FEModel):
+        given = [o for o, v in (("--rpm", rpm_spec), ("--band", band_spec), ("--modes", n_modes)) if v is not None]
+        if method != "auto":
+            given.append("--method")
+        if given:
+            raise InputError(f"{given[0]} applies to FE models only (model = \"fe\" in the --config file).")
+        return {}
+    if rpm_spec is None and need_rpm:
+        raise InputError("An FE model needs disc speeds: --rpm START:STOP:N (rpm).")
+    out: dict[str, Any] = {"method": method, "n_modes": n_modes}
+    if rpm_spec is not None:
+        rpm = parse_range("--rpm", rpm_spec)
+        if np.any(rpm <= 0):
+            raise InputError(f"--rpm {rpm_spec!r}: disc speeds must be > 0 rpm.")
+        out["rpm"] = rpm
+    if band_spec is not None:
+        lo, sep, hi = band_spec.partition(":")
+        try:
+            out["band"] = (float(lo), float(hi))
+        except ValueError:
+            raise InputError(f"--band {band_spec!r} must be LO:HI in Hz, e.g. 1000:16000.") from None
+        if not sep:
+            raise InputError(f"--band {band_spec!r} must be LO:HI in Hz, e.g. 1000:16000.")
+    else:
+        out["band"] = None
+    if n_modes is not None and n_modes < 1:
+        raise InputError(f"--modes {n_modes} must be >= 1.")
+    return out

@@ -9,6 +9,8 @@ import click
 from ._options import (
     build_model_from_options,
     emit_json,
+    fe_kwargs_from_options,
+    fe_options,
     friction_from_options,
     friction_json,
     friction_options,
@@ -26,10 +28,11 @@ from ._options import (
 @click.option("--sensitivity", is_flag=True,
               help="Also report d mu_crit / d p and the elasticity for every model parameter "
               "(exact, from the eigenvectors at onset).")
+@fe_options()
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON on stdout.")
 @click.pass_context
 def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed, mu_max, sensitivity,
-             as_json) -> None:
+             rpm_spec, band_spec, method, n_modes, as_json) -> None:
     """Critical friction: where the brake first loses stability (paper §3, eq. 6).
 
     Finds every friction window in [0, --mu-max] where the brake is unstable (a
@@ -65,15 +68,28 @@ def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed
     with --sensitivity a list "sensitivity" of {parameter, value, unit, dmu_dp,
     elasticity}; with --stribeck also stribeck ({mu_static, v_stribeck}) and
     speed [m/s]. A range of theta gives the same keys, each a list over theta.
+
+    \b
+    FE models (model = "fe" in --config): mu_crit at each disc speed --rpm (one
+    --theta): a scan of 41 friction values in [0, --mu-max], then bisection to 1e-6.
+    --json keys: rpm, mu_critical, mu_e_critical, frequency_hz, status (lists over
+    rpm), theta_deg, mu_max, method.
+      squealkit critical --config brake.toml --rpm 60:240:4 --json
     """
     from .._validation import InputError, parse_range
     from ..stability import critical_friction, critical_friction_curve, critical_friction_sensitivity
 
-    model = build_model_from_options(preset, config, sets)
-    fr = friction_from_options(ctx, stribeck_spec, speed)
+    model = build_model_from_options(preset, config, sets, allow_fe=True)
+    fe = fe_kwargs_from_options(model, rpm_spec, band_spec, method, n_modes)
     theta_deg = parse_range("--theta", theta_spec)
     if any(abs(t) >= 90.0 for t in theta_deg):
         raise InputError(f"--theta {theta_spec!r}: angles must lie strictly between -90 and 90 deg.")
+    if fe:
+        if stribeck_spec is not None or sensitivity or damped or theta_deg.size != 1:
+            raise InputError("For FE models critical takes one --theta, and no --stribeck, --sensitivity or --damped "
+                             "(damping is always included).")
+        return _critical_fe(model, fe, float(theta_deg[0]), mu_max, as_json)
+    fr = friction_from_options(ctx, stribeck_spec, speed)
     if theta_deg.size == 1:
         res = critical_friction(model, math.radians(float(theta_deg[0])), damped=damped, mu_max=mu_max, **fr)
         out = {**res.to_dict(), **friction_json(fr)}
@@ -129,3 +145,25 @@ def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed
                               out["unstable_intervals"], strict=True):
         windows = " ".join(f"[{a:.4f}, {b:.4f}]" for a, b in w) or "-"
         click.echo(f"{t:12.4g} {m:12.6f} {me:12.6f} {f:10.2f}  {windows}")
+
+
+def _critical_fe(model, fe, theta_deg: float, mu_max: float, as_json: bool) -> None:
+    """``squealkit critical`` on an FE model: mu_crit at each disc speed."""
+    from ..stability import fe_critical_friction
+
+    ds = fe_critical_friction(model, fe["rpm"], mu_max=mu_max, theta=math.radians(theta_deg), method=fe["method"],
+                              band=fe["band"], n_modes=fe["n_modes"])
+    out = {
+        "rpm": ds.rpm.values, "mu_critical": ds.mu_critical.values, "mu_e_critical": ds.mu_e_critical.values,
+        "frequency_hz": ds.frequency_hz.values, "status": [str(s) for s in ds.status.values],
+        "theta_deg": theta_deg, "mu_max": mu_max, "method": ds.attrs["method"],
+    }
+    if as_json:
+        emit_json(out)
+        return
+    click.echo(f"model: fe, {model.n_dof} DOFs, method {out['method']}, theta = {theta_deg:g} deg, "
+               f"friction searched 0 to {mu_max:g}")
+    click.echo(f"{'rpm':>10} {'mu_crit':>12} {'mu_e_crit':>12} {'f [Hz]':>12}  status")
+    for r, m, me, f, st in zip(out["rpm"], out["mu_critical"], out["mu_e_critical"], out["frequency_hz"],
+                               out["status"], strict=True):
+        click.echo(f"{r:10.4g} {m:12.6f} {me:12.6f} {f:12.6g}  {st}")

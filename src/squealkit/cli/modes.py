@@ -3,10 +3,19 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import click
 
-from ._options import build_model_from_options, check_output_suffix, emit_json, model_options, output_options
+from ._options import (
+    build_model_from_options,
+    check_output_suffix,
+    emit_json,
+    fe_kwargs_from_options,
+    fe_options,
+    model_options,
+    output_options,
+)
 
 
 @click.command()
@@ -17,8 +26,12 @@ from ._options import build_model_from_options, check_output_suffix, emit_json, 
 @click.option("--damped", is_flag=True, help="Include the damping matrix (the paper's sweep, eq. 7, is undamped).")
 @click.option("--at-onset", is_flag=True,
               help="Use the critical friction at this theta instead of --mu, and mark the mode that loses stability.")
+@fe_options(rpm_help="Disc speed in rpm (one value). FE models only.")
+@click.option("--vtk", "vtk_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="FE models with a mesh: write the unstable mode shapes with the mesh (.vtu, needs meshio).")
 @output_options()
-def modes(preset, config, sets, mu, theta_deg, damped, at_onset, as_json, out_path, plot_path) -> None:
+def modes(preset, config, sets, mu, theta_deg, damped, at_onset, rpm_spec, band_spec, method, n_modes, vtk_path,
+          as_json, out_path, plot_path) -> None:
     """Mode shapes at one friction and run-out incline: which motion squeals.
 
     Solves (lambda^2 M + lambda C + K(mu, tan theta)) phi = 0 for every mode's
@@ -42,6 +55,15 @@ def modes(preset, config, sets, mu, theta_deg, damped, at_onset, as_json, out_pa
     modal_mass [kg], friction_work, damping_work, net_work [J per cycle at 1 m
     largest amplitude; null for a real root], loses_stability (--at-onset).
     --out FILE.nc stores the shapes as real and imaginary parts.
+
+    \b
+    FE models (model = "fe" in --config): the modes at one disc speed --rpm and
+    --mu (default mu_ref; or --at-onset: mu_crit at that speed) in --band, with
+    their backward errors; the table lists the 12 least stable. --json keys: rpm,
+    mu, theta_deg, verdict, method, n_dof, and modes (eigenvalue [re, im],
+    frequency_hz, growth_rate, damping_ratio, unstable, residual); the shapes go
+    to --out FILE.nc (shape_real, shape_imag over dof x mode) and, with a mesh, --vtk.
+      squealkit modes --config brake.toml --rpm 60 --mu 1.0 --out modes.nc
     """
     from .._validation import InputError, validate_finite
     from ..io import save_dataset, save_figure
@@ -50,13 +72,20 @@ def modes(preset, config, sets, mu, theta_deg, damped, at_onset, as_json, out_pa
 
     check_output_suffix(out_path, (".nc", ".zarr"), "--out")
     check_output_suffix(plot_path, (".png", ".svg", ".pdf"), "--plot")
-    if at_onset == (mu is not None):
-        raise InputError("Use either --mu or --at-onset." if at_onset else "Missing friction: give --mu or --at-onset.")
+    if at_onset and mu is not None:
+        raise InputError("Use either --mu or --at-onset.")
     theta_deg = validate_finite("--theta", theta_deg)
     if abs(theta_deg) >= 90.0:
         raise InputError(f"--theta {theta_deg!r}: the angle must lie strictly between -90 and 90 deg.")
-    model = build_model_from_options(preset, config, sets)
+    model = build_model_from_options(preset, config, sets, allow_fe=True)
     theta = math.radians(theta_deg)
+    fe = fe_kwargs_from_options(model, rpm_spec, band_spec, method, n_modes)
+    if fe:
+        return _modes_fe(model, fe, mu, theta, at_onset, vtk_path, as_json, out_path, plot_path)
+    if vtk_path is not None:
+        raise InputError("--vtk applies to FE models with a mesh only.")
+    if not at_onset and mu is None:
+        raise InputError("Missing friction: give --mu or --at-onset.")
     if at_onset:
         ds = onset_modes(model, theta, damped=damped)
     else:
@@ -95,3 +124,49 @@ def _print_table(model, s: dict) -> None:
                    f"{work}  {dofs}{mark}")
     click.echo("W: energy per cycle for the shape scaled to 1 m largest amplitude (scales with amplitude^2); "
                "W_net = friction - damping has the sign of sigma.")
+
+
+def _modes_fe(model, fe, mu, theta, at_onset, vtk_path, as_json, out_path, plot_path) -> None:
+    """``squealkit modes`` on an FE model at one disc speed."""
+    import numpy as np
+
+    from .._validation import InputError, validate_finite
+    from ..io import save_dataset
+    from ..stability import fe_critical_friction, fe_modes
+    from ..stability.fe_sweep import modes_to_vtk
+
+    if plot_path is not None:
+        raise InputError("--plot is not available for FE modes yet; use --out FILE.nc or --vtk.")
+    check_output_suffix(vtk_path, (".vtu",), "--vtk")
+    if len(fe["rpm"]) != 1:
+        raise InputError("modes takes one disc speed: --rpm RPM.")
+    rpm = float(fe["rpm"][0])
+    kw = {"method": fe["method"], "band": fe["band"], "n_modes": fe["n_modes"]}
+    if at_onset:
+        crit = fe_critical_friction(model, [rpm], theta=theta, **kw)
+        if str(crit.status.values[0]) != "onset":
+            raise InputError(f"No onset at {rpm:g} rpm: {crit.status.values[0]} for mu in [0, 2 mu_ref].")
+        mu = float(crit.mu_critical.values[0])
+    mu = model.mu_ref if mu is None else validate_finite("--mu", mu)
+    ds = fe_modes(model, rpm, mu, theta, **kw)
+    if out_path is not None:
+        save_dataset(ds, out_path)
+    if vtk_path is not None:
+        modes_to_vtk(ds.isel(mode=np.flatnonzero(ds.unstable.values)), model, vtk_path)
+    rows = [{"mode": int(k), "eigenvalue": [float(ds.eigenvalue_real[k]), float(ds.eigenvalue_imag[k])],
+             "frequency_hz": float(ds.frequency[k]), "growth_rate": float(ds.growth_rate[k]),
+             "damping_ratio": float(ds.damping_ratio[k]), "unstable": bool(ds.unstable[k]),
+             "residual": float(ds.residual[k])} for k in range(ds.sizes["mode"])]
+    if as_json:
+        emit_json({"rpm": rpm, "mu": mu, "theta_deg": math.degrees(theta), "verdict": ds.attrs["verdict"],
+                   "method": ds.attrs["method"], "n_dof": model.n_dof, "modes": rows})
+        return
+    click.echo(f"model: fe, {model.n_dof} DOFs, {rpm:g} rpm, mu = {mu:g}, theta = {math.degrees(theta):g} deg, "
+               f"method {ds.attrs['method']}: {ds.attrs['verdict']}, {len(rows)} modes")
+    click.echo(f"{'mode':>5} {'f [Hz]':>12} {'sigma [1/s]':>13} {'zeta':>10} {'residual':>10}")
+    for r in sorted(rows, key=lambda r: -r["growth_rate"])[:12]:
+        click.echo(f"{r['mode']:5d} {r['frequency_hz']:12.6g} {r['growth_rate']:13.6g} {r['damping_ratio']:10.3g} "
+                   f"{r['residual']:10.2g}" + ("  <- UNSTABLE" if r["unstable"] else ""))
+    for label, path in (("dataset", out_path), ("mode shapes", vtk_path)):
+        if path is not None:
+            click.echo(f"wrote {label}: {path}")

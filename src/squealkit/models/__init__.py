@@ -2,6 +2,8 @@
 
 from ._base import FrictionModel, SystemMatrices
 from .config import PRESETS, build_model, get_preset, load_model, load_rig, model_from_dict, parse_assignments
+from .fe import FEModel
+from .fe_readers import load_fe_model
 from .friction import Stribeck
 from .hoffmann import Hoffmann2002
 from .matrix import MatrixModel
@@ -17,6 +19,7 @@ from .rig import (
 
 __all__ = [
     "PRESETS",
+    "FEModel",
     "FrictionModel",
     "Hoffmann2002",
     "MatrixModel",
@@ -28,6 +31,7 @@ __all__ = [
     "cantilever_bending_frequency",
     "contact_stiffness",
     "get_preset",
+    "load_fe_model",
     "load_model",
     "load_rig",
     "modal_stiffness",

@@ -2,7 +2,7 @@
 
 A model file (all sections optional; SI units, angles in rad or as ``*_deg`` in degrees)::
 
-    model = "pin_on_disc"      # pin_on_disc | hoffmann | matrix
+    model = "pin_on_disc"      # pin_on_disc | hoffmann | matrix | fe
     preset = "lv2013"          # start from a built-in preset
 
     [parameters]               # any parameter of the model
@@ -18,6 +18,13 @@ A model file (all sections optional; SI units, angles in rad or as ``*_deg`` in 
     [matrices]                 # model = "matrix": M, K0 (required), C, Kn, Kf, F0, fn, ff
     M = [[1.0, 0.0], [0.0, 1.0]]
 
+    [fe]                       # model = "fe": exported FE matrices (see models/fe.py)
+    file = "brake.mat"         # all matrices in one file (.mat v5/v7.3, .op4), or
+    # files = {M = "M.mtx", K1 = "K1.mtx", KR = "KR.mtx"}     # one file per matrix
+    names = {M = "MAA"}        # the names in the file where they differ (optional)
+    omega_ref = 1.0            # rad/s; mu_ref, f_ref likewise (defaults 1)
+
+File paths are relative to the model file.
 Other top-level tables (``[simulation]``, ``[uncertain]``, ...) belong to other commands and
 are ignored here.
 """
@@ -32,6 +39,7 @@ from typing import Any
 
 from .._validation import InputError, validate_finite
 from ._base import FrictionModel
+from .fe import FEModel
 from .hoffmann import Hoffmann2002
 from .matrix import MatrixModel
 from .pin_on_disc import PinOnDisc3DOF
@@ -57,7 +65,8 @@ _MODEL_KINDS: dict[str, type[FrictionModel]] = {
     "matrix": MatrixModel,
 }
 _PRESET_KIND = {"lv2013": "pin_on_disc", "hoffmann2002": "hoffmann"}
-_TOP_KEYS = {"model", "preset", "parameters", "rig", "matrices", "description"}
+_TOP_KEYS = {"model", "preset", "parameters", "rig", "matrices", "fe", "description"}
+_FE_KEYS = ("file", "files", "names", "omega_ref", "mu_ref", "f_ref")
 
 
 def get_preset(name: str) -> FrictionModel:
@@ -83,8 +92,27 @@ def _rig_from_table(table: Mapping[str, Any]) -> PinOnDiscRig:
         raise InputError(f"Bad [rig] table: {e}") from e
 
 
-def model_from_dict(doc: Mapping[str, Any]) -> FrictionModel:
-    """Build a model from a parsed model file (see the module docstring)."""
+def _fe_from_table(table: Any, base_dir: Path | None) -> FEModel:
+    from .fe_readers import load_fe_model
+
+    if not isinstance(table, Mapping):
+        raise InputError('An FE model needs an [fe] table with file = "..." or files = {M = "...", ...}.')
+    for key in table:
+        if key not in _FE_KEYS:
+            raise InputError(f"Unknown [fe] key {key!r}; known: {', '.join(_FE_KEYS)}.")
+    for key in ("files", "names"):
+        if key in table and not isinstance(table[key], Mapping):
+            raise InputError(f"[fe] {key} must be a table, e.g. {key} = {{M = ...}}.")
+    refs = {k: validate_finite(k, table[k]) for k in ("omega_ref", "mu_ref", "f_ref") if k in table}
+    return load_fe_model(table.get("file"), files=table.get("files"), names=table.get("names"),
+                         base_dir=base_dir, **refs)
+
+
+def model_from_dict(doc: Mapping[str, Any], base_dir: str | Path | None = None) -> FrictionModel | FEModel:
+    """Build a model from a parsed model file (see the module docstring).
+
+    ``base_dir`` is the folder relative matrix file paths of an ``[fe]`` table start from.
+    """
     unknown = set(doc) - _TOP_KEYS
     # Tables of other commands are allowed; stray scalar keys are typos.
     stray = sorted(k for k in unknown if not isinstance(doc[k], Mapping))
@@ -93,9 +121,14 @@ def model_from_dict(doc: Mapping[str, Any]) -> FrictionModel:
     preset = doc.get("preset")
     kind = doc.get("model", _PRESET_KIND.get(preset, "pin_on_disc") if preset else None)
     if kind is None:
-        kind = "matrix" if "matrices" in doc else "pin_on_disc"
+        kind = "matrix" if "matrices" in doc else "fe" if "fe" in doc else "pin_on_disc"
+    if kind == "fe":
+        extra = sorted(k for k in ("preset", "rig", "matrices", "parameters") if k in doc)
+        if extra:
+            raise InputError(f"An FE model is described by its [fe] table only; remove {extra[0]!r}.")
+        return _fe_from_table(doc.get("fe"), Path(base_dir) if base_dir is not None else None)
     if kind not in _MODEL_KINDS:
-        raise InputError(f"Unknown model {kind!r}; known: {', '.join(_MODEL_KINDS)}.")
+        raise InputError(f"Unknown model {kind!r}; known: {', '.join([*_MODEL_KINDS, 'fe'])}.")
     if preset is not None and _PRESET_KIND.get(preset) not in (None, kind):
         raise InputError(f"Preset {preset!r} is a {_PRESET_KIND[preset]!r} model, not {kind!r}.")
 
@@ -140,12 +173,12 @@ def _read_toml(path: str | Path) -> dict[str, Any]:
     return doc
 
 
-def load_model(path: str | Path) -> FrictionModel:
+def load_model(path: str | Path) -> FrictionModel | FEModel:
     """Read a model file (TOML). Errors name the file and what is wrong in it."""
     p = Path(path)
     doc = _read_toml(p)
     try:
-        return model_from_dict(doc)
+        return model_from_dict(doc, base_dir=p.parent)
     except InputError as e:
         raise InputError(f"{p.name}: {e}") from e
 
@@ -176,7 +209,7 @@ def parse_assignments(items: Iterable[str]) -> dict[str, float]:
 
 def build_model(
     preset: str | None = None, config: str | Path | None = None, overrides: Mapping[str, Any] | None = None
-) -> FrictionModel:
+) -> FrictionModel | FEModel:
     """The model a command works on: a preset or a model file, then overrides.
 
     With neither ``preset`` nor ``config`` the default preset ``lv2013`` is used.

@@ -20,6 +20,7 @@ from .eigen import (
     unstable_threshold,
 )
 from .ensemble import ModelEnsemble, ensemble_onset, ensemble_unstable
+from .fe_sweep import fe_critical_friction, fe_modes, fe_stability_map
 from .modes import eigenvalue_sensitivity, mode_shapes, modes, modes_summary, onset_modes
 from .sensitivity import critical_friction_sensitivity
 from .tracking import lock_in, track_modes
@@ -39,6 +40,9 @@ __all__ = [
     "eigenvalues",
     "ensemble_onset",
     "ensemble_unstable",
+    "fe_critical_friction",
+    "fe_modes",
+    "fe_stability_map",
     "lock_in",
     "mode_shapes",
     "modes",

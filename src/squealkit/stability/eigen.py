@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 from .. import __version__
 from .._threads import limit_threads, threads_for
 from .._validation import InputError, check_memory, validate_array_finite
-from ..models import FrictionModel
+from ..models import FEModel, FrictionModel
 from ..models.friction import Stribeck, validate_friction
 from ._kernels import (
     charpoly_table,
@@ -378,8 +378,16 @@ def stability_map(
     store: str | Path | None = None,
     client: Any = None,
     tile_points: int = _TILE_POINTS,
+    rpm: ArrayLike | None = None,
+    method: str = "auto",
+    band: tuple[float, float] | None = None,
+    n_modes: int | None = None,
 ) -> xr.Dataset:
     """Eigenvalues over a grid of friction ``mu`` and run-out incline ``theta`` (paper Fig. 2).
+
+    For an :class:`~squealkit.models.FEModel` the grid is disc speed ``rpm`` x friction ``mu``
+    at one ``theta`` (see :func:`~squealkit.stability.fe_sweep.fe_stability_map`, which takes
+    ``rpm``, ``method``, ``band`` and ``n_modes``); its damping is always included.
 
     Parameters
     ----------
@@ -432,6 +440,19 @@ def stability_map(
     >>> sorted(ds.sizes.items())
     [('mode', 3), ('mu', 9), ('theta', 5)]
     """
+    if isinstance(model, FEModel):
+        from .fe_sweep import fe_stability_map
+
+        if rpm is None:
+            raise InputError("A map of an FE model needs the disc speeds: rpm=[...].")
+        if friction is not None or store is not None or client is not None:
+            raise InputError("FE models take neither friction laws nor streamed (store/client) maps yet.")
+        if np.size(theta) != 1:
+            raise InputError("A map of an FE model takes one run-out incline theta (mu_e = mu + tan theta).")
+        return fe_stability_map(model, rpm, mu, float(np.ravel(theta)[0]), method=method, band=band,
+                                n_modes=n_modes, progress=progress)
+    if rpm is not None or band is not None or n_modes is not None or method != "auto":
+        raise InputError("rpm, method, band and n_modes apply to FE models only.")
     friction, speed = validate_friction(model, friction, speed)
     fr = {"friction": friction, "speed": speed}
     mu_a = validate_array_finite("mu", mu)

@@ -1,0 +1,254 @@
+"""A finite element brake model given by its sparse matrices, as industrial workflows export it.
+
+The matrices carry the names of the TU Berlin / NLEVP disc brake workflow (Graebner et al.,
+ZAMM 96(12), 2016): ``M`` mass, ``D1`` material damping, ``DR`` friction-induced damping,
+``DG`` gyroscopic (skew), ``D4`` a damping scaled by ``1/f_ref``, ``K1`` structural stiffness
+(symmetric), ``KR`` friction stiffness (non-symmetric), ``KGeo`` centrifugal stiffening.
+At disc speed ``omega`` [rad/s] and friction ``mu``::
+
+    C(omega, mu) = D1 + (mu/mu_ref) (omega_ref/omega) DR + (omega/omega_ref) DG + D4/f_ref
+    K(omega, mu) = K1 + (mu/mu_ref) KR + (omega/omega_ref)^2 KGeo
+
+``KR`` and ``DR`` are exported at friction ``mu_ref`` and scale linearly with ``mu``;
+``omega_ref`` is the speed at which ``DG`` and ``KGeo`` were exported. The run-out slope of the
+disc acts like extra friction (Lv, Zhang & Yu 2013, eqs. 5-6): ``mu_e = mu + tan(theta)``
+replaces ``mu`` in the friction parts when ``tan_theta`` is given.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from numpy.typing import NDArray
+
+from .._validation import InputError, validate_finite, validate_positive
+
+__all__ = ["FE_MATRICES", "FEModel", "rpm_to_omega"]
+
+#: The matrix names of an FE brake model, in a fixed order.
+FE_MATRICES: tuple[str, ...] = ("M", "D1", "DG", "DR", "D4", "K1", "KR", "KGeo")
+_DAMPING = ("D1", "DR", "DG", "D4")
+_STIFFNESS = ("K1", "KR", "KGeo")
+#: Largest n whose mass matrix is checked for definiteness by a dense eigenvalue solve.
+_DENSE_CHECK_MAX = 3000
+
+
+def _as_csr(name: str, value: Any) -> sp.csr_matrix:
+    """One matrix as a float64 CSR matrix: square and finite, else a one-line error naming it."""
+    try:
+        mat = sp.csr_matrix(value, dtype=np.float64) if sp.issparse(value) else sp.csr_matrix(
+            np.asarray(value, dtype=np.float64))
+    except (TypeError, ValueError) as e:
+        raise InputError(f"Matrix {name} must be a numeric matrix: {e}") from e
+    if mat.ndim != 2 or mat.shape[0] != mat.shape[1]:
+        raise InputError(f"Matrix {name} must be square, got shape {mat.shape}.")
+    if not np.all(np.isfinite(mat.data)):
+        raise InputError(f"Matrix {name} contains a non-finite value.")
+    mat.sum_duplicates()
+    mat.eliminate_zeros()
+    return mat
+
+
+def _check_mass(M: sp.csr_matrix) -> None:
+    """M symmetric positive semidefinite (definiteness checked densely up to a few thousand DOF)."""
+    scale = abs(M).max() if M.nnz else 0.0
+    if scale == 0.0:
+        raise InputError("Matrix M is zero.")
+    asym = abs(M - M.T).max() if M.nnz else 0.0
+    if asym > 1e-10 * scale:
+        raise InputError(f"Matrix M must be symmetric: max |M - M^T| = {asym:.3g} (max |M| = {scale:.3g}).")
+    if M.diagonal().min() < 0.0:
+        raise InputError(f"Matrix M must be positive semidefinite: a diagonal entry is {M.diagonal().min():.3g}.")
+    if M.shape[0] <= _DENSE_CHECK_MAX:
+        low = float(np.linalg.eigvalsh(M.toarray()).min())
+        if low < -1e-10 * scale * M.shape[0]:
+            raise InputError(f"Matrix M must be positive semidefinite: its smallest eigenvalue is {low:.3g}.")
+
+
+@dataclass(frozen=True, eq=False)
+class FEModel:
+    """A finite element brake model: sparse ``M, D1, DG, DR, D4, K1, KR, KGeo`` (module docstring).
+
+    Attributes
+    ----------
+    M, D1, DG, DR, D4, K1, KR, KGeo : scipy.sparse.csr_matrix or None, shape (n, n)
+        The matrices; absent ones are None. ``M`` and ``K1`` are required.
+    omega_ref : float
+        Disc speed [rad/s] at which ``DG``, ``KGeo`` (and ``DR``) were exported.
+    mu_ref : float
+        Friction coefficient at which ``KR`` and ``DR`` were exported.
+    f_ref : float
+        Reference value dividing ``D4`` (NLEVP's ``Fref``).
+    dof_names : tuple of str, optional
+        A name per DOF (e.g. ``node12.uz``); default ``q0, q1, ...``.
+    mesh : object, optional
+        Mesh metadata (e.g. a ``meshio.Mesh`` whose points carry the DOFs), for mode shape export.
+    source : str, optional
+        Where the matrices came from (a file name), recorded in results.
+
+    Examples
+    --------
+    >>> m = FEModel.from_matrices(M=np.eye(2), K1=np.diag([4.0, 9.0]), KR=[[0, 1.0], [-1.0, 0]])
+    >>> m.n_dof
+    2
+    >>> m.stiffness_matrix(omega=1.0, mu=0.5).toarray().tolist()
+    [[4.0, 0.5], [-0.5, 9.0]]
+    """
+
+    kind: ClassVar[str] = "fe"
+
+    M: Any = None
+    D1: Any = None
+    DG: Any = None
+    DR: Any = None
+    D4: Any = None
+    K1: Any = None
+    KR: Any = None
+    KGeo: Any = None
+    omega_ref: float = 1.0
+    mu_ref: float = 1.0
+    f_ref: float = 1.0
+    dof_names: tuple[str, ...] | None = None
+    mesh: Any = None
+    source: str | None = None
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        for name in ("M", "K1"):
+            if getattr(self, name) is None:
+                raise InputError(f"An FE model needs matrix {name}.")
+        n = None
+        for name in FE_MATRICES:
+            value = getattr(self, name)
+            if value is None:
+                continue
+            mat = _as_csr(name, value)
+            if n is None:
+                n = mat.shape[0]
+            elif mat.shape[0] != n:
+                raise InputError(f"Matrix {name} must be {n}x{n} like M, got shape {mat.shape}.")
+            set_(self, name, mat)
+        _check_mass(self.M)
+        for name in ("omega_ref", "mu_ref", "f_ref"):
+            set_(self, name, validate_positive(name, getattr(self, name)))
+        names = tuple(f"q{i}" for i in range(n)) if self.dof_names is None else tuple(map(str, self.dof_names))
+        if len(names) != n:
+            raise InputError(f"Parameter dof_names has {len(names)} entries for {n} DOFs.")
+        set_(self, "dof_names", names)
+
+    @classmethod
+    def from_matrices(cls, *, omega_ref: float = 1.0, mu_ref: float = 1.0, f_ref: float = 1.0,
+                      dof_names: Any = None, mesh: Any = None, source: str | None = None, **mats: Any) -> FEModel:
+        """The model of the matrices given by name (``M=..., K1=..., KR=...``), validated.
+
+        Raises
+        ------
+        InputError
+            For an unknown matrix name, a matrix that is not square, of another size than ``M``
+            or not finite, or ``M`` not symmetric positive semidefinite; the message names it.
+        """
+        for name in mats:
+            if name not in FE_MATRICES:
+                raise InputError(f"Unknown FE matrix {name!r}; known: {', '.join(FE_MATRICES)}.")
+        return cls(**mats, omega_ref=omega_ref, mu_ref=mu_ref, f_ref=f_ref, dof_names=dof_names, mesh=mesh,
+                   source=source)
+
+    # -- size and parts ----------------------------------------------------------------
+    @property
+    def n_dof(self) -> int:
+        """Number of degrees of freedom n."""
+        return self.M.shape[0]
+
+    @property
+    def present(self) -> tuple[str, ...]:
+        """Names of the matrices the model has."""
+        return tuple(name for name in FE_MATRICES if getattr(self, name) is not None)
+
+    def factors(self, omega: float, mu: float, tan_theta: float = 0.0) -> dict[str, float]:
+        """The scalar multiplying each present damping and stiffness matrix at ``(omega, mu)``.
+
+        ``C = sum f[D] D`` over the damping matrices and ``K = sum f[K] K`` over the stiffness
+        matrices; ``mu_e = mu + tan_theta`` is the friction (run-out slope as extra friction).
+        """
+        omega = validate_finite("omega", omega)
+        mu_e = validate_finite("mu", mu) + validate_finite("tan_theta", tan_theta)
+        if self.DR is not None and not omega > 0.0:
+            raise InputError(f"Parameter omega={omega!r} rad/s must be > 0: DR is scaled by omega_ref/omega.")
+        f = {
+            "D1": 1.0,
+            "DR": (mu_e / self.mu_ref) * (self.omega_ref / omega) if omega else 0.0,
+            "DG": omega / self.omega_ref,
+            "D4": 1.0 / self.f_ref,
+            "K1": 1.0,
+            "KR": mu_e / self.mu_ref,
+            "KGeo": (omega / self.omega_ref) ** 2,
+        }
+        return {k: v for k, v in f.items() if getattr(self, k) is not None}
+
+    def _combine(self, names: tuple[str, ...], f: dict[str, float]) -> sp.csr_matrix:
+        out = sp.csr_matrix(self.M.shape, dtype=np.float64)
+        for name in names:
+            if name in f and f[name] != 0.0:
+                out = out + f[name] * getattr(self, name)
+        return out.tocsr()
+
+    # -- the model interface -----------------------------------------------------------
+    def mass_matrix(self) -> sp.csr_matrix:
+        """Mass matrix M, shape (n, n), sparse."""
+        return self.M
+
+    def damping_matrix(self, omega: float, mu: float, tan_theta: float = 0.0) -> sp.csr_matrix:
+        """``C(omega, mu) = D1 + (mu_e/mu_ref)(omega_ref/omega) DR + (omega/omega_ref) DG + D4/f_ref``."""
+        return self._combine(_DAMPING, self.factors(omega, mu, tan_theta))
+
+    def stiffness_matrix(self, omega: float, mu: float, tan_theta: float = 0.0) -> sp.csr_matrix:
+        """``K(omega, mu) = K1 + (mu_e/mu_ref) KR + (omega/omega_ref)^2 KGeo``."""
+        return self._combine(_STIFFNESS, self.factors(omega, mu, tan_theta))
+
+    # -- derived models ------------------------------------------------------------------
+    def replace(self, **changes: Any) -> FEModel:
+        """A new model with reference values (``omega_ref``, ``mu_ref``, ``f_ref``) or matrices changed."""
+        allowed = {"omega_ref", "mu_ref", "f_ref", *FE_MATRICES}
+        for key in changes:
+            if key not in allowed:
+                raise InputError(f"Unknown parameter {key!r} for model 'fe'; known: omega_ref, mu_ref, f_ref.")
+        return dataclasses.replace(self, **changes)
+
+    def project(self, V: Any) -> FEModel:
+        """The reduced model ``V^T A V`` of every matrix A, for a real basis V (n x k).
+
+        The reduced model keeps the reference values; its DOFs are the basis vectors.
+        """
+        V = np.asarray(V, dtype=np.float64)
+        if V.ndim != 2 or V.shape[0] != self.n_dof or not np.all(np.isfinite(V)):
+            raise InputError(f"Basis V must be a finite {self.n_dof} x k matrix, got shape {V.shape}.")
+        mats = {name: V.T @ (getattr(self, name) @ V) for name in self.present}
+        return FEModel(**mats, omega_ref=self.omega_ref, mu_ref=self.mu_ref, f_ref=self.f_ref,
+                       dof_names=tuple(f"b{i}" for i in range(V.shape[1])), source=self.source)
+
+    def to_dict(self) -> dict[str, Any]:
+        """What the model is, for result attributes (not the matrices)."""
+        return {"kind": self.kind, "n_dof": self.n_dof, "matrices": list(self.present),
+                "omega_ref": self.omega_ref, "mu_ref": self.mu_ref, "f_ref": self.f_ref, "source": self.source}
+
+    def to_json(self) -> str:
+        """:meth:`to_dict` as a JSON string."""
+        return json.dumps(self.to_dict(), sort_keys=True)
+
+    def norms(self, omega: float, mu: float, tan_theta: float = 0.0) -> tuple[float, float, float]:
+        """Frobenius norms of M, C and K at ``(omega, mu)`` (for backward errors)."""
+        f = self.factors(omega, mu, tan_theta)
+        return (float(spla.norm(self.M)), float(spla.norm(self._combine(_DAMPING, f))),
+                float(spla.norm(self._combine(_STIFFNESS, f))))
+
+
+def rpm_to_omega(rpm: Any) -> NDArray[np.float64]:
+    """Disc speed [rad/s] of ``rpm`` revolutions per minute: ``omega = 2 pi rpm / 60``."""
+    return np.asarray(rpm, dtype=np.float64) * (2.0 * math.pi / 60.0)

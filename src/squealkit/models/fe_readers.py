@@ -1,0 +1,217 @@
+"""Readers for exported FE brake matrices: MATLAB ``.mat`` (v5 and v7.3/HDF5), Matrix Market, Nastran OP4.
+
+Each reader returns ``{name in the file: scipy.sparse.csr_matrix}``; :func:`load_fe_model`
+picks the FE matrices (``M, D1, DG, DR, D4, K1, KR, KGeo``) out of one file or one file per
+matrix, with the names they have in the files if those differ, and builds the
+:class:`~squealkit.models.fe.FEModel`. Every failure is one :class:`InputError` line naming the file.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from .._validation import InputError
+from .fe import FE_MATRICES, FEModel
+
+__all__ = ["load_fe_model", "read_mat", "read_matrices", "read_mtx", "read_op4"]
+
+_SUFFIXES = (".mat", ".mtx", ".op4")
+
+
+def _sparse(name: str, value: Any, path: Path) -> sp.csr_matrix:
+    if sp.issparse(value):
+        return sp.csr_matrix(value)
+    arr = np.asarray(value)
+    if arr.dtype.kind not in "biuf":
+        raise InputError(f"{path.name}: matrix {name!r} is not real numeric (dtype {arr.dtype}).")
+    if arr.ndim != 2:
+        raise InputError(f"{path.name}: {name!r} is not a matrix (shape {arr.shape}).")
+    return sp.csr_matrix(arr.astype(np.float64))
+
+
+def _h5_matrices(path: Path) -> dict[str, sp.csr_matrix]:
+    """MATLAB v7.3 (HDF5): dense arrays stored transposed; sparse ones as groups of data/ir/jc."""
+    import h5py
+
+    out: dict[str, sp.csr_matrix] = {}
+    with h5py.File(path, "r") as f:
+        for key, obj in f.items():
+            if key.startswith("#"):  # MATLAB's internal references
+                continue
+            if isinstance(obj, h5py.Group) and "MATLAB_sparse" in obj.attrs:
+                n_rows = int(obj.attrs["MATLAB_sparse"])
+                jc = np.asarray(obj["jc"], dtype=np.int64)
+                ir = np.asarray(obj["ir"], dtype=np.int64) if "ir" in obj else np.zeros(0, np.int64)
+                data = np.asarray(obj["data"]) if "data" in obj else np.zeros(0)
+                if data.dtype.names:  # complex: a compound of real and imag
+                    raise InputError(f"{path.name}: matrix {key!r} is complex; FE matrices must be real.")
+                out[key] = sp.csc_matrix((data.astype(np.float64), ir, jc), shape=(n_rows, jc.size - 1)).tocsr()
+            elif isinstance(obj, h5py.Dataset) and obj.ndim == 2:
+                arr = np.asarray(obj)
+                if arr.dtype.names:
+                    raise InputError(f"{path.name}: matrix {key!r} is complex; FE matrices must be real.")
+                out[key] = _sparse(key, arr.T, path)
+    return out
+
+
+def read_mat(path: str | Path) -> dict[str, sp.csr_matrix]:
+    """Matrices of a MATLAB ``.mat`` file: v4/v5/v7 through SciPy, v7.3 (HDF5) through h5py."""
+    import scipy.io
+
+    p = Path(path)
+    try:
+        import h5py
+
+        if h5py.is_hdf5(p):
+            return _h5_matrices(p)
+    except OSError as e:
+        raise InputError(f"{p.name}: cannot be read: {e}") from e
+    try:
+        doc = scipy.io.loadmat(p)
+    except (ValueError, TypeError, OSError, NotImplementedError) as e:
+        raise InputError(f"{p.name}: not a readable MATLAB file: {e}") from e
+    return {k: _sparse(k, v, p) for k, v in doc.items()
+            if not k.startswith("__") and (sp.issparse(v) or getattr(v, "ndim", 0) == 2)
+            and (sp.issparse(v) or v.dtype.kind in "biufc")}
+
+
+def read_mtx(path: str | Path) -> dict[str, sp.csr_matrix]:
+    """The one matrix of a Matrix Market file (as Abaqus and ANSYS export), keyed by the file's stem."""
+    import scipy.io
+
+    p = Path(path)
+    try:
+        mat = scipy.io.mmread(p)
+    except (ValueError, TypeError, OSError, IndexError) as e:
+        raise InputError(f"{p.name}: not a readable Matrix Market file: {e}") from e
+    if np.iscomplexobj(mat.data if sp.issparse(mat) else mat):
+        raise InputError(f"{p.name}: the matrix is complex; FE matrices must be real.")
+    return {p.stem: _sparse(p.stem, mat, p)}
+
+
+def read_op4(path: str | Path) -> dict[str, sp.csr_matrix]:
+    """Matrices of a Nastran OP4 file (ASCII or binary), through pyNastran's reader.
+
+    Needs the optional ``pyNastran`` package (``pip install "squealkit[nastran]"``).
+    """
+    p = Path(path)
+    try:
+        from pyNastran.op4.op4 import read_op4 as _read
+    except ImportError:
+        raise InputError(f"{p.name}: reading Nastran OP4 needs pyNastran: pip install 'squealkit[nastran]'.") from None
+    try:
+        mats = _read(str(p), debug=False)
+    except Exception as e:  # pyNastran raises many kinds on a malformed file
+        raise InputError(f"{p.name}: not a readable OP4 file: {e}") from e
+    out = {}
+    for name, m in mats.items():
+        data = m.data if hasattr(m, "data") else m
+        if np.iscomplexobj(data.data if sp.issparse(data) else data):
+            raise InputError(f"{p.name}: matrix {name!r} is complex; FE matrices must be real.")
+        out[name.strip()] = _sparse(name, data, p)
+    return out
+
+
+def read_matrices(path: str | Path) -> dict[str, sp.csr_matrix]:
+    """All matrices of a file, by its suffix (``.mat``, ``.mtx``, ``.op4``)."""
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"Matrix file {str(p)!r} does not exist.")
+    suffix = p.suffix.lower()
+    if suffix == ".mat":
+        return read_mat(p)
+    if suffix == ".mtx":
+        return read_mtx(p)
+    if suffix == ".op4":
+        return read_op4(p)
+    raise InputError(f"Matrix file {p.name!r}: unknown format {suffix!r}; known: {', '.join(_SUFFIXES)}.")
+
+
+def _pick(found: Mapping[str, sp.csr_matrix], wanted: str, path: Path) -> sp.csr_matrix | None:
+    """The matrix named ``wanted`` in a file, matched exactly, else ignoring case (``KGEO`` for ``KGeo``)."""
+    if wanted in found:
+        return found[wanted]
+    hits = [k for k in found if k.lower() == wanted.lower()]
+    if len(hits) > 1:
+        raise InputError(f"{path.name}: matrix name {wanted!r} is ambiguous: {', '.join(hits)}.")
+    return found[hits[0]] if hits else None
+
+
+def load_fe_model(
+    file: str | Path | None = None,
+    *,
+    files: Mapping[str, str | Path] | None = None,
+    names: Mapping[str, str] | None = None,
+    omega_ref: float = 1.0,
+    mu_ref: float = 1.0,
+    f_ref: float = 1.0,
+    base_dir: str | Path | None = None,
+) -> FEModel:
+    """An FE model read from exported matrices.
+
+    Parameters
+    ----------
+    file : path, optional
+        One file holding all matrices (``.mat`` or ``.op4``).
+    files : mapping, optional
+        One file per matrix, ``{"M": "M.mtx", "K1": "K1.mtx", ...}`` (any format; a file with
+        several matrices contributes the one of that name, or its only one).
+    names : mapping, optional
+        The name each FE matrix has in the file where it differs, ``{"M": "MAA", "K1": "KAA"}``.
+    omega_ref, mu_ref, f_ref : float
+        Reference values (see :class:`~squealkit.models.fe.FEModel`).
+    base_dir : path, optional
+        Folder relative paths start from (the model file's folder).
+
+    Examples
+    --------
+    >>> from squealkit.data import nlevp_path
+    >>> load_fe_model(nlevp_path("disk_brake100.mat")).present
+    ('M', 'D1', 'DG', 'DR', 'K1', 'KR')
+    """
+    if (file is None) == (files is None):
+        raise InputError("An FE model needs either file (all matrices in one file) or files (one per matrix).")
+    names = dict(names or {})
+    for key in names:
+        if key not in FE_MATRICES:
+            raise InputError(f"Unknown FE matrix {key!r} in names; known: {', '.join(FE_MATRICES)}.")
+    base = Path(base_dir) if base_dir is not None else Path(".")
+
+    def resolve(x: str | Path) -> Path:
+        p = Path(x)
+        return p if p.is_absolute() else base / p
+
+    mats: dict[str, sp.csr_matrix] = {}
+    if file is not None:
+        path = resolve(file)
+        found = read_matrices(path)
+        for key in FE_MATRICES:
+            m = _pick(found, names.get(key, key), path)
+            if m is None and key in names:
+                raise InputError(f"{path.name}: no matrix {names[key]!r} (for {key}); it has {', '.join(found)}.")
+            if m is not None:
+                mats[key] = m
+        source = path.name
+    else:
+        for key, x in dict(files).items():
+            if key not in FE_MATRICES:
+                raise InputError(f"Unknown FE matrix {key!r} in files; known: {', '.join(FE_MATRICES)}.")
+            path = resolve(x)
+            found = read_matrices(path)
+            m = _pick(found, names.get(key, key), path)
+            if m is None:
+                if len(found) != 1 or key in names:
+                    raise InputError(f"{path.name}: no matrix {names.get(key, key)!r} (for {key}); "
+                                     f"it has {', '.join(found) or 'none'}.")
+                m = next(iter(found.values()))
+            mats[key] = m
+        source = ", ".join(str(v) for v in dict(files).values())
+    try:
+        return FEModel.from_matrices(**mats, omega_ref=omega_ref, mu_ref=mu_ref, f_ref=f_ref, source=source)
+    except InputError as e:
+        raise InputError(f"{source}: {e}") from e

@@ -1,0 +1,639 @@
+"""Complex eigenvalue analysis of FE brake models over disc speed and friction.
+
+The FE counterpart of :func:`~squealkit.stability.stability_map`: eigenvalues of an
+:class:`~squealkit.models.fe.FEModel` over a grid of disc speed (rpm, ``omega = 2 pi rpm/60``)
+and friction ``mu`` (the run-out slope enters as ``mu_e = mu + tan(theta)``), the critical
+friction at each speed, and the modes at one operating point with their shapes. Solvers
+(``method``): ``dense`` (all modes, LAPACK), ``sparse`` (a frequency band by shift-invert),
+``modal`` and ``pod`` (a reduced basis from :mod:`squealkit.stability.reduction`, every
+eigenpair checked by its backward error in the full model); ``auto`` is dense up to
+:data:`DENSE_MAX_DOF` DOFs, sparse above.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import xarray as xr
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import linear_sum_assignment
+from threadpoolctl import threadpool_limits
+
+from .. import __version__
+from .._threads import thread_limit
+from .._validation import InputError, validate_angle, validate_array_finite, validate_positive
+from ..models.fe import FEModel, rpm_to_omega
+from ._kernels import derived_quantities
+from ._solve import VERDICTS
+from .eigen import UNSTABLE_RTOL
+from .sparse import (
+    BAND_HZ,
+    RESIDUAL_TOL,
+    EigenSolution,
+    backward_errors,
+    band_eigs,
+    dense_eigs,
+    dense_parts,
+    validate_band,
+)
+
+__all__ = ["DENSE_MAX_DOF", "METHODS", "FESolver", "fe_critical_friction", "fe_modes", "fe_stability_map"]
+
+#: Solvers for FE models.
+METHODS = ("auto", "dense", "sparse", "modal", "pod")
+#: ``method="auto"`` solves densely up to this many DOFs.
+DENSE_MAX_DOF = 1000
+#: Safety factor on backward error x |lambda| for a well-conditioned eigenvalue's error radius.
+_ERR_C = 16.0
+
+
+def _reduction():
+    try:
+        from . import reduction
+    except ImportError as e:
+        raise InputError("method 'modal'/'pod' needs squealkit.stability.reduction, which this installation "
+                         f"lacks ({e}).") from None
+    return reduction
+
+
+@dataclass
+class FESolver:
+    """One FE model prepared for repeated solves by one method (reduced basis, dense parts).
+
+    Parameters
+    ----------
+    model : FEModel
+    method : {"auto", "dense", "sparse", "modal", "pod"}
+    band : (float, float) or None
+        Frequency band [Hz] of interest; ``sparse`` needs one (default 1-16 kHz), the
+        others keep all modes without one.
+    n_modes : int, optional
+        Basis size for ``modal``/``pod``.
+    samples : (omegas, mus), optional
+        Operating points the ``pod`` basis is built from (``mus`` with the run-out slope added:
+        the friction the friction matrices see).
+    sigma_reach : float
+        For ``sparse``: find every mode in the band with ``|sigma|`` up to this [1/s].
+    """
+
+    model: FEModel
+    method: str = "auto"
+    band: tuple[float, float] | None = None
+    n_modes: int | None = None
+    samples: tuple[NDArray, NDArray] | None = None
+    sigma_reach: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.model, FEModel):
+            raise InputError(f"An FE solver needs an FEModel, got {type(self.model).__name__}.")
+        if self.method not in METHODS:
+            raise InputError(f"Parameter method={self.method!r}; known: {', '.join(METHODS)}.")
+        if self.method == "auto":
+            self.method = "dense" if self.model.n_dof <= DENSE_MAX_DOF else "sparse"
+        if self.band is not None:
+            self.band = validate_band(self.band)
+        elif self.method == "sparse":
+            self.band = BAND_HZ
+        if self.n_modes is not None and (isinstance(self.n_modes, bool) or int(self.n_modes) != self.n_modes
+                                         or self.n_modes < 1):
+            raise InputError(f"Parameter n_modes={self.n_modes!r} must be an integer >= 1.")
+        self.sigma_reach = validate_positive("sigma_reach", self.sigma_reach, allow_zero=True)
+        self.basis = None
+        solve_model = self.model
+        if self.method in ("modal", "pod"):
+            red = _reduction()
+            if self.method == "modal":
+                fmax = None if self.n_modes is not None or self.band is None else 1.5 * self.band[1]
+                self.basis = np.asarray(red.modal_basis(self.model, n_modes=self.n_modes, freq_max=fmax))
+            else:
+                if self.samples is None:
+                    raise InputError("method 'pod' needs sample operating points (omegas, mus).")
+                # pod_basis(model, omegas, mus, *, band=..., n_modes=...): pass what it takes; a basis
+                # ordered by singular value is truncated to n_modes where it has no such argument
+                accepts = inspect.signature(red.pod_basis).parameters
+                kw = {} if self.band is None else {"band": self.band}
+                if self.n_modes is not None and "n_modes" in accepts:
+                    kw["n_modes"] = self.n_modes
+                V = np.asarray(red.pod_basis(self.model, *self.samples, **kw))
+                self.basis = V if self.n_modes is None or "n_modes" in accepts else V[:, : self.n_modes]
+            solve_model = self.model.project(self.basis)
+        self.solve_model = solve_model
+        if self.method != "sparse":
+            self.parts = dense_parts(solve_model)
+
+    def solve(self, omega: float, mu: float, tan_theta: float = 0.0, *, vectors: bool = True) -> EigenSolution:
+        """Eigenvalues (and right eigenvectors in the full model's DOFs) at one operating point."""
+        if self.method == "sparse":
+            return band_eigs(self.model, omega, mu, tan_theta, band=self.band, sigma_reach=self.sigma_reach)
+        need_x = vectors or self.basis is not None
+        sol = dense_eigs(self.solve_model, omega, mu, tan_theta, vectors=need_x, parts=self.parts)
+        lam, X = sol.eigenvalues, sol.vectors
+        if self.band is not None:
+            f = lam.imag / (2 * math.pi)
+            keep = (f >= self.band[0]) & (f <= self.band[1])
+            lam = lam[keep]
+            X = X[:, keep] if X is not None else None
+        res = sol.residuals if self.band is None else sol.residuals[keep]
+        if self.basis is not None:  # lift to the full model and check there
+            X = self.basis @ X
+            X = X / np.linalg.norm(X, axis=0) if X.shape[1] else X
+            res = backward_errors(self.model, omega, mu, lam, X, tan_theta)
+        return EigenSolution(lam, X if vectors else None, res)
+
+
+def _mac(A: NDArray, B: NDArray) -> NDArray:
+    """Modal assurance criterion between the columns of A and B (unit-norm columns)."""
+    return np.abs(A.conj().T @ B) ** 2
+
+
+class _Tracker:
+    """Assign each point's modes to slots, matching the previous point's by MAC and eigenvalue."""
+
+    def __init__(self) -> None:
+        self.n_slots = 0
+
+    def first(self, sol: EigenSolution) -> NDArray[np.intp]:
+        slots = np.arange(self.n_slots, self.n_slots + sol.eigenvalues.size)
+        self.n_slots += sol.eigenvalues.size
+        return slots
+
+    def match(self, prev: tuple[NDArray, NDArray, NDArray], sol: EigenSolution) -> NDArray[np.intp]:
+        """Slots of ``sol``'s modes given the previous point's ``(slots, lam, X)``."""
+        p_slots, p_lam, p_X = prev
+        lam, X = sol.eigenvalues, sol.vectors
+        slots = np.full(lam.size, -1, dtype=np.intp)
+        if p_lam.size and lam.size:
+            scale = max(np.max(np.abs(p_lam)), np.max(np.abs(lam)), 1e-300)
+            cost = (1.0 - _mac(p_X, X)) + np.abs(p_lam[:, None] - lam[None, :]) / scale
+            rows, cols = linear_sum_assignment(cost)
+            slots[cols] = p_slots[rows]
+        new = slots < 0
+        slots[new] = np.arange(self.n_slots, self.n_slots + int(new.sum()))
+        self.n_slots += int(new.sum())
+        return slots
+
+
+def _validate_grid(name: str, values: ArrayLike) -> NDArray[np.float64]:
+    a = np.atleast_1d(validate_array_finite(name, values))
+    if a.ndim != 1:
+        raise InputError(f"Parameter {name} must be a 1-D grid (or a number).")
+    return a
+
+
+def _tan_theta(theta: float) -> float:
+    return math.tan(validate_angle("theta", theta))
+
+
+def fe_stability_map(
+    model: FEModel,
+    rpm: ArrayLike,
+    mu: ArrayLike | None = None,
+    theta: float = 0.0,
+    *,
+    method: str = "auto",
+    band: tuple[float, float] | None = None,
+    n_modes: int | None = None,
+    sigma_reach: float = 0.0,
+    track: bool = True,
+    workers: int | None = None,
+    client: Any = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> xr.Dataset:
+    """Complex eigenvalues of an FE brake model over disc speed and friction.
+
+    Parameters
+    ----------
+    model : FEModel
+    rpm : array_like, 1-D
+        Disc speeds [rev/min]; ``omega = 2 pi rpm / 60`` [rad/s] enters the model.
+    mu : array_like, 1-D, optional
+        Friction coefficients (default: the model's ``mu_ref``).
+    theta : float
+        Run-out incline [rad]: ``mu_e = mu + tan(theta)`` replaces mu in ``KR`` and ``DR``.
+    method : {"auto", "dense", "sparse", "modal", "pod"}
+        Solver (module docstring). ``pod`` builds its basis at the grid's corners and centre.
+    band : (float, float), optional
+        Frequency band [Hz]: only modes in it are reported (``sparse``: default 1-16 kHz).
+    n_modes : int, optional
+        Reduced basis size for ``modal``/``pod``.
+    sigma_reach : float
+        ``sparse`` only: see :func:`~squealkit.stability.sparse.band_eigs`.
+    track : bool
+        Follow each mode across the grid by MAC on its right eigenvector; otherwise modes
+        are ordered by frequency at each point and no eigenvectors are computed (faster).
+    workers : int, optional
+        Points solved at once (threads; LAPACK and SuperLU release the GIL); default: the
+        thread limit of :mod:`squealkit._threads`.
+    client : distributed.Client, optional
+        Solve the rpm rows on this Dask cluster (one task per row, after the first column
+        here): the same numbers as the local run.
+    progress : callable, optional
+        ``progress(done, total)`` with point counts.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dims ``(rpm, mu, mode)``, with the variables of
+        :func:`~squealkit.stability.stability_map` (``growth_rate``, ``omega``, ``frequency``,
+        ``damping_ratio``, ``growth_rate_error``, ``unstable``, ``verdict``,
+        ``max_growth_rate``, ``any_unstable``, ``lock_in``) and ``residual`` (backward error
+        of each eigenpair; above ``residual_tol`` the reduced answer is not to be trusted),
+        ``trusted``. Coordinates ``rpm``, ``omega_disc`` [rad/s], ``mu``, ``mu_e``, scalar
+        ``theta``, ``theta_deg``, ``tan_theta``. Modes are tracked across the grid by MAC
+        on the right eigenvectors (first column along rpm, then each row along mu); a mode
+        that enters the band gets a new index, and is NaN where it is outside.
+
+    Examples
+    --------
+    >>> from squealkit.models import load_fe_model
+    >>> from squealkit.data import nlevp_path
+    >>> ds = fe_stability_map(load_fe_model(nlevp_path()), rpm=[60.0, 120.0], mu=[0.5, 1.0])
+    >>> sorted(ds.sizes.items())
+    [('mode', 100), ('mu', 2), ('rpm', 2)]
+    """
+    rpm_a = _validate_grid("rpm", rpm)
+    mu_a = _validate_grid("mu", model.mu_ref if mu is None else mu)
+    t = _tan_theta(theta)
+    omegas = rpm_to_omega(rpm_a)
+    samples = None
+    if method == "pod":
+        pick = [0, len(omegas) // 2, len(omegas) - 1]
+        pick_mu = [0, len(mu_a) // 2, len(mu_a) - 1]
+        samples = (np.unique(omegas[pick]), np.unique(mu_a[pick_mu]) + t)  # pod_basis takes mu_e
+    solver = FESolver(model, method, band, n_modes, samples, sigma_reach)
+    n_r, n_m = rpm_a.size, mu_a.size
+    results: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
+    tracker = _Tracker()
+    total, done = n_r * n_m, 0
+    workers = thread_limit() if workers is None else max(1, int(workers))
+
+    def solve(ij):
+        return solver.solve(omegas[ij[0]], mu_a[ij[1]], t, vectors=track)
+
+    def record(ij, sol, prev):
+        if not track:
+            slots = np.arange(sol.eigenvalues.size)
+            tracker.n_slots = max(tracker.n_slots, slots.size)
+        else:
+            slots = tracker.first(sol) if prev is None else tracker.match(prev, sol)
+        results[ij] = (slots, sol.eigenvalues, sol.residuals)
+        return slots, sol.eigenvalues, sol.vectors
+
+    # one BLAS thread per point: parallel points beat threaded LAPACK on 2n <= a few thousand,
+    # and threaded BLAS on busy cores stalls (measured 10x slower on a loaded 2-core machine)
+    with ThreadPoolExecutor(max_workers=workers) as pool, threadpool_limits(1, user_api="blas"):
+        column = list(pool.map(solve, [(i, 0) for i in range(n_r)]))
+        firsts = []
+        prev = None
+        for i, sol in enumerate(column):
+            prev = record((i, 0), sol, prev)
+            firsts.append(prev)
+        done += n_r
+        if progress is not None:
+            progress(done, total)
+        if client is not None:
+            from ..scale import map_tasks
+
+            items = [(solver, omegas[i], mu_a, t, firsts[i], track) for i in range(n_r)]
+            rows = dict(map_tasks(_row_task, items, client=client, name="squealkit-fe-rows",
+                                  progress=None if progress is None else lambda d, _t: progress(n_r + d, total),
+                                  weights=[n_m - 1] * n_r))
+            for i in range(n_r):  # new modes numbered in row order: the numbers of the local run
+                fresh: dict[int, int] = {}
+                for j, (slots, lam, res) in enumerate(rows[i], start=1):
+                    if track:
+                        for k in np.flatnonzero(slots >= _PROVISIONAL):
+                            if slots[k] not in fresh:
+                                fresh[int(slots[k])] = tracker.n_slots
+                                tracker.n_slots += 1
+                            slots[k] = fresh[int(slots[k])]
+                    else:
+                        tracker.n_slots = max(tracker.n_slots, slots.size)
+                    results[(i, j)] = (slots, lam, res)
+        for i in range(n_r if client is None else 0):
+            prev = firsts[i]
+            todo = [(i, j) for j in range(1, n_m)]
+            for a in range(0, len(todo), 4 * workers):  # bounded memory: a few points' vectors at a time
+                chunk = todo[a:a + 4 * workers]
+                for ij, sol in zip(chunk, pool.map(solve, chunk), strict=True):
+                    prev = record(ij, sol, prev)
+                done += len(chunk)
+                if progress is not None:
+                    progress(done, total)
+    # at least one (NaN) mode: a band without eigenvalues gives a map that is stable everywhere
+    return _fe_dataset(solver, rpm_a, omegas, mu_a, theta, t, results, max(1, tracker.n_slots), tracked=track)
+
+
+#: Provisional indices of modes that enter the band inside a row computed on a worker.
+_PROVISIONAL = 1 << 40
+
+
+def _row_task(item: tuple) -> list[tuple[NDArray, NDArray, NDArray]]:
+    """One rpm row of an FE map after its first point (a Dask task): solved and tracked along mu.
+
+    Modes new to the row get provisional indices from ``_PROVISIONAL`` up, renumbered by the caller.
+    """
+    solver, omega, mus, t, first, track = item
+    tracker = _Tracker()
+    tracker.n_slots = _PROVISIONAL
+    out = []
+    prev = first
+    with threadpool_limits(1, user_api="blas"):
+        for mu in mus[1:]:
+            sol = solver.solve(omega, mu, t, vectors=track)
+            slots = tracker.match(prev, sol) if track else np.arange(sol.eigenvalues.size)
+            prev = (slots, sol.eigenvalues, sol.vectors)
+            out.append((slots, sol.eigenvalues, sol.residuals))
+    return out
+
+
+def _point_arrays(lam: NDArray, res: NDArray, valid: NDArray):
+    """Per-mode error radii and flags, and the point's verdict code (as in ``_solve.VERDICTS``)."""
+    mag = np.where(valid, np.abs(lam), 0.0)
+    thr = UNSTABLE_RTOL * np.max(mag, axis=-1, initial=0.0)
+    err = _ERR_C * np.maximum(res, np.finfo(float).eps) * mag
+    sigma = lam.real
+    with np.errstate(invalid="ignore"):
+        unstable = valid & (sigma - err > thr[..., None])
+        unsure = valid & ~unstable & (np.abs(sigma - thr[..., None]) <= err)
+    real = np.abs(lam.imag) <= 1e-12 * mag
+    flutter = np.any(unstable & ~real, axis=-1)
+    diverge = np.any(unstable & real, axis=-1)
+    verdict = np.where(flutter, 1, np.where(diverge, 2, np.where(np.any(unsure, axis=-1), 3, 0))).astype(np.int8)
+    return err, unstable, verdict, thr
+
+
+def _fe_dataset(solver, rpm, omegas, mu, theta, t, results, n_slots, *, tracked: bool,
+                lock_in_rtol: float = 1e-3) -> xr.Dataset:
+    n_r, n_m = rpm.size, mu.size
+    lam = np.full((n_r, n_m, n_slots), np.nan + 1j * np.nan)
+    res = np.full((n_r, n_m, n_slots), np.nan)
+    for (i, j), (slots, ev, r) in results.items():
+        lam[i, j, slots] = ev
+        res[i, j, slots] = r
+    valid = np.isfinite(lam)
+    # no residual (eigenvalues without vectors): LAPACK's QR is backward stable, eta ~ eps
+    err, _unstable, verdict, thr = _point_arrays(np.where(valid, lam, 0.0), np.where(np.isfinite(res), res, 0.0),
+                                                 valid)
+    err = np.where(valid, err, np.nan)
+    flat = (n_r * n_m, n_slots)
+    # the small models' kernel for the derived quantities; modes outside the band (NaN) are
+    # never unstable nor locked in, their damping ratio NaN and the largest growth rate skips them
+    sigma, omega, zeta, unstable, _smax, any_u, locked = (
+        a.reshape((n_r, n_m, *a.shape[1:]))
+        for a in derived_quantities(np.ascontiguousarray(lam.reshape(flat)), np.ascontiguousarray(err.reshape(flat)),
+                                    thr.ravel(), verdict.ravel(), lock_in_rtol))
+    zeta = np.where(valid, zeta, np.nan)
+    smax = np.max(np.where(valid, sigma, -np.inf), axis=-1, initial=-np.inf)
+    dims = ("rpm", "mu", "mode")
+    model = solver.model
+    ds = xr.Dataset(
+        data_vars={
+            "growth_rate": (dims, sigma, {"units": "1/s", "long_name": "growth rate sigma (real part)"}),
+            "omega": (dims, omega, {"units": "rad/s", "long_name": "damped circular frequency omega_d"}),
+            "frequency": (dims, omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency"}),
+            "damping_ratio": (dims, zeta, {"units": "1", "long_name": "damping ratio -sigma/|lambda|"}),
+            "growth_rate_error": (dims, err, {"units": "1/s", "long_name": "error radius of the eigenvalue "
+                                              "(16 x backward error x |lambda|)"}),
+            "residual": (dims, res, {"units": "1", "long_name": "backward error of the eigenpair in the full model"}),
+            "trusted": (dims, valid & ~(res > RESIDUAL_TOL),
+                        {"long_name": "backward error below residual_tol (or not computed: dense, no vectors)"}),
+            "unstable": (dims, unstable,
+                         {"long_name": "mode unstable (sigma beyond 1e-9 |lambda|_max by more than its error)"}),
+            "verdict": (("rpm", "mu"), verdict,
+                        {"long_name": "stability verdict", "flag_values": np.arange(len(VERDICTS), dtype=np.int8),
+                         "flag_meanings": " ".join(VERDICTS)}),
+            "max_growth_rate": (("rpm", "mu"), smax, {"units": "1/s", "long_name": "largest growth rate"}),
+            "any_unstable": (("rpm", "mu"), any_u, {"long_name": "unstable: flutter or divergence"}),
+            "lock_in": (("rpm", "mu"), locked,
+                        {"long_name": "two modes coalesced in frequency, one unstable", "rtol": lock_in_rtol}),
+        },
+        coords={
+            "rpm": ("rpm", rpm, {"units": "1/min", "long_name": "disc speed"}),
+            "omega_disc": ("rpm", omegas, {"units": "rad/s", "long_name": "disc speed omega = 2 pi rpm/60"}),
+            "mu": ("mu", mu, {"units": "1", "long_name": "friction coefficient"}),
+            "mu_e": ("mu", mu + t, {"units": "1", "long_name": "equivalent friction mu + tan(theta)"}),
+            "theta": ((), float(theta), {"units": "rad", "long_name": "run-out incline angle"}),
+            "theta_deg": ((), math.degrees(theta), {"units": "deg", "long_name": "run-out incline angle"}),
+            "tan_theta": ((), t, {"units": "1", "long_name": "run-out slope"}),
+            "mode": ("mode", np.arange(n_slots),
+                     {"long_name": "mode index (tracked by MAC)" if tracked else "mode index (by frequency)"}),
+        },
+        attrs={
+            "title": "Complex eigenvalues of an FE brake model over disc speed and friction",
+            "model": model.to_json(),
+            "model_kind": model.kind,
+            "method": solver.method,
+            "band_hz": list(solver.band) if solver.band is not None else "all",
+            "basis_size": 0 if solver.basis is None else int(solver.basis.shape[1]),
+            "damped": 1,
+            "tracked": int(tracked),
+            "unstable_rtol": UNSTABLE_RTOL,
+            "residual_tol": RESIDUAL_TOL,
+            "reference": "C(omega, mu) = D1 + (mu_e/mu_ref)(omega_ref/omega) DR + (omega/omega_ref) DG + D4/f_ref; "
+                         "K = K1 + (mu_e/mu_ref) KR + (omega/omega_ref)^2 KGeo (Graebner et al., ZAMM 2016)",
+            "squealkit_version": __version__,
+        },
+    )
+    return ds
+
+
+def _max_unstable(solver: FESolver, omega: float, mu: float, t: float) -> tuple[bool, float, float]:
+    """Whether the point is unstable, its largest growth rate and that mode's frequency [Hz]."""
+    sol = solver.solve(omega, mu, t, vectors=False)
+    lam = sol.eigenvalues
+    if lam.size == 0:
+        return False, -math.inf, math.nan
+    res = np.where(np.isfinite(sol.residuals), sol.residuals, 0.0)
+    verdict = _point_arrays(lam, res, np.ones(lam.size, bool))[2]
+    k = int(np.argmax(lam.real))
+    return bool(verdict in (1, 2)), float(lam.real[k]), float(lam.imag[k] / (2 * math.pi))
+
+
+def _onsets(solver: FESolver, omegas: NDArray, grid: NDArray, t: float, xtol: float):
+    """Scan ``grid`` at each speed, bisect the first stable-to-unstable step."""
+    mu_c = np.full(omegas.size, np.nan)
+    freq = np.full(omegas.size, np.nan)
+    status = []
+    for i, w in enumerate(omegas):
+        prev = None
+        found = False
+        for j, m in enumerate(grid):
+            u, _s, f = _max_unstable(solver, w, m, t)
+            if u:
+                found = True
+                if j == 0:
+                    status.append("unstable_at_start")
+                    mu_c[i], freq[i] = 0.0, f
+                    break
+                lo, hi = prev, m
+                f_hi = f
+                while hi - lo > xtol:
+                    mid = 0.5 * (lo + hi)
+                    um, _sm, fm = _max_unstable(solver, w, mid, t)
+                    if um:
+                        hi, f_hi = mid, fm
+                    else:
+                        lo = mid
+                status.append("onset")
+                mu_c[i], freq[i] = hi, f_hi
+                break
+            prev = m
+        if not found:
+            status.append("stable_in_range")
+    return mu_c, freq, status
+
+
+def fe_critical_friction(
+    model: FEModel,
+    rpm: ArrayLike,
+    *,
+    mu_max: float | None = None,
+    theta: float = 0.0,
+    mu_operating: float | None = None,
+    n_scan: int = 41,
+    xtol: float = 1e-6,
+    method: str = "auto",
+    band: tuple[float, float] | None = None,
+    n_modes: int | None = None,
+) -> xr.Dataset:
+    """Critical friction at each disc speed: the least mu in ``[0, mu_max]`` where the brake is unstable.
+
+    A scan of ``n_scan`` friction values, then bisection of the first stable-to-unstable
+    step to ``xtol``. A window narrower than the scan step can be missed (use a finer
+    ``n_scan``). With ``mu_operating`` the run-out tolerance follows from ``mu_e = mu + tan(theta)``:
+    the largest slope ``tan_theta_max = mu_e_critical - mu_operating`` the brake stays stable with.
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``rpm``: ``mu_critical`` (NaN if stable in range), ``mu_e_critical``
+        (``mu_critical + tan(theta)``), ``frequency_hz`` of the mode that loses stability,
+        ``status`` (``onset``, ``unstable_at_start``, ``stable_in_range``) and, with
+        ``mu_operating``, ``tan_theta_max`` and ``theta_max_deg``.
+
+    Examples
+    --------
+    >>> from squealkit.models import FEModel
+    >>> m = FEModel.from_matrices(M=np.eye(2), K1=np.diag([1.0, 1.2]), KR=[[0.0, 1.0], [-1.0, 0.0]])
+    >>> float(fe_critical_friction(m, [60.0], mu_max=1.0).mu_critical[0].round(4))  # 2 |KR12| mu = 1.2 - 1
+    0.1
+    """
+    rpm_a = _validate_grid("rpm", rpm)
+    mu_max = validate_positive("mu_max", 2.0 * model.mu_ref if mu_max is None else mu_max)
+    t = _tan_theta(theta)
+    if isinstance(n_scan, bool) or int(n_scan) != n_scan or n_scan < 2:
+        raise InputError(f"Parameter n_scan={n_scan!r} must be an integer >= 2.")
+    omegas = rpm_to_omega(rpm_a)
+    samples = (omegas, np.array([0.0, mu_max / 2, mu_max]) + t) if method == "pod" else None
+    solver = FESolver(model, method, band, n_modes, samples)
+    grid = np.linspace(0.0, mu_max, int(n_scan))
+    with threadpool_limits(1, user_api="blas"):
+        mu_c, freq, status = _onsets(solver, omegas, grid, t, xtol)
+    ds = xr.Dataset(
+        {
+            "mu_critical": ("rpm", mu_c, {"units": "1", "long_name": "critical friction coefficient"}),
+            "mu_e_critical": ("rpm", mu_c + t, {"units": "1", "long_name": "critical equivalent friction mu + tan"}),
+            "frequency_hz": ("rpm", freq, {"units": "Hz", "long_name": "frequency of the mode losing stability"}),
+            "status": ("rpm", np.array(status, dtype=object).astype(str)),
+        },
+        coords={"rpm": ("rpm", rpm_a, {"units": "1/min"}), "omega_disc": ("rpm", omegas, {"units": "rad/s"}),
+                "theta": ((), float(theta), {"units": "rad"}), "tan_theta": ((), t)},
+        attrs={"method": solver.method, "mu_max": mu_max, "n_scan": int(n_scan), "xtol": xtol,
+               "model": model.to_json(), "model_kind": model.kind},
+    )
+    if mu_operating is not None:
+        tmax = mu_c + t - mu_operating
+        ds["tan_theta_max"] = ("rpm", tmax, {"units": "1", "long_name": "largest run-out slope tolerated at mu"})
+        ds["theta_max_deg"] = ("rpm", np.degrees(np.arctan(tmax)), {"units": "deg"})
+        ds.attrs["mu_operating"] = float(mu_operating)
+    return ds
+
+
+def fe_modes(
+    model: FEModel,
+    rpm: float,
+    mu: float | None = None,
+    theta: float = 0.0,
+    *,
+    method: str = "auto",
+    band: tuple[float, float] | None = None,
+    n_modes: int | None = None,
+    unstable_only: bool = False,
+) -> xr.Dataset:
+    """Modes of an FE model at one operating point, with their right eigenvectors (shapes).
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``mode``: ``eigenvalue_real``, ``eigenvalue_imag`` [1/s], ``growth_rate``,
+        ``frequency`` [Hz], ``damping_ratio``, ``unstable``, ``residual``; over
+        ``(dof, mode)``: ``shape_real``, ``shape_imag`` (largest amplitude 1, real there).
+        Attributes ``verdict``, ``rpm``, ``mu``, ``theta``.
+    """
+    rpm = float(_validate_grid("rpm", rpm)[0])
+    mu = float(model.mu_ref if mu is None else mu)
+    t = _tan_theta(theta)
+    omega = float(rpm_to_omega(rpm))
+    samples = (np.array([omega]), np.array([mu + t])) if method == "pod" else None
+    solver = FESolver(model, method, band, n_modes, samples)
+    with threadpool_limits(1, user_api="blas"):
+        sol = solver.solve(omega, mu, t)
+    lam, X, res = sol.eigenvalues, sol.vectors, sol.residuals
+    err, unstable, verdict, _ = _point_arrays(lam, res, np.ones(lam.size, bool))
+    if unstable_only:
+        lam, X, res, unstable, err = lam[unstable], X[:, unstable], res[unstable], unstable[unstable], err[unstable]
+    if X.shape[1]:
+        peak = X[np.argmax(np.abs(X), axis=0), np.arange(X.shape[1])]
+        X = X / peak
+    mag = np.abs(lam)
+    return xr.Dataset(
+        {
+            "eigenvalue_real": ("mode", lam.real, {"units": "1/s"}),
+            "eigenvalue_imag": ("mode", lam.imag, {"units": "1/s"}),
+            "growth_rate": ("mode", lam.real, {"units": "1/s"}),
+            "frequency": ("mode", lam.imag / (2 * math.pi), {"units": "Hz"}),
+            "damping_ratio": ("mode", np.where(mag > 0, -lam.real / np.where(mag > 0, mag, 1), 0.0), {"units": "1"}),
+            "unstable": ("mode", unstable),
+            "residual": ("mode", res, {"long_name": "backward error in the full model"}),
+            "growth_rate_error": ("mode", err, {"units": "1/s"}),
+            "shape_real": (("dof", "mode"), X.real),
+            "shape_imag": (("dof", "mode"), X.imag),
+        },
+        coords={"mode": np.arange(lam.size), "dof": list(model.dof_names)},
+        attrs={"verdict": VERDICTS[int(verdict)], "rpm": rpm, "omega_disc": omega, "mu": mu, "theta": float(theta),
+               "tan_theta": t, "method": solver.method, "model": model.to_json(), "model_kind": model.kind},
+    )
+
+
+def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any) -> None:
+    """Write mode shapes with the model's mesh (a ``meshio.Mesh``) to a VTK file (needs meshio).
+
+    The model's DOFs must be the mesh points' displacement components in order
+    (``n_dof = 3 x points`` or ``= points``); each mode becomes point data ``mode{k}_re``/``_im``.
+    """
+    from ..io import atomic_path
+
+    if model.mesh is None:
+        raise InputError("The model has no mesh: mode shapes can be exported only with one.")
+    mesh = model.mesh
+    n_pts = len(mesh.points)
+    comp = model.n_dof // n_pts if n_pts and model.n_dof % n_pts == 0 else 0
+    if comp not in (1, 2, 3):
+        raise InputError(f"The model's {model.n_dof} DOFs do not map onto the mesh's {n_pts} points.")
+    import meshio
+
+    data = {}
+    for k in range(ds.sizes["mode"]):
+        for part in ("real", "imag"):
+            v = ds[f"shape_{part}"].values[:, k].reshape(n_pts, comp)
+            data[f"mode{k}_{part[:2]}"] = v
+    out = meshio.Mesh(mesh.points, mesh.cells, point_data=data)
+    with atomic_path(path) as tmp:
+        out.write(tmp, file_format="vtu")
