@@ -227,3 +227,18 @@ def test_meaningless_scatter_is_one_line(run, tmp_path):
     unc.write_text('[uncertain]\nkc = {dist = "lognormal", mean = 4.6e7, std = 1e300}\n')
     r = run("montecarlo", "--uncertain", str(unc), "--samples", "64", "--mu", "0:1:11")
     assert r.exit_code == 2 and "times its mean" in _one_line(r)
+
+
+def test_typo_table_in_a_model_file_is_an_error_not_the_default_model(run, tmp_path):
+    cfg = tmp_path / "rig.toml"
+    cfg.write_text("[paramters]\nm1 = -5\n")
+    r = run("critical", "--config", str(cfg))
+    assert r.exit_code == 2 and "did you mean 'parameters'" in _one_line(r)
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/zero"), reason="needs /dev/zero")
+def test_endless_model_file_is_read_bounded(run):
+    t0 = time.monotonic()
+    r = run("critical", "--config", "/dev/zero")
+    assert r.exit_code == 2 and "larger than 16 MiB" in _one_line(r)
+    assert time.monotonic() - t0 < 20

@@ -24,13 +24,14 @@ A model file (all sections optional; SI units, angles in rad or as ``*_deg`` in 
     names = {M = "MAA"}        # the names in the file where they differ (optional)
     omega_ref = 1.0            # rad/s; mu_ref, f_ref likewise (defaults 1)
 
-File paths are relative to the model file.
-Other top-level tables (``[simulation]``, ``[uncertain]``, ...) belong to other commands and
-are ignored here.
+File paths are relative to the model file. An ``[uncertain]`` table belongs to
+``montecarlo`` and is ignored here; any other table or key is an error (a typo such as
+``[paramters]`` must not silently give the default model).
 """
 
 from __future__ import annotations
 
+import difflib
 import math
 import tomllib
 from collections.abc import Iterable, Mapping
@@ -66,6 +67,10 @@ _MODEL_KINDS: dict[str, type[FrictionModel]] = {
 }
 _PRESET_KIND = {"lv2013": "pin_on_disc", "hoffmann2002": "hoffmann"}
 _TOP_KEYS = {"model", "preset", "parameters", "rig", "matrices", "fe", "description"}
+#: Tables a model file may hold for other commands (``montecarlo`` reads ``[uncertain]``).
+_OTHER_TABLES = {"uncertain"}
+#: A model file is text of a few kB (large matrices go in the files an [fe] table names).
+_MAX_FILE_BYTES = 16 * 2**20
 _FE_KEYS = ("file", "files", "names", "omega_ref", "mu_ref", "f_ref")
 
 
@@ -113,11 +118,14 @@ def model_from_dict(doc: Mapping[str, Any], base_dir: str | Path | None = None) 
 
     ``base_dir`` is the folder relative matrix file paths of an ``[fe]`` table start from.
     """
-    unknown = set(doc) - _TOP_KEYS
-    # Tables of other commands are allowed; stray scalar keys are typos.
-    stray = sorted(k for k in unknown if not isinstance(doc[k], Mapping))
-    if stray:
-        raise InputError(f"Unknown top-level key {stray[0]!r} in model file; known: {', '.join(sorted(_TOP_KEYS))}.")
+    unknown = sorted(set(doc) - _TOP_KEYS - _OTHER_TABLES)
+    if unknown:
+        # a typo ([paramters]) must not silently give the default model
+        key = unknown[0]
+        what = f"table [{key}]" if isinstance(doc[key], Mapping) else f"top-level key {key!r}"
+        close = difflib.get_close_matches(key, sorted(_TOP_KEYS | _OTHER_TABLES), n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise InputError(f"Unknown {what} in model file; {hint}known: {', '.join(sorted(_TOP_KEYS | _OTHER_TABLES))}.")
     preset = doc.get("preset")
     kind = doc.get("model", _PRESET_KIND.get(preset, "pin_on_disc") if preset else None)
     if kind is None:
@@ -159,7 +167,12 @@ def model_from_dict(doc: Mapping[str, Any], base_dir: str | Path | None = None) 
 def _read_toml(path: str | Path) -> dict[str, Any]:
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        with open(p, "rb") as f:
+            raw = f.read(_MAX_FILE_BYTES + 1)  # bounded: /dev/zero or a wrong file is not read without end
+        if len(raw) > _MAX_FILE_BYTES:
+            raise InputError(f"Model file {str(p)!r} is larger than {_MAX_FILE_BYTES // 2**20} MiB; a model file is "
+                             "a few kB of TOML (large matrices go in the files an [fe] table names).")
+        text = raw.decode("utf-8")
     except FileNotFoundError:
         raise InputError(f"Model file {str(p)!r} does not exist.") from None
     except IsADirectoryError:
