@@ -9,7 +9,9 @@ batch of R independent runs by one chunk of steps, in parallel over runs (``pran
 Contact force (the part of eq. 4 carried by the contact), for each run::
 
     linear:     -g (Kn x - q fn) - e (Kf x - q ff),   g = 1 - mu t, e = s (mu + t)
-    structured: Nc (g b + e f),  Nc = -kc (b.x - q) = N cos(theta) (eq. 2)
+                  - s t (g Knx x + e Kfx x)   (consistent kinematics only, ``kin = 1``)
+    structured: Nc (g b + e f),  Nc = -kc (b_t.x - q) = N cos(theta) (eq. 2)
+                with b_t = b (paper) or b + s t fhat (consistent kinematics)
                 with Nc >= 0 if contact may open, and mu -> mu(w) phi(w) where w is the
                 sliding speed of the disc past the pin, phi = tanh(w / v_reg).
 
@@ -25,7 +27,7 @@ from numba import njit, prange
 
 
 @njit(cache=True, inline="always")
-def _rhs(x, xd, q, t, mu, v, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, opts, r, acc):
+def _rhs(x, xd, q, t, mu, v, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, opts, r, acc):
     """Accelerations ``acc`` at state (x, xd); returns (N cos theta, effective mu)."""
     n = x.shape[0]
     for i in range(n):
@@ -44,11 +46,15 @@ def _rhs(x, xd, q, t, mu, v, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, 
             for j in range(n):
                 kn += Kn[i, j] * x[j]
                 kf += Kf[i, j] * x[j]
+            if kin != 0.0:
+                for j in range(n):
+                    kn += s * t * Knx[i, j] * x[j]
+                    kf += s * t * Kfx[i, j] * x[j]
             r[i] -= g * kn + e * kf
     else:
         d = -q
         for j in range(n):
-            d += b[j] * x[j]
+            d += (b[j] + kin * s * t * fhat[j]) * x[j]
         nc = -kc * d
         if opts[1] != 0.0 and nc < 0.0:
             nc = 0.0
@@ -73,7 +79,7 @@ def _rhs(x, xd, q, t, mu, v, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, 
 
 @njit(cache=True, parallel=True)
 def integrate_chunk(
-    X, V, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+    X, V, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
     qh, th, dt, n_steps, stride, out_x, out_v, out_a, out_nc, out_me, o_start, limit, status, n_valid,
 ):
     """Advance each run r by ``n_steps`` RK4 steps of ``dt``; record every ``stride`` steps.
@@ -102,11 +108,13 @@ def integrate_chunk(
         o = o_start
         mu_r, v_r, kc_r, s_r = mu[r], v[r], kc[r], s[r]
         bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r = bM[r], fM[r], C[r], K0[r], Kn[r], Kf[r]
+        Knx_r, Kfx_r, kin_r = Knx[r], Kfx[r], kin[r]
         F0_r, fn_r, ff_r, b_r, f_r, fhat_r = F0[r], fn[r], ff[r], b[r], f[r], fhat[r]
         for k in range(n_steps + 1):
             i0 = 2 * k
             if k % stride == 0 and (k < n_steps or n_steps == 0):
                 nc, me = _rhs(x, xd, qh[r, i0], th[r, i0], mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+                              Knx_r, Kfx_r, kin_r,
                  F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k1v)
                 bad = False
                 for i in range(n):
@@ -129,25 +137,25 @@ def integrate_chunk(
             q0, t0 = qh[r, i0], th[r, i0]
             q1, t1 = qh[r, i0 + 1], th[r, i0 + 1]
             q2, t2 = qh[r, i0 + 2], th[r, i0 + 2]
-            _rhs(x, xd, q0, t0, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+            _rhs(x, xd, q0, t0, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
                  F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k1v)
             for i in range(n):
                 k1x[i] = xd[i]
                 xt[i] = x[i] + 0.5 * dt * k1x[i]
                 vt[i] = xd[i] + 0.5 * dt * k1v[i]
-            _rhs(xt, vt, q1, t1, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+            _rhs(xt, vt, q1, t1, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
                  F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k2v)
             for i in range(n):
                 k2x[i] = vt[i]
                 xt[i] = x[i] + 0.5 * dt * k2x[i]
                 vt[i] = xd[i] + 0.5 * dt * k2v[i]
-            _rhs(xt, vt, q1, t1, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+            _rhs(xt, vt, q1, t1, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
                  F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k3v)
             for i in range(n):
                 k3x[i] = vt[i]
                 xt[i] = x[i] + dt * k3x[i]
                 vt[i] = xd[i] + dt * k3v[i]
-            _rhs(xt, vt, q2, t2, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+            _rhs(xt, vt, q2, t2, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
                  F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k4v)
             for i in range(n):
                 x[i] += dt / 6.0 * (k1x[i] + 2.0 * k2x[i] + 2.0 * k3x[i] + vt[i])

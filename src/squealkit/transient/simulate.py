@@ -149,6 +149,9 @@ def _integrate(
     K0 = stack(lambda r: r.model.stiffness_parts()[0])
     Kn = stack(lambda r: r.model.stiffness_parts()[1])
     Kf = stack(lambda r: r.model.stiffness_parts()[2])
+    Knx = stack(lambda r: r.model.slope_parts()[0])
+    Kfx = stack(lambda r: r.model.slope_parts()[1])
+    kin = np.array([float(r.model.slope_coupled) for r in runs])
     F0 = stack(lambda r: r.model.load_parts()[0])
     fn = stack(lambda r: r.model.load_parts()[1])
     ff = stack(lambda r: r.model.load_parts()[2])
@@ -192,7 +195,7 @@ def _integrate(
                 qh[i], th[i] = qh[j], th[j]
         with limit_threads(threads_for(R, serial_below=2)):  # parallel over runs: one run is serial
             _kernels.integrate_chunk(
-                X, V, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+                X, V, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
                 qh, th, dt, m, stride, out_x, out_v, out_a, out_nc, out_me, done // stride, limit, status, n_valid,
             )
         done += m
@@ -215,10 +218,11 @@ def _run_dataset(run: _Run, raw: dict, i: int, n_keep: int) -> xr.Dataset:
     q, tan_theta = run.profile.evaluate(pos)
     nc = raw["nc"][i, :n_keep]
     me = raw["me"][i, :n_keep]
-    structured, kc, b, _ = contact_geometry(model)
+    structured, kc, _, _ = contact_geometry(model)
     if raw["contact"].is_linear:
-        # N cos(theta) = -kc (b.x - q) (eq. 2), also for output of the linear law.
-        nc = -kc * (raw["x"][i, :n_keep] @ b - q) if structured else np.full(n_keep, np.nan)
+        # N cos(theta) = -kc (b_t.x - q) (eq. 2), also for output of the linear law.
+        nc = (-kc * (np.sum(raw["x"][i, :n_keep] * model.contact_normal(tan_theta), axis=-1) - q)
+              if structured else np.full(n_keep, np.nan))
     normal = nc * np.sqrt(1.0 + tan_theta**2)  # eq. (2): N = -kc (y1 - y2 - q) / cos(theta)
     # sigma depends on tan(theta) only (mu fixed): solve once per distinct slope (to 1e-12).
     slopes, inverse = np.unique(np.round(tan_theta, 12), return_inverse=True)
@@ -256,6 +260,7 @@ def _attrs(run: _Run, raw: dict, status: str, t_stop: float, fs: float) -> dict:
         "reference": "Lv, Zhang & Yu, J. Vibroeng. 15(2) 2013, eqs. 1-4 and 9-11",
         "model": run.model.to_json(),
         "model_kind": run.model.kind,
+        "kinematics": run.model.kinematics_option,
         "mu": run.mu,
         "speed": run.speed,
         "speed_units": "m/s",
