@@ -131,7 +131,7 @@ def reproduce(
     default = model is None
     model = get_preset("lv2013") if model is None else model
     if rig is None and default:
-        rig = PinOnDiscRig()
+        rig = PinOnDiscRig.paper()
     steps = _paper_steps(model, rig, published=True, quick=quick, recording=recording)
     start = time.perf_counter()
     # staged beside out_dir and moved into place only when complete (io.atomic_path)
