@@ -55,7 +55,7 @@ def test_measured_convergence_order_is_four():
     dts, errs = [], []
     for stride in (60, 120, 240):
         dt = 1.0 / (fs * stride)
-        ds = simulate(model, mu=mu, duration=T, fs=fs, x0=x0, dt=dt)
+        ds = simulate(model, mu=mu, duration=T, fs=fs, x0=x0, dt=dt, method="rk4")
         x = np.array([ds[n].values[-1] for n in model.dof_names])
         dts.append(ds.attrs["dt"])
         errs.append(np.linalg.norm(x - exact))
@@ -104,7 +104,7 @@ def test_energy_conserved_undamped_conservative(model, dt, tol):
     # (dt = 0.25/omega_max by default: < 1e-3 over 0.02 s; dt = 2.5e-7 s: < 1e-7).
     n = model.n_dof
     x0 = model.static_equilibrium(0.0) + 1e-7 * np.arange(1, n + 1)
-    ds = simulate(model, mu=0.0, duration=0.02, fs=20_000, x0=x0, dt=dt)
+    ds = simulate(model, mu=0.0, duration=0.02, fs=20_000, x0=x0, dt=dt, method="rk4")
     M, K, F = model.mass_matrix(), model.stiffness_matrix(0.0, 0.0), model.load_vector(0.0, 0.0, 0.0)
     x = np.stack([ds[d].values for d in model.dof_names], axis=-1)
     v = np.stack([ds[f"{d}_dot"].values for d in model.dof_names], axis=-1)
