@@ -233,7 +233,7 @@ def _integrate(
     limit: float,
     progress: Progress | None,
     method: str = "dopri5",
-    rtol: float = 1e-6,
+    rtol: float = 1e-8,
     atol: float | None = None,
 ):
     method = _validate_method(method)
@@ -529,7 +529,7 @@ def simulate(
     limit: float = 1.0,
     progress: Progress | None = None,
     method: str = "dopri5",
-    rtol: float = 1e-6,
+    rtol: float = 1e-8,
     atol: float | None = None,
 ) -> xr.Dataset:
     """Time response of a model sliding over a disc surface profile (paper section 4).
@@ -669,7 +669,7 @@ def simulate_batch(
     client: Any = None,
     runs_per_task: int = 16,
     method: str = "dopri5",
-    rtol: float = 1e-6,
+    rtol: float = 1e-8,
     atol: float | None = None,
 ) -> xr.Dataset:
     """Many runs at once, in parallel over runs (numba ``prange``, all cores).
@@ -736,7 +736,7 @@ def _batch_piece(arg: tuple) -> xr.Dataset:
 
 
 def _batch_dataset(runs: Sequence[_Run], *, duration, fs, contact, x0, perturbation, rng, x_start, dt, limit,
-                   progress, method="dopri5", rtol=1e-6, atol=None) -> xr.Dataset:
+                   progress, method="dopri5", rtol=1e-8, atol=None) -> xr.Dataset:
     raw = _integrate(
         runs, duration=duration, fs=fs, contact=contact, x0=x0, v0=None, perturbation=perturbation,
         rng=rng, x_start=x_start, dt=dt, limit=limit, progress=progress, method=method, rtol=rtol, atol=atol,
