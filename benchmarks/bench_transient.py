@@ -1,4 +1,4 @@
-"""Benchmark: compiled ``simulate`` (Dormand-Prince 5(4), and fixed-step RK4) against ``solve_ivp(RK45, rtol=1e-6)`` on paper Fig. 4.
+"""Benchmark: compiled ``simulate`` (Dormand-Prince 5(4); RK4) against ``solve_ivp(RK45, rtol=1e-6)``, paper Fig. 4.
 
 The case is the paper's section 4 (mu = 0.4, c1 = c2 = c3 = 220 N s/m, P = 10 N, sine SRO
 q0 = 0.08 mm, lambda = 1 mm, v = 0.02 m/s). Both solve the same equations (eq. 4). Accuracy is

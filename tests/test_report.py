@@ -50,6 +50,9 @@ def test_reproduce_numbers_match_the_paper(paper):
     assert 2387.0 <= n["critical"]["onset_mode_frequency_hz"] <= 2438.0
     # §4 Fig. 4: growth on rising SRO, decay on falling SRO
     assert n["transient"]["rise_rate"] > 0 > n["transient"]["fall_rate"]
+    # issue 12: the linear law's normal force in Fig. 4 is tensile a good part of the time, and the report says so
+    assert n["transient"]["fig4_tensile_fraction"] > 0.2
+    assert "tensile" in " ".join(next(s for s in paper.sections if s.key == "transient").paragraphs)
     # §5 (synthetic): squeal at the model's onset frequency, close to the measured 2388 Hz, on rising run-out
     assert n["measurement"]["squeal_frequency_hz"] == pytest.approx(2388.0, rel=0.01)
     assert n["measurement"]["rising_fraction"] == pytest.approx(n["measurement"]["truth_rising_fraction"], abs=0.05)

@@ -27,6 +27,7 @@ COMMANDS: dict[str, str] = {
     "reproduce": "squealkit.cli.reproduce:reproduce",
     "tolerance": "squealkit.cli.tolerance:tolerance",
     "simulate": "squealkit.cli.simulate:simulate",
+    "floquet": "squealkit.cli.floquet:floquet",
     "analyze": "squealkit.cli.analyze:analyze",
     "montecarlo": "squealkit.cli.montecarlo:montecarlo",
     "synth": "squealkit.cli.synth:synth",

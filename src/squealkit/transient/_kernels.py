@@ -434,3 +434,73 @@ def integrate_adaptive(
             X[r, i] = z[i]
             V[r, i] = z[n + i]
         H[r] = h
+
+
+# -- monodromy matrix of the periodic linear system (Floquet) --------------------------------------
+
+
+@njit(cache=True, inline="always")
+def _state_matrix(tan_t, mu, s, kin, MC, MK0, MKn, MKf, MKnx, MKfx, A):
+    """A(t) = [[0, I], [-M^-1 K(mu, tan_t), -M^-1 C]] into A (paper eq. 4, homogeneous part)."""
+    n = MC.shape[0]
+    g = 1.0 - mu * tan_t
+    e = s * (mu + tan_t)
+    st = kin * s * tan_t
+    for i in range(n):
+        for j in range(n):
+            A[i, j] = 0.0
+            A[i, n + j] = 1.0 if i == j else 0.0
+            k = MK0[i, j] + g * (MKn[i, j] + st * MKnx[i, j]) + e * (MKf[i, j] + st * MKfx[i, j])
+            A[n + i, j] = -k
+            A[n + i, n + j] = -MC[i, j]
+
+
+@njit(cache=True, inline="always")
+def _slope_at(tg, u):
+    """Periodic linear interpolation of the slope samples tg (one period) at phase u in [0, 1]."""
+    M = tg.shape[0]
+    x = u * M
+    j = math.floor(x)
+    w = x - j
+    j = j % M
+    return tg[j] + w * (tg[(j + 1) % M] - tg[j])
+
+
+@njit(cache=True, parallel=True)
+def monodromy(tg, mu, s, kin, MC, MK0, MKn, MKf, MKnx, MKfx, period, n_steps, out):
+    """Monodromy matrices Phi(T) of z' = A(t) z over one ``period`` [s], by classical RK4 (``n_steps``).
+
+    Case b has the slope samples ``tg[b]`` over one period (periodic), friction ``mu[b]`` and
+    model matrices ``M^-1 C``, ``M^-1 K0``... (``[b]``); ``out[b]`` receives Phi(T), shape (2n, 2n).
+    """
+    B = tg.shape[0]
+    m = 2 * MC.shape[1]
+    h = period / n_steps
+    du = 1.0 / n_steps  # the step in units of the period (phase of the slope samples)
+    for bi in prange(B):
+        Phi = np.eye(m)
+        A0 = np.empty((m, m))
+        A1 = np.empty((m, m))
+        A2 = np.empty((m, m))
+        k1 = np.empty((m, m))
+        k2 = np.empty((m, m))
+        k3 = np.empty((m, m))
+        k4 = np.empty((m, m))
+        tmp = np.empty((m, m))
+        for step in range(n_steps):
+            u = step * du
+            _state_matrix(_slope_at(tg[bi], u), mu[bi], s[bi], kin[bi], MC[bi], MK0[bi], MKn[bi], MKf[bi],
+                          MKnx[bi], MKfx[bi], A0)
+            _state_matrix(_slope_at(tg[bi], u + 0.5 * du), mu[bi], s[bi], kin[bi], MC[bi], MK0[bi], MKn[bi],
+                          MKf[bi], MKnx[bi], MKfx[bi], A1)
+            _state_matrix(_slope_at(tg[bi], u + du), mu[bi], s[bi], kin[bi], MC[bi], MK0[bi], MKn[bi], MKf[bi],
+                          MKnx[bi], MKfx[bi], A2)
+            k1[:, :] = A0 @ Phi
+            tmp[:, :] = Phi + 0.5 * h * k1
+            k2[:, :] = A1 @ tmp
+            tmp[:, :] = Phi + 0.5 * h * k2
+            k3[:, :] = A1 @ tmp
+            tmp[:, :] = Phi + h * k3
+            k4[:, :] = A2 @ tmp
+            Phi += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        out[bi] = Phi

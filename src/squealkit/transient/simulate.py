@@ -644,9 +644,9 @@ def _warn_tensile(ds: xr.Dataset) -> None:
     frac = ds.attrs.get("tensile_fraction", 0.0)
     if frac > 0:
         warnings.warn(
-            f"The linear contact pulled the pin onto the disc {100 * frac:.1f} % of the time (normal force down to "
+            f"The normal force of the linear contact was tensile {100 * frac:.1f} % of the time (down to "
             f"{ds.attrs['min_normal_force']:.4g} N): a real contact opens there. Run with contact='nonlinear' "
-            "(loss of contact) to bound the vibration.", TensileContactWarning, stacklevel=3)
+            "(CLI: --contact nonlinear), which lets the contact open.", TensileContactWarning, stacklevel=3)
 
 
 def simulate_batch(
@@ -825,6 +825,11 @@ def transient_summary(ds: xr.Dataset, *, max_stages: int = 50) -> dict[str, obje
         "profile": ds.attrs.get("profile"),
         "contact": ds.attrs.get("contact"),
         "dt": ds.attrs.get("dt"),
+        "method": ds.attrs.get("method"),
+        "steps": ds.attrs.get("steps"),
+        "events": ds.attrs.get("events"),
+        "tensile_fraction": ds.attrs.get("tensile_fraction"),
+        "min_normal_force": ds.attrs.get("min_normal_force"),
         "peak": {},
     }
     for d in model_dofs:
