@@ -149,3 +149,18 @@ def test_linear_contact_that_pulls_says_so():
     assert 0.4 < ds.attrs["tensile_fraction"] < 0.6
     smooth = simulate(LV, mu=0.2, duration=0.01)  # stable, stays in compression
     assert smooth.attrs["tensile_fraction"] == 0.0
+
+
+def test_limit_cycle_records_contact_and_stick_slip_events():
+    # mu = 0.8 is unstable; with loss of contact and the sign law the run settles on a limit
+    # cycle that lifts off (contact opens/closes) and sticks (|w| < v_reg) once per cycle
+    ds = simulate(LV, mu=0.8, duration=0.3, fs=20_000, contact=Contact.nonlinear(), perturbation=1e-9,
+                  rng=np.random.default_rng(0))
+    assert ds.attrs["status"] == "completed"
+    kinds = ds.event_kind.values
+    assert set(kinds.tolist()) == {1, 2, 3, 4}
+    stick_slip = kinds[(kinds == 3) | (kinds == 4)]
+    assert np.all(stick_slip[1:] != stick_slip[:-1])  # stick, slip, stick, ...
+    contact = kinds[(kinds == 1) | (kinds == 2)]
+    assert np.all(contact[1:] != contact[:-1])
+    assert np.all(np.diff(ds.event_time.values) >= 0)

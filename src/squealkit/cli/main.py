@@ -28,6 +28,7 @@ COMMANDS: dict[str, str] = {
     "tolerance": "squealkit.cli.tolerance:tolerance",
     "simulate": "squealkit.cli.simulate:simulate",
     "floquet": "squealkit.cli.floquet:floquet",
+    "rig": "squealkit.cli.rig:rig",
     "analyze": "squealkit.cli.analyze:analyze",
     "montecarlo": "squealkit.cli.montecarlo:montecarlo",
     "synth": "squealkit.cli.synth:synth",
