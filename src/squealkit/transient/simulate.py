@@ -715,7 +715,8 @@ def simulate_batch(
     if any(r.model.n_dof != n for r in runs):
         raise InputError("All models of a batch must have the same number of degrees of freedom.")
     # one step and one set of perturbations for the whole batch, whatever the pieces
-    kw["dt"] = _step_size(runs, validate_fs(fs), dt, kw["contact"], _validate_method(method))[0]
+    if _validate_method(method) == "rk4":  # RK4's step is the batch's; Dormand-Prince steps each run alone
+        kw["dt"] = _step_size(runs, validate_fs(fs), dt, kw["contact"], "rk4")[0]
     noise = _perturbation_noise(validate_positive("perturbation", perturbation, allow_zero=True), rng, len(runs), n)
     from ..scale import lazy_template, stream_to_zarr
 
@@ -756,12 +757,17 @@ def _batch_dataset(runs: Sequence[_Run], *, duration, fs, contact, x0, perturbat
     if "counts" in raw:
         ds["steps"] = ("run", raw["counts"][:, 0].astype(np.int64), {"long_name": "accepted steps"})
         ds["events"] = ("run", raw["n_ev"].astype(np.int64), {"long_name": "located contact and stick/slip events"})
+        ds["max_step"] = ("run", raw["h_max"], {"units": "s", "long_name": "largest step (the run's stability bound)"})
+    # batch attributes may not depend on which runs a piece holds (streamed batches must equal
+    # the in-memory one): the per-run steps and bounds are variables, RK4's dt is fixed up front
     integ = _integrator_attrs(raw, 0)
-    for k in ("steps", "rejected_steps", "rhs_calls", "min_step", "atol", "dt"):
+    for k in ("steps", "rejected_steps", "rhs_calls", "min_step", "atol", "dt", "step_bound_modes",
+              "step_bound_friction"):
         integ.pop(k, None)
+    if raw["method"] == "rk4":
+        integ["dt"] = float(raw["dt"])
     ds.attrs.update(
         {"title": "squealkit transient simulation (batch)", "fs": float(fs), **integ,
-         "dt": float(raw["dt"]) if raw["method"] == "rk4" else float(np.max(raw["h_max"])),
          "integrator": integ["integrator"].replace("(numba)", "(numba, parallel over runs)"),
          "contact": raw["contact"].describe()}
     )
