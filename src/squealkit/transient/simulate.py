@@ -706,7 +706,15 @@ def simulate_batch(
     if store is None and client is not None:
         raise InputError("A cluster run streams its result to zarr: pass store='....zarr' with client.")
     if store is None:
-        return _batch_dataset(runs, rng=rng, progress=progress, **kw)
+        ds = _batch_dataset(runs, rng=rng, progress=progress, **kw)
+        tensile = ds["tensile_fraction"].values
+        if np.any(tensile > 0):
+            warnings.warn(
+                f"The normal force of the linear contact was tensile in {int(np.sum(tensile > 0))} of {tensile.size} "
+                f"runs (up to {100 * float(tensile.max()):.1f} % of the time; see tensile_fraction): a real contact "
+                "opens there. Run with contact='nonlinear' (CLI: --contact nonlinear).",
+                TensileContactWarning, stacklevel=2)
+        return ds
     if Path(store).suffix.lower() != ".zarr":
         raise InputError(f"Parameter store={str(store)!r} must be a zarr store ending in .zarr.")
     if isinstance(runs_per_task, bool) or not isinstance(runs_per_task, int) or runs_per_task < 1:
