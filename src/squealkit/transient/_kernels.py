@@ -1,4 +1,8 @@
-"""Compiled fixed-step RK4 integration of M x'' + C x' + f(x, x', q, tan_theta) = F0.
+"""Compiled integration of M x'' + C x' + f(x, x', q, tan_theta) = F0, and the monodromy matrix.
+
+Three kernels: ``integrate_chunk`` (fixed-step classical RK4), ``integrate_adaptive``
+(Dormand-Prince 5(4) with error control, dense output and event location) and ``monodromy``
+(Floquet: the periodic linear system over one period).
 
 All matrices and load vectors arrive premultiplied by M^-1 (``K0 = M^-1 K0`` and so on; ``bM``
 and ``fM`` are M^-1 b and M^-1 f), so the right-hand side is the acceleration directly.
