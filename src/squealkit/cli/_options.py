@@ -66,18 +66,10 @@ def scheduler_option(f: F) -> F:
 
 
 def build_model_from_options(preset: str | None, config: Path | None, sets: tuple[str, ...]):
-    """The model named by --preset/--config with the --set overrides applied.
+    """The model named by --preset/--config with the --set overrides applied."""
+    from ..models import build_model, parse_assignments
 
-    A model file with a [rig] table says, in one line on stderr, where each frequency the model
-    is derived from came from (given, or which beam theory): stdout and --json stay clean.
-    """
-    from ..models import build_model, load_rig, parse_assignments
-
-    model = build_model(preset, config, parse_assignments(sets))
-    rig = load_rig(config) if config is not None else None
-    if rig is not None:
-        click.echo(f"squealkit: rig frequencies: {rig.describe()}", err=True)
-    return model
+    return build_model(preset, config, parse_assignments(sets))
 
 
 def _jsonable(obj: Any) -> Any:
