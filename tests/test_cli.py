@@ -124,3 +124,10 @@ def test_rig_command_says_where_each_frequency_comes_from(run):
     assert "Mode coupling needs friction" in r.stderr
     r = run("rig")
     assert r.exit_code == 0 and "2561.0 Hz  (given)" in r.output
+    # every command on a rig file says it too, on stderr after its work (stdout's JSON stays clean)
+    r = run("critical", "--config", str(cfg), "--json")
+    assert r.exit_code == 0
+    assert json.loads(r.stdout)["mu_critical"] == pytest.approx(1.1270, abs=1e-4)
+    assert "rig frequencies: pin bending 2722.1 Hz (Timoshenko" in r.stderr
+    r = run("montecarlo", "--config", str(cfg))   # a user error stays one line
+    assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1

@@ -65,11 +65,24 @@ def scheduler_option(f: F) -> F:
     )(f)
 
 
-def build_model_from_options(preset: str | None, config: Path | None, sets: tuple[str, ...]):
-    """The model named by --preset/--config with the --set overrides applied."""
-    from ..models import build_model, parse_assignments
+#: One-line notes for stderr, printed by the CLI's main only after the command succeeded (so a
+#: user error stays one line).
+PENDING_NOTES: list[str] = []
 
-    return build_model(preset, config, parse_assignments(sets))
+
+def build_model_from_options(preset: str | None, config: Path | None, sets: tuple[str, ...]):
+    """The model named by --preset/--config with the --set overrides applied.
+
+    With a model file that has a [rig] table, a note (on stderr, after the command succeeded)
+    says where each frequency the model is derived from came from: given, or which beam theory.
+    """
+    from ..models import build_model, load_rig, parse_assignments
+
+    model = build_model(preset, config, parse_assignments(sets))
+    rig = load_rig(config) if config is not None else None
+    if rig is not None:
+        PENDING_NOTES.append(f"squealkit: rig frequencies: {rig.describe()}")
+    return model
 
 
 def _jsonable(obj: Any) -> Any:

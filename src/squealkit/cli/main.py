@@ -61,13 +61,18 @@ class SquealkitGroup(click.Group):
         standalone_mode: bool = True,
         **extra: Any,
     ) -> int:
+        from ._options import PENDING_NOTES
+
         shown = warnings.showwarning
         warnings.showwarning = _one_line_warning
+        PENDING_NOTES.clear()
         try:
             rv = super().main(
                 args, prog_name or "squealkit", complete_var, standalone_mode=False, **extra
             )
             code = rv if isinstance(rv, int) and not isinstance(rv, bool) else 0
+            for note in PENDING_NOTES:
+                click.echo(note, err=True)
         except click.UsageError as e:
             hint = f" (see '{e.ctx.command_path} --help')" if e.ctx is not None else ""
             click.echo(f"squealkit: error: {e.format_message()}{hint}", err=True)
@@ -83,6 +88,7 @@ class SquealkitGroup(click.Group):
             code = 130
         finally:
             warnings.showwarning = shown
+            PENDING_NOTES.clear()
         if standalone_mode:
             sys.exit(code)
         return code
