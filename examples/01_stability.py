@@ -5,14 +5,21 @@ Run:  python examples/01_stability.py [OUTPUT_DIR]
 
 import math
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from squealkit.io import save_dataset, save_figure
-from squealkit.models import get_preset, load_model
+from squealkit.models import get_preset, load_model, load_rig
 from squealkit.plotting.stability import fig2_plot, stability_map_plot
-from squealkit.stability import critical_friction_curve, runout_tolerance, stability_map, stability_summary
+from squealkit.stability import (
+    UnrealisticFrictionWarning,
+    critical_friction_curve,
+    runout_tolerance,
+    stability_map,
+    stability_summary,
+)
 
 out = Path(sys.argv[1] if len(sys.argv) > 1 else "examples-output")
 out.mkdir(parents=True, exist_ok=True)
@@ -32,9 +39,15 @@ save_figure(stability_map_plot(ds, critical=critical_friction_curve(model, ds.th
 tol = runout_tolerance(model, 0.3, wavelength=1e-3)
 print(f"at mu = 0.3 keep tan(theta) <= {tol.tan_theta_max:.4f}: q0 <= {tol.q0_max * 1e6:.1f} um at 1 mm wavelength")
 
-# your own rig, from a TOML file
-mine = load_model(Path(__file__).with_name("myrig.toml"))
-c = critical_friction_curve(mine, [0.0])
-print(f"myrig.toml: mu_crit {float(c.mu_critical[0]):.4f} at {float(c.frequency_hz[0]):.1f} Hz "
-      f"(theta = 0, pin bending from Timoshenko theory)")
+# your own rig, from a TOML file: the pin bending frequency is not given there, so it comes
+# from Timoshenko beam theory (every frequency's source is printed)
+path = Path(__file__).with_name("myrig.toml")
+mine, rig = load_model(path), load_rig(path)
+print(f"myrig.toml frequencies: {rig.describe()}")
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always", UnrealisticFrictionWarning)
+    c = critical_friction_curve(mine, [0.0])
+print(f"myrig.toml: mu_crit {float(c.mu_critical[0]):.4f} at {float(c.frequency_hz[0]):.1f} Hz (theta = 0)")
+for w in caught:
+    print(f"  warning: {w.message}")
 assert math.isfinite(float(c.mu_critical[0]))

@@ -108,3 +108,26 @@ def test_every_subcommand_help_has_an_example(run):
         assert r.exit_code == 0, cmd
         assert "Example" in r.output or "example" in r.output, cmd
         assert "squealkit " + cmd in r.output, cmd
+
+
+def test_rig_command_says_where_each_frequency_comes_from(run):
+    # issue 12: examples/myrig.toml leaves pin_bending_freq out -> Timoshenko, mu_crit 1.127 with a warning
+    from pathlib import Path
+
+    cfg = Path(__file__).parents[1] / "examples" / "myrig.toml"
+    r = run("rig", "--config", str(cfg), "--json")
+    assert r.exit_code == 0, r.output
+    out = json.loads(r.stdout)
+    assert out["frequencies"]["pin_bending"]["source"].startswith("Timoshenko")
+    assert out["frequencies"]["pin_axial"]["source"] == "given"
+    assert out["mu_crit"] == pytest.approx(1.1270, abs=1e-4)
+    assert "Mode coupling needs friction" in r.stderr
+    r = run("rig")
+    assert r.exit_code == 0 and "2561.0 Hz  (given)" in r.output
+    # every command on a rig file says it too, on stderr after its work (stdout's JSON stays clean)
+    r = run("critical", "--config", str(cfg), "--json")
+    assert r.exit_code == 0
+    assert json.loads(r.stdout)["mu_critical"] == pytest.approx(1.1270, abs=1e-4)
+    assert "rig frequencies: pin bending 2722.1 Hz (Timoshenko" in r.stderr
+    r = run("montecarlo", "--config", str(cfg))   # a user error stays one line
+    assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1

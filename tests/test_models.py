@@ -1,6 +1,7 @@
 """Models: the paper's matrices, parameters from the rig, presets and model files."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +17,7 @@ from squealkit.models import (
     contact_stiffness,
     get_preset,
     load_model,
+    load_rig,
     modal_stiffness,
     rod_axial_frequency,
     rod_mass,
@@ -66,7 +68,7 @@ def test_timoshenko_tends_to_euler_bernoulli_for_slender_beams():
 
 
 def test_rig_model_lands_near_paper_preset():
-    rig_model = PinOnDiscRig().to_model()
+    rig_model = PinOnDiscRig.paper().to_model()
     preset = get_preset("lv2013")
     for name, value in PAPER.items():
         assert getattr(rig_model, name) == pytest.approx(value, rel=3e-3), name
@@ -191,3 +193,67 @@ def test_bad_model_files(tmp_path, text, message):
 def test_missing_model_file():
     with pytest.raises(InputError, match="does not exist"):
         build_model(config="/definitely/not/here.toml")
+
+
+# -- rigs derived right (issue 12) --------------------------------------------------------------
+# Reference values: Timoshenko bending of the paper's pin (d 30 mm, L 45 mm, PA6) 2855.9 Hz and the
+# quarter-wave rod 9356.7 Hz (NOTES: Euler-Bernoulli 3491 Hz, rod 9357 Hz); the issue's mu_crit of
+# examples/myrig.toml with beam theory applied, 1.127, and of the all-theory rig, 1.57.
+
+
+def test_rig_table_without_pin_frequencies_uses_beam_theory(tmp_path):
+    f = tmp_path / "rig.toml"
+    f.write_text("[rig]\npin_diameter = 0.030\npin_length = 0.045\n")
+    m = load_model(f)
+    rig = PinOnDiscRig()
+    assert m.k1 == pytest.approx(modal_stiffness(rig.pin_mass(), 2855.9), rel=1e-4)
+    assert m.k2 == pytest.approx(modal_stiffness(rig.pin_mass(), 9356.7), rel=1e-4)
+    src = rig.frequency_sources()
+    assert src["pin_bending"]["source"].startswith("Timoshenko")
+    assert src["pin_axial"]["source"].startswith("quarter-wave")
+    assert src["disc"]["source"] == "given"
+    assert PinOnDiscRig.paper().frequency_sources()["pin_bending"] == {"frequency_hz": 2561.0, "source": "given"}
+
+
+@pytest.mark.parametrize(("value", "freq", "source"), [
+    ('"timoshenko"', 2855.9, "Timoshenko"), ('"euler_bernoulli"', 3490.6, "Euler-Bernoulli"),
+    ("2600.0", 2600.0, "given"),
+])
+def test_rig_table_names_the_bending_theory(tmp_path, value, freq, source):
+    f = tmp_path / "rig.toml"
+    f.write_text(f"[rig]\npin_bending_freq = {value}\npin_axial_freq = \"rod\"\n")
+    rig = load_rig(f)
+    assert rig.bending_freq() == pytest.approx(freq, abs=0.1)
+    assert rig.frequency_sources()["pin_bending"]["source"].startswith(source)
+    assert "Hz (" in rig.describe()
+
+
+def test_rig_rejects_an_unknown_theory(tmp_path):
+    f = tmp_path / "rig.toml"
+    f.write_text('[rig]\npin_bending_freq = "rayleigh"\n')
+    with pytest.raises(ValueError, match="pin_bending_freq='rayleigh' must be a frequency"):
+        load_model(f)
+
+
+def test_example_rig_needs_unrealistic_friction_and_says_so():
+    from squealkit.stability import UnrealisticFrictionWarning, critical_friction
+
+    mine = load_model(Path(__file__).parents[1] / "examples" / "myrig.toml")
+    with pytest.warns(UnrealisticFrictionWarning, match="mu_crit = 1.127"):
+        assert critical_friction(mine).mu_critical == pytest.approx(1.1270, abs=1e-4)
+    with pytest.warns(UnrealisticFrictionWarning, match="mu_crit = 1.57"):
+        critical_friction(PinOnDiscRig().to_model().undamped())
+
+
+def test_rig_modal_mass_and_preload_options():
+    paper = PinOnDiscRig.paper()
+    assert paper.to_model().m1 == pytest.approx(paper.pin_mass())  # the paper's choice: the whole pin
+    tip = PinOnDiscRig.paper(pin_mass_factor=0.25).to_model()
+    assert tip.m1 == pytest.approx(0.25 * paper.pin_mass())
+    assert tip.k1 == pytest.approx(tip.m1 * (2 * math.pi * 2561.0) ** 2)  # frequencies kept
+    # the paper's P = 10 N on the pin gives ~3 N of contact force (NOTES); preload="contact_force" gives 10 N
+    assert float(paper.to_model().static_contact_force(0.0)) == pytest.approx(3.15, abs=0.01)
+    force = PinOnDiscRig.paper(preload="contact_force").to_model().static_contact_force(0.0)
+    assert float(force) == pytest.approx(10.0)
+    with pytest.raises(ValueError, match="preload"):
+        PinOnDiscRig(preload="bolted")

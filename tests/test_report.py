@@ -1,6 +1,7 @@
 """The main job: reproduce the paper as a report, checked in a real headless browser."""
 
 import json
+import math
 import os
 import re
 import shutil
@@ -49,6 +50,9 @@ def test_reproduce_numbers_match_the_paper(paper):
     assert 2387.0 <= n["critical"]["onset_mode_frequency_hz"] <= 2438.0
     # §4 Fig. 4: growth on rising SRO, decay on falling SRO
     assert n["transient"]["rise_rate"] > 0 > n["transient"]["fall_rate"]
+    # issue 12: the linear law's normal force in Fig. 4 is tensile a good part of the time, and the report says so
+    assert n["transient"]["fig4_tensile_fraction"] > 0.2
+    assert "tensile" in " ".join(next(s for s in paper.sections if s.key == "transient").paragraphs)
     # §5 (synthetic): squeal at the model's onset frequency, close to the measured 2388 Hz, on rising run-out
     assert n["measurement"]["squeal_frequency_hz"] == pytest.approx(2388.0, rel=0.01)
     assert n["measurement"]["rising_fraction"] == pytest.approx(n["measurement"]["truth_rising_fraction"], abs=0.05)
@@ -57,8 +61,25 @@ def test_reproduce_numbers_match_the_paper(paper):
     assert "SYNTHETIC" in html
     verdicts = [c.agrees for s in paper.sections for c in s.comparisons]
     assert verdicts and all(verdicts)
-    assert [s.key for s in paper.sections] == ["parameters", "fig2", "critical", "transient", "measurement",
+    assert [s.key for s in paper.sections] == ["parameters", "fig2", "critical", "transient", "beyond", "measurement",
                                                "conclusions"]
+
+
+def test_beyond_the_paper_puts_both_kinematics_side_by_side(paper):
+    # issue 12 (checked by LAPACK in tests/test_kinematics.py): theta = +8 deg: 0.305 (paper) vs stable
+    # (consistent); -8 deg: 0.585 (paper) vs 0.266 (consistent); frictionless flutter only in the paper's
+    b = paper.numbers()["beyond"]
+    assert b["paper_mu_crit_theta_max"] == pytest.approx(0.30492, abs=1e-4)
+    assert math.isnan(b["consistent_mu_crit_theta_max"])
+    assert b["paper_mu_crit_theta_min"] == pytest.approx(0.58474, abs=1e-4)
+    assert b["consistent_mu_crit_theta_min"] == pytest.approx(0.26600, abs=1e-4)
+    assert b["paper_mu_e_spread"] < 0.01 < b["consistent_mu_e_spread"]
+    assert (b["paper_frictionless_stable"], b["consistent_frictionless_stable"]) == (0.0, 1.0)
+    assert b["consistent_q0_max"] < b["paper_q0_max"]
+    section = next(s for s in paper.sections if s.key == "beyond")
+    text = " ".join(section.paragraphs)
+    assert f"{b['paper_q0_max'] * 1e6:.2f} um" in text and "0.2660" in text  # prose from the numbers
+    assert "Beyond the paper" in paper.report.read_text()
 
 
 @pytest.mark.skipif(CHROMIUM is None and not os.environ.get("CI"), reason="Debian's chromium is not installed")

@@ -68,15 +68,18 @@ def test_slope_and_coefficient_of_the_law():
     np.testing.assert_allclose(law.mu(0.3, 0.0), 0.55)  # static value at rest
 
 
-def test_linearised_friction_is_the_derivative_of_the_transient_force():
+@pytest.mark.parametrize("kinematics", ["paper", "consistent"])
+def test_linearised_friction_is_the_derivative_of_the_transient_force(kinematics):
     # The transient kernel's force (transient/_kernels.py, _rhs) differentiated numerically
     # at the static equilibrium of steady sliding: d acc / d x' = -M^-1 (C + dmu/dv N0 D) and
-    # d acc / d x = -M^-1 K(mu(V), tan_theta), with tan_theta != 0 to test the slope terms.
-    model = get_preset("lv2013")
+    # d acc / d x = -M^-1 K(mu(V), tan_theta), with tan_theta != 0 to test the slope terms
+    # (with consistent kinematics also the kernel's gap b_t.x against slope_parts).
+    model = get_preset("lv2013").replace(kinematics=kinematics)
     law, mu, V, t = Stribeck(0.6, 1e-3), 0.3, 1.5e-3, 0.07
     pc = point_contact(model)
     Minv = np.linalg.inv(model.mass_matrix())
     K0, Kn, Kf = model.stiffness_parts()
+    Knx, Kfx = model.slope_parts()
     F0, fn, ff = model.load_parts()
     s = float(model.sliding_direction)
     opts = Contact(mu_static=law.mu_static, v_stribeck=law.v_stribeck).options()
@@ -85,7 +88,8 @@ def test_linearised_friction_is_the_derivative_of_the_transient_force():
     def acc(x, xd):
         out, work = np.empty(3), np.empty(3)
         transient_kernels._rhs(x, xd, 0.0, t, mu, V, Minv @ pc.b, Minv @ pc.f, Minv @ model.damping_matrix(),
-                               Minv @ K0, Minv @ Kn, Minv @ Kf, Minv @ F0, Minv @ fn, Minv @ ff, pc.b, pc.f,
+                               Minv @ K0, Minv @ Kn, Minv @ Kf, Minv @ Knx, Minv @ Kfx, float(model.slope_coupled),
+                               Minv @ F0, Minv @ fn, Minv @ ff, pc.b, pc.f,
                                pc.fhat, pc.kc, s, opts, work, out)
         return out
 

@@ -90,18 +90,27 @@ def scheduler_option(f: F) -> F:
 #: Subcommands that work on FE models (model = "fe").
 FE_COMMANDS = ("stability", "critical", "modes", "tolerance")
 
+#: One-line notes for stderr, printed by the CLI's main only after the command succeeded (so a
+#: user error stays one line).
+PENDING_NOTES: list[str] = []
+
 
 def build_model_from_options(preset: str | None, config: Path | None, sets: tuple[str, ...], *,
                              allow_fe: bool = False):
     """The model named by --preset/--config with the --set overrides applied.
 
     An FE model (``model = "fe"``) is refused unless ``allow_fe``: only :data:`FE_COMMANDS` take one.
+    With a model file that has a [rig] table, a note (on stderr, after the command succeeded)
+    says where each frequency the model is derived from came from: given, or which beam theory.
     """
-    from ..models import FEModel, build_model, parse_assignments
+    from ..models import FEModel, build_model, load_rig, parse_assignments
 
     model = build_model(preset, config, parse_assignments(sets))
     if isinstance(model, FEModel) and not allow_fe:
         raise InputError(f"FE models (model = \"fe\") work with {', '.join(FE_COMMANDS)} only.")
+    rig = load_rig(config) if config is not None and not isinstance(model, FEModel) else None
+    if rig is not None:
+        PENDING_NOTES.append(f"squealkit: rig frequencies: {rig.describe()}")
     return model
 
 

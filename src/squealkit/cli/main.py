@@ -32,6 +32,8 @@ COMMANDS: dict[str, str] = {
     "reproduce": "squealkit.cli.reproduce:reproduce",
     "tolerance": "squealkit.cli.tolerance:tolerance",
     "simulate": "squealkit.cli.simulate:simulate",
+    "floquet": "squealkit.cli.floquet:floquet",
+    "rig": "squealkit.cli.rig:rig",
     "analyze": "squealkit.cli.analyze:analyze",
     "montecarlo": "squealkit.cli.montecarlo:montecarlo",
     "synth": "squealkit.cli.synth:synth",
@@ -93,12 +95,15 @@ class SquealkitGroup(click.Group):
         standalone_mode: bool = True,
         **extra: Any,
     ) -> int:
+        from ._options import PENDING_NOTES
+
         shown = warnings.showwarning
         warnings.showwarning = _one_line_warning
         handlers = {}
         if standalone_mode:  # the real command line, not an in-process call
             for sig in (signal.SIGINT, signal.SIGTERM):
                 handlers[sig] = signal.signal(sig, _on_signal)
+        PENDING_NOTES.clear()
         try:
             rv = super().main(
                 args, prog_name or "squealkit", complete_var, standalone_mode=False, **extra
@@ -110,6 +115,8 @@ class SquealkitGroup(click.Group):
                 raise
             except OSError as e:
                 raise OSError(e.errno, f"cannot write to standard output ({e.strerror})") from e
+            for note in PENDING_NOTES:
+                click.echo(note, err=True)
         except click.UsageError as e:
             hint = f" (see '{e.ctx.command_path} --help')" if e.ctx is not None else ""
             click.echo(f"squealkit: error: {e.format_message()}{hint}", err=True)
@@ -138,6 +145,7 @@ class SquealkitGroup(click.Group):
             warnings.showwarning = shown
             for sig, h in handlers.items():
                 signal.signal(sig, h)
+            PENDING_NOTES.clear()
         if standalone_mode:
             sys.exit(code)
         return code

@@ -44,10 +44,14 @@ from ._options import (
 @friction_options
 @click.option("--duration", type=float, default=0.15, show_default=True, help="Simulated time [s].")
 @click.option("--fs", type=float, default=40_000.0, show_default=True, help="Output sample rate [Hz].")
+@click.option("--method", type=click.Choice(["dopri5", "rk4"]), default="dopri5", show_default=True,
+              help="dopri5: Dormand-Prince 5(4) with error control, located contact and stick/slip events; "
+              "rk4: fixed-step classical RK4.")
+@click.option("--rtol", type=float, default=1e-8, show_default=True, help="Relative tolerance of dopri5.")
 @scheduler_option
 @output_options()
 def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, sro_file, seed, perturbation, contact,
-             stribeck_spec, speed, duration, fs, scheduler, as_json, out_path, plot_path) -> None:
+             stribeck_spec, speed, duration, fs, method, rtol, scheduler, as_json, out_path, plot_path) -> None:
     """Simulate the time response of a model driven by disc surface run-out.
 
     \b
@@ -64,7 +68,9 @@ def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, 
 
     \b
     Batch --json keys: mu, status, max_growth_rate [1/s] (largest frozen-time
-    sigma(t)), peak_acceleration_m_s2 (per DOF), lists with one entry per run.
+    sigma(t)), peak_acceleration_m_s2 (per DOF), tensile_fraction (share of time
+    the linear contact pulled), lists with one entry per run. A single run's --json
+    also has method, steps, events, tensile_fraction and min_normal_force [N].
     """
     import numpy as np
 
@@ -99,13 +105,13 @@ def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, 
     if mu_all.size > 1 or scheduler is not None:
         _batch(model, mu_all, profile, speed=speed, duration=duration, fs=fs, contact=contact,
                perturbation=perturbation, rng=rng, scheduler=scheduler, as_json=as_json, out_path=out_path,
-               plot_path=plot_path)
+               plot_path=plot_path, method=method, rtol=rtol)
         return
     mu = float(mu_all[0])
     with progress_callback("simulating", enabled=not as_json and duration * 1e6 > 2e5) as progress:
         ds = run_simulation(
             model, mu=mu, profile=profile, speed=speed, duration=duration, fs=fs, contact=contact,
-            perturbation=perturbation, rng=rng, progress=progress,
+            perturbation=perturbation, rng=rng, progress=progress, method=method, rtol=rtol,
         )
     if out_path is not None:
         from ..io import save_dataset
@@ -121,7 +127,12 @@ def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, 
     if as_json:
         emit_json(summary)
         return
-    click.echo(f"status: {summary['status']} (t_stop = {summary['t_stop']:g} s, dt = {summary['dt']:.3g} s)")
+    steps = f", {summary['steps']} steps, {summary['events']} events" if summary.get("steps") is not None else ""
+    click.echo(f"status: {summary['status']} (t_stop = {summary['t_stop']:g} s, {summary['method']}, "
+               f"largest step {summary['dt']:.3g} s{steps})")
+    if summary.get("tensile_fraction"):
+        click.echo(f"  the normal force was tensile {100 * summary['tensile_fraction']:.1f} % of the time ("
+                   f"down to {summary['min_normal_force']:.4g} N): rerun with --contact nonlinear")
     for d, p in summary["peak"].items():  # type: ignore[union-attr]
         click.echo(f"  {d:<4} peak |a| = {p['acceleration_m_s2']:.4g} m/s^2, peak change = "
                    f"{p['displacement_change_m']:.4g} m")
@@ -157,7 +168,8 @@ def _batch(model, mu, profile, *, scheduler, as_json, out_path, plot_path, **kw)
 
         save_dataset(ds, out_path)
     summary = {"mu": mu.tolist(), "status": status, "max_growth_rate": r["max_growth_rate"].values.tolist(),
-               "peak_acceleration_m_s2": {d: r[d].values.tolist() for d in dofs}}
+               "peak_acceleration_m_s2": {d: r[d].values.tolist() for d in dofs},
+               "tensile_fraction": [float(x) for x in ds["tensile_fraction"].values]}
     if as_json:
         emit_json(summary)
         return

@@ -13,6 +13,14 @@ the normal contact force and a part carried by the friction force (paper, eq. 4)
 ``s`` is the sliding direction (+1 or -1). ``mu + tan_theta`` is the paper's equivalent
 friction coefficient mu_e (eqs. 5-6). Matrices are computed for whole grids at once:
 ``mu`` and ``tan_theta`` broadcast, and ``stiffness_matrix`` returns shape ``(..., n, n)``.
+
+Consistent contact kinematics (option ``kinematics = "consistent"``, beyond the paper) adds
+the parts ``(Knx, Kfx)`` of :meth:`FrictionModel.slope_parts` that grow with the slope::
+
+    K = K0 + g (Kn + s t Knx) + e (Kf + s t Kfx),   g = 1 - mu t, e = s (mu + t), t = tan_theta
+
+so at a fixed slope the model still has the three-part form, with the contact parts
+:meth:`FrictionModel.contact_parts` ``(Kn(t), Kf(t))``. The load is unchanged.
 """
 
 from __future__ import annotations
@@ -36,7 +44,7 @@ from .._validation import (
 )
 from .friction import Stribeck, require_point_contact
 
-__all__ = ["FrictionModel", "SystemMatrices", "param"]
+__all__ = ["KINEMATICS", "FrictionModel", "SystemMatrices", "param"]
 
 #: Kinds of scalar parameter and the validator that checks each.
 _KINDS = {
@@ -47,12 +55,33 @@ _KINDS = {
     "sign": validate_sign,
 }
 
+#: Contact kinematics a model may be built with (see :meth:`FrictionModel.slope_parts`).
+KINEMATICS = ("paper", "consistent")
 
-def param(default: Any, *, unit: str, doc: str, kind: str = "positive") -> Any:
-    """Declare a model parameter: a dataclass field with its unit, meaning and check."""
-    if kind not in _KINDS and kind != "array":
+
+def validate_choice(name: str, value: object, choices: tuple[str, ...]) -> str:
+    """Return ``value`` if it is one of ``choices`` (strings); anything else is rejected."""
+    if not isinstance(value, str) or value not in choices:
+        accepted = ", ".join(repr(c) for c in choices)
+        raise InputError(f"Parameter {name}={value!r} must be one of {accepted}.")
+    return value
+
+
+def param(default: Any, *, unit: str, doc: str, kind: str = "positive",
+          choices: tuple[str, ...] = ()) -> Any:
+    """Declare a model parameter: a dataclass field with its unit, meaning and check.
+
+    ``kind="choice"`` declares an option, one of the strings ``choices`` (e.g. the contact
+    kinematics); it has no unit, no derivative and is not sampled.
+    """
+    if kind not in _KINDS and kind not in ("array", "choice"):
         raise ValueError(f"unknown parameter kind {kind!r}")
-    return field(default=default, metadata={"unit": unit, "doc": doc, "kind": kind})
+    if (kind == "choice") != bool(choices) or (choices and default not in choices):
+        raise ValueError(f"parameter kind {kind!r} with choices {choices!r} and default {default!r}")
+    meta = {"unit": unit, "doc": doc, "kind": kind}
+    if choices:
+        meta["choices"] = tuple(choices)
+    return field(default=default, metadata=meta)
 
 
 @dataclass(frozen=True)
@@ -93,6 +122,8 @@ class FrictionModel(ABC):
             if kind in _KINDS:
                 value = _KINDS[kind](f.name, getattr(self, f.name))
                 object.__setattr__(self, f.name, value)
+            elif kind == "choice":
+                validate_choice(f.name, getattr(self, f.name), f.metadata["choices"])
         self._check_mass_matrix()
 
     def _check_mass_matrix(self) -> None:
@@ -130,6 +161,85 @@ class FrictionModel(ABC):
         """+1 for the equations as printed, -1 for the disc sliding the other way."""
         return 1
 
+    @property
+    def kinematics_option(self) -> str:
+        """``"paper"`` (eq. 2 as printed) or ``"consistent"``; see :meth:`slope_parts`."""
+        return str(getattr(self, "kinematics", "paper"))
+
+    def slope_parts(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        r"""Parts ``(Knx, Kfx)`` [N/m] of K that grow with the slope: zero for the paper's kinematics.
+
+        The paper's gap (eq. 2) is ``delta = b.x - q``: the run-out is taken at the rest
+        position of the contact. But the contact point moves with the pin along the inclined
+        surface, ``q(v t + x1) ~ q(v t) + tan(theta) x1``; with consistent kinematics the gap
+        is ``delta = b_t.x - q`` with ``b_t = b + s t fhat`` (``fhat`` the unit friction
+        direction, -x1 for the pin-on-disc, ``t = tan(theta)``, ``s`` the sliding direction).
+
+        *Derivation.* The normal force of eq. (2) is the gradient of the contact potential
+        ``V = kc delta^2 / 2``: its components ``-N sin(theta)`` on x1, ``N cos(theta)`` on y1
+        and ``-N cos(theta)`` on y2 with ``N = -kc delta / cos(theta)`` are exactly
+        ``-dV/dx = -kc delta b_t`` (the paper keeps them and drops only the x1 term of the gap).
+        Coulomb friction ``F_f = mu N`` acts along the surface's tangent, on the DOFs
+        ``-kc delta s mu (f - s t b)`` (eq. 1). The contact force is then
+        ``-kc delta u`` with ``u = g b + e f`` (``g = 1 - mu t``, ``e = s (mu + t)``), and
+
+        .. math:: K_c = k_c\, u\, b_t^T = g K_n + e K_f + s t (g K_{nx} + e K_{fx}),
+                  \quad K_{nx} = k_c\, b\, \hat f^T,\ K_{fx} = k_c\, f\, \hat f^T.
+
+        At ``mu = 0``, ``u = b_t`` and ``K_c = kc b_t b_t^T`` is symmetric: the frictionless
+        contact is conservative for any slope (the paper's ``kc u b^T`` is not: at
+        ``tan(theta) = 0.5`` and ``mu = 0`` it flutters). With ``u = b_t + s mu w``,
+        ``w = f - s t b``, the skew part is ``s mu kc (w b_t^T - b_t w^T) / 2``; for the
+        pin-on-disc its Frobenius norm is ``mu kc (1 + t^2)``: friction alone, grown by the
+        slope only through ``1 + tan^2(theta)``. The load ``q kc u`` is the paper's.
+
+        Returns
+        -------
+        Knx, Kfx : ndarray, shape (n, n)
+
+        Examples
+        --------
+        >>> from squealkit.models import PinOnDisc3DOF
+        >>> m = PinOnDisc3DOF(kinematics="consistent")
+        >>> K = m.stiffness_matrix(0.0, 0.5)
+        >>> bool(np.allclose(K, K.T))
+        True
+        """
+        n = self.n_dof
+        if self.kinematics_option == "paper":
+            return np.zeros((n, n)), np.zeros((n, n))
+        pc = require_point_contact(self)
+        return pc.kc * np.outer(pc.b, pc.fhat), pc.kc * np.outer(pc.f, pc.fhat)
+
+    @property
+    def slope_coupled(self) -> bool:
+        """True when the contact parts depend on the slope (consistent kinematics)."""
+        Knx, Kfx = self.slope_parts()
+        return bool(np.any(Knx) or np.any(Kfx))
+
+    def contact_parts(self, tan_theta: ArrayLike = 0.0) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Contact parts ``(Kn(t), Kf(t)) = (Kn + s t Knx, Kf + s t Kfx)`` [N/m] at slope(s) t.
+
+        ``K = K0 + (1 - mu t) Kn(t) + s (mu + t) Kf(t)``; the paper's kinematics give the
+        constant ``Kn``, ``Kf``. Shape ``tan_theta.shape + (n, n)``.
+        """
+        t = np.asarray(tan_theta, float)[..., None, None]
+        _, Kn, Kf = (np.asarray(a, float) for a in self.stiffness_parts())
+        Knx, Kfx = self.slope_parts()
+        st = self.sliding_direction * t
+        return Kn + st * Knx, Kf + st * Kfx
+
+    def contact_normal(self, tan_theta: ArrayLike = 0.0) -> NDArray[np.float64]:
+        """The gap's direction ``b_t`` [1]: ``delta = b_t . x - q`` (``b`` for the paper's kinematics).
+
+        Shape ``tan_theta.shape + (n,)``. Raises InputError without a single point contact.
+        """
+        pc = require_point_contact(self)
+        t = np.asarray(tan_theta, float)[..., None]
+        if self.kinematics_option == "paper":
+            return pc.b + 0.0 * t
+        return pc.b + self.sliding_direction * t * pc.fhat
+
     # -- derived -----------------------------------------------------------------------
     @property
     def n_dof(self) -> int:
@@ -151,7 +261,8 @@ class FrictionModel(ABC):
         ndarray, shape ``broadcast(mu, tan_theta).shape + (n, n)``
         """
         mu_a, t_a = np.broadcast_arrays(np.asarray(mu, float), np.asarray(tan_theta, float))
-        K0, Kn, Kf = self.stiffness_parts()
+        K0 = np.asarray(self.stiffness_parts()[0], float)
+        Kn, Kf = self.contact_parts(t_a)
         g = (1.0 - mu_a * t_a)[..., None, None]
         e = (self.sliding_direction * (mu_a + t_a))[..., None, None]
         return K0 + g * Kn + e * Kf
@@ -209,7 +320,7 @@ class FrictionModel(ABC):
         K = self.stiffness_matrix(mu_a, t_a)
         F = self.load_vector(mu_a, t_a, q_a)
         x = np.linalg.solve(K, F[..., None])[..., 0]
-        return -pc.kc * (x @ pc.b - q_a)
+        return -pc.kc * (np.sum(x * self.contact_normal(t_a), axis=-1) - q_a)
 
     def friction_damping_matrix(self, tan_theta: ArrayLike = 0.0) -> NDArray[np.float64]:
         """Direction matrix D [1] of the friction force's velocity dependence.

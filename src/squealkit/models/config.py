@@ -9,6 +9,7 @@ A model file (all sections optional; SI units, angles in rad or as ``*_deg`` in 
     mu_note = "friction is not a model parameter; it is swept"
     alpha_deg = 2.0
     c1 = 0.0
+    kinematics = "consistent"  # or "paper" (the default): see PinOnDisc3DOF
 
     [rig]                      # or derive the pin-on-disc model from the rig (paper §5.1)
     pin_diameter = 0.030
@@ -208,16 +209,33 @@ def load_rig(path: str | Path) -> PinOnDiscRig | None:
         raise InputError(f"{Path(path).name}: {e}") from e
 
 
-def parse_assignments(items: Iterable[str]) -> dict[str, float]:
-    """Parse ``NAME=VALUE`` strings (from ``--set``) into a dict of floats."""
-    out: dict[str, float] = {}
+def parse_assignments(items: Iterable[str]) -> dict[str, float | str]:
+    """Parse ``NAME=VALUE`` strings (from ``--set``) into a dict of floats.
+
+    A value that is not a number stays a string, for the model's options (``kinematics=consistent``);
+    the model's own check then says whether the parameter takes it.
+    """
+    out: dict[str, float | str] = {}
     for item in items:
         name, sep, value = item.partition("=")
         name = name.strip()
         if not sep or not name:
             raise InputError(f"--set {item!r} is not NAME=VALUE.")
-        out[name] = validate_finite(name, value.strip())
+        try:
+            out[name] = validate_finite(name, value.strip())
+        except InputError:
+            if _is_number(value.strip()):
+                raise
+            out[name] = value.strip()
     return out
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def build_model(

@@ -13,7 +13,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from ._base import FrictionModel, param
+from ._base import KINEMATICS, FrictionModel, param
 
 __all__ = ["PinOnDisc3DOF"]
 
@@ -81,6 +81,8 @@ class PinOnDisc3DOF(FrictionModel):
     alpha: float = param(math.radians(2.0), unit="rad", doc="pin incline (paper §3: 2 deg)", kind="angle")
     P: float = param(10.0, unit="N", doc="axial load on the pin (paper §4)", kind="nonnegative")
     sliding: int = param(-1, unit="1", doc="sliding direction, +1 as printed, -1 reversed", kind="sign")
+    kinematics: str = param("paper", unit="", kind="choice", choices=KINEMATICS,
+                            doc="contact kinematics: 'paper' (eq. 2) or 'consistent' (gap with tan(theta) x1)")
 
     @property
     def sliding_direction(self) -> int:

@@ -22,6 +22,7 @@ from .._validation import InputError, validate_positive
 from .pin_on_disc import PinOnDisc3DOF
 
 __all__ = [
+    "CANTILEVER_TIP_MASS_FACTOR",
     "PinOnDiscRig",
     "cantilever_bending_frequency",
     "contact_stiffness",
@@ -153,20 +154,47 @@ def cantilever_bending_frequency(
     raise InputError("No Timoshenko bending mode found below the Euler-Bernoulli frequency.")
 
 
+#: What a pin frequency left out (or named) in a rig comes from.
+_BENDING_THEORIES = {"timoshenko": "Timoshenko beam theory (shear, rotary inertia)",
+                     "euler_bernoulli": "Euler-Bernoulli beam theory"}
+_AXIAL_THEORIES = {"rod": "quarter-wave clamped-free rod theory"}
+#: The paper's FEA frequencies of the pin (Table 1) [Hz].
+PAPER_PIN_FREQ_HZ = {"bending": 2561.0, "axial": 8653.0}
+#: Tip modal mass of a clamped-free beam's first bending mode, as a share of its mass (mode shape
+#: scaled to 1 at the tip); the paper uses the whole mass (factor 1).
+CANTILEVER_TIP_MASS_FACTOR = 0.25
+
+
 @dataclass(frozen=True)
 class PinOnDiscRig:
     """A pin-on-disc rig described by what can be measured on it (paper §5.1).
 
-    Frequencies left as ``None`` come from beam theory (``pin_bending_theory``). The
-    defaults are the paper's rig: PA6 pin d = 30 mm, L = 45 mm, E = 2.95 GPa,
-    rho = 1040 kg/m^3, nu = 0.35; disc 4.35 kg; FEA frequencies 2561 Hz (pin bending),
-    8653 Hz (pin tensile), 2346 Hz (disc, 3rd nodal diameter), Table 1.
+    The paper's own rig, with its FEA pin frequencies, is :meth:`paper`. A pin frequency not
+    given (``None``, or a theory's name) comes from beam theory: ``pin_bending_freq`` from
+    Timoshenko theory (``"timoshenko"``, the default, or ``"euler_bernoulli"``),
+    ``pin_axial_freq`` from the quarter-wave rod (``"rod"``). :meth:`frequency_sources`
+    says where each frequency came from.
+
+    The paper's derivation choices are the defaults, and each can be changed:
+
+    - ``pin_mass_factor`` (default 1): the pin's modal mass as a share of its whole mass,
+      ``m1 = factor rho A L`` and ``k = m1 (2 pi f)^2``. The paper takes the whole mass; a
+      cantilever's first bending mode has a tip modal mass of about a quarter of it
+      (:data:`CANTILEVER_TIP_MASS_FACTOR`). Frequencies are kept; the pin/disc mass ratio and
+      the contact stiffness relative to k1, k2 change.
+    - ``preload`` (default ``"pin_load"``): ``P`` is the load on the pin, as in the paper
+      (it acts on m1 while k2 is grounded, so the static contact force is only about 3 N of
+      the paper's 10 N); ``"contact_force"`` makes ``P`` the static contact force.
+    - ``kc = E A / L``, the pin's own axial stiffness (the paper's choice; k2 models the
+      same pin's axial mode, so the pin's axial compliance is counted twice).
 
     Examples
     --------
-    >>> rig = PinOnDiscRig()
+    >>> rig = PinOnDiscRig.paper()
     >>> round(rig.to_model().kc / 1e7, 3)   # paper §3: kc = 4.632e7 N/m
     4.634
+    >>> round(PinOnDiscRig().bending_freq(), 1)   # the same pin from Timoshenko theory
+    2855.9
     """
 
     pin_diameter: float = 0.030
@@ -176,8 +204,8 @@ class PinOnDiscRig:
     pin_poisson: float = 0.35
     disc_mass: float = 4.35
     disc_freq: float = 2346.0
-    pin_bending_freq: float | None = 2561.0
-    pin_axial_freq: float | None = 8653.0
+    pin_bending_freq: float | str | None = None
+    pin_axial_freq: float | str | None = None
     pin_bending_theory: Literal["euler_bernoulli", "timoshenko"] = "timoshenko"
     alpha: float = math.radians(2.0)
     P: float = 10.0
@@ -185,41 +213,91 @@ class PinOnDiscRig:
     c2: float = 220.0
     c3: float = 220.0
     sliding: int = -1
+    pin_mass_factor: float = 1.0
+    preload: Literal["pin_load", "contact_force"] = "pin_load"
     _derived: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        skip = ("pin_bending_theory", "sliding", "alpha", "pin_poisson", "preload", "pin_bending_freq",
+                "pin_axial_freq")
         for f in fields(self):
-            if f.name.startswith("_") or f.name in ("pin_bending_theory", "sliding", "alpha", "pin_poisson"):
-                continue
-            v = getattr(self, f.name)
-            if v is None:
+            if f.name.startswith("_") or f.name in skip:
                 continue
             allow_zero = f.name in ("P", "c1", "c2", "c3")
-            validate_positive(f.name, v, allow_zero=allow_zero)
+            validate_positive(f.name, getattr(self, f.name), allow_zero=allow_zero)
+        for name, theories in (("pin_bending_freq", _BENDING_THEORIES), ("pin_axial_freq", _AXIAL_THEORIES)):
+            v = getattr(self, name)
+            if isinstance(v, str):
+                if v not in theories:
+                    accepted = ", ".join(repr(t) for t in theories)
+                    raise InputError(f"Parameter {name}={v!r} must be a frequency [Hz], omitted, or one of {accepted}.")
+            elif v is not None:
+                validate_positive(name, v)
+        if self.pin_bending_theory not in _BENDING_THEORIES:
+            raise InputError(f"Parameter pin_bending_theory={self.pin_bending_theory!r} must be 'timoshenko' or "
+                             "'euler_bernoulli'.")
+        if not self.pin_mass_factor <= 1.0:
+            raise InputError(f"Parameter pin_mass_factor={self.pin_mass_factor!r} must lie in (0, 1].")
+        if self.preload not in ("pin_load", "contact_force"):
+            raise InputError(f"Parameter preload={self.preload!r} must be 'pin_load' or 'contact_force'.")
+
+    @classmethod
+    def paper(cls, **changes) -> PinOnDiscRig:
+        """The paper's rig: the defaults with the FEA pin frequencies of Table 1 (2561 Hz, 8653 Hz)."""
+        kw = {"pin_bending_freq": PAPER_PIN_FREQ_HZ["bending"], "pin_axial_freq": PAPER_PIN_FREQ_HZ["axial"]}
+        return cls(**{**kw, **changes})
 
     def pin_mass(self) -> float:
-        """Pin mass [kg] from geometry and density."""
+        """Pin mass [kg] from geometry and density (the whole rod)."""
         return rod_mass(self.pin_diameter, self.pin_length, self.pin_density)
+
+    def _bending_theory(self) -> str | None:
+        v = self.pin_bending_freq
+        return v if isinstance(v, str) else (self.pin_bending_theory if v is None else None)
 
     def bending_freq(self) -> float:
         """Pin bending frequency [Hz]: the given one, else beam theory."""
-        if self.pin_bending_freq is not None:
-            return float(self.pin_bending_freq)
+        theory = self._bending_theory()
+        if theory is None:
+            return float(self.pin_bending_freq)  # type: ignore[arg-type]
         return cantilever_bending_frequency(
             self.pin_diameter, self.pin_length, self.pin_youngs_modulus, self.pin_density,
-            poisson=self.pin_poisson, theory=self.pin_bending_theory,
+            poisson=self.pin_poisson, theory=theory,  # type: ignore[arg-type]
         )
 
     def axial_freq(self) -> float:
         """Pin axial (tensile) frequency [Hz]: the given one, else the quarter-wave rod."""
-        if self.pin_axial_freq is not None:
-            return float(self.pin_axial_freq)
-        return rod_axial_frequency(self.pin_length, self.pin_youngs_modulus, self.pin_density)
+        if self.pin_axial_freq is None or isinstance(self.pin_axial_freq, str):
+            return rod_axial_frequency(self.pin_length, self.pin_youngs_modulus, self.pin_density)
+        return float(self.pin_axial_freq)
+
+    def frequency_sources(self) -> dict[str, dict[str, float | str]]:
+        """Each modal frequency [Hz] the model is built from, and where it came from.
+
+        Examples
+        --------
+        >>> PinOnDiscRig(pin_axial_freq=8653.0).frequency_sources()["pin_bending"]["source"]
+        'Timoshenko beam theory (shear, rotary inertia)'
+        """
+        theory = self._bending_theory()
+        axial_given = self.pin_axial_freq is not None and not isinstance(self.pin_axial_freq, str)
+        return {
+            "pin_bending": {"frequency_hz": self.bending_freq(),
+                            "source": "given" if theory is None else _BENDING_THEORIES[theory]},
+            "pin_axial": {"frequency_hz": self.axial_freq(),
+                          "source": "given" if axial_given else _AXIAL_THEORIES["rod"]},
+            "disc": {"frequency_hz": float(self.disc_freq), "source": "given"},
+        }
+
+    def describe(self) -> str:
+        """One line: each frequency and its source, e.g. for a CLI note or a report."""
+        return "; ".join(f"{name.replace('_', ' ')} {v['frequency_hz']:.1f} Hz ({v['source']})"
+                         for name, v in self.frequency_sources().items())
 
     def to_model(self) -> PinOnDisc3DOF:
         """The 3-DOF model (paper eq. 4) with every stiffness derived from this rig."""
-        m1 = self.pin_mass()
-        return PinOnDisc3DOF(
+        m1 = self.pin_mass_factor * self.pin_mass()
+        model = PinOnDisc3DOF(
             m1=m1,
             m2=self.disc_mass,
             k1=modal_stiffness(m1, self.bending_freq()),
@@ -228,3 +306,8 @@ class PinOnDiscRig:
             kc=contact_stiffness(self.pin_diameter, self.pin_length, self.pin_youngs_modulus),
             c1=self.c1, c2=self.c2, c3=self.c3, alpha=self.alpha, P=self.P, sliding=self.sliding,
         )
+        if self.preload == "contact_force" and self.P > 0:
+            # the static contact force is linear in P: scale P so that it equals the requested force
+            per_newton = float(model.replace(P=1.0).static_contact_force(0.0))
+            model = model.replace(P=self.P / per_newton)
+        return model

@@ -1,4 +1,4 @@
-"""Figures of stability results: the paper's Fig. 2, a stability map and a root locus.
+"""Figures of stability results: the paper's Fig. 2, a stability map, a root locus, two kinematics.
 
 Each function draws a result computed elsewhere and returns the matplotlib Figure; none
 computes anything the result does not hold. matplotlib is imported inside the functions.
@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-__all__ = ["coupled_modes", "fig2_plot", "root_locus_plot", "stability_map_plot"]
+__all__ = ["coupled_modes", "fig2_plot", "kinematics_plot", "root_locus_plot", "stability_map_plot"]
 
 
 def _figure(**kwargs: Any):
@@ -150,4 +150,40 @@ def root_locus_plot(ds: xr.Dataset, *, theta_index: int | None = None, ax=None):
     ax.set_xlabel("growth rate sigma [1/s]")
     ax.set_ylabel("frequency [Hz]")
     ax.set_title(f"Root locus over mu_e (theta = {float(col.theta_deg):.2f} deg)")
+    return fig
+
+
+def kinematics_plot(ds: xr.Dataset, *, ax=None):
+    """Critical friction over the run-out incline for each contact kinematics, with mu + tan(theta).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Critical-friction curves (:func:`squealkit.stability.critical_friction_curve`) stacked
+        along a ``kinematics`` dimension (``"paper"``, ``"consistent"``).
+    ax : matplotlib Axes, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = _axes(ax, (7, 4.5))
+    styles = {"paper": ("C0", "o"), "consistent": ("C3", "s")}
+    for kin in ds["kinematics"].values.tolist():
+        r = ds.sel(kinematics=kin)
+        color, marker = styles.get(kin, ("k", "x"))
+        ax.plot(r.theta_deg.values, r.mu_critical.values, color=color, marker=marker, ms=4,
+                label=f"{kin}: mu_crit")
+        ax.plot(r.theta_deg.values, r.mu_e_critical.values, color=color, ls="--", lw=1,
+                label=f"{kin}: mu_crit + tan(theta)")
+        gone = ~np.isfinite(r.mu_critical.values)
+        if gone.any():
+            top = float(ds.attrs.get("mu_max", np.nanmax(ds.mu_critical.values)))
+            ax.plot(r.theta_deg.values[gone], np.full(gone.sum(), top), color=color, marker="^", ls="none",
+                    label=f"{kin}: stable up to mu = {top:g}")
+    ax.set_xlabel("run-out incline theta [deg]")
+    ax.set_ylabel("critical friction")
+    ax.set_title("Onset of squeal: the paper's contact kinematics and the consistent ones")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
     return fig

@@ -11,7 +11,7 @@ from typing import Any
 
 import xarray as xr
 
-__all__ = ["envelope_plot", "fig3_plot", "fig4_plot"]
+__all__ = ["envelope_plot", "fig3_plot", "fig4_plot", "floquet_plot"]
 
 
 def _axes(ax: Any, n: int, figsize: tuple[float, float]):
@@ -124,4 +124,30 @@ def envelope_plot(ds: xr.Dataset, ax: Any = None, *, var: str = "x1_ddot", freq_
     tw.axhline(0.0, color="C1", lw=0.5, ls="--")
     tw.set_ylabel("sigma(t) [1/s]", color="C1")
     a.set_title(_title(ds), fontsize=9)
+    return fig
+
+
+def floquet_plot(ds: xr.Dataset, ax: Any = None):
+    """Floquet exponent over friction and run-out amplitude (a :func:`~squealkit.transient.floquet.floquet_map`).
+
+    Colour: the exponent [1/s] (red grows); black line: exponent 0; dashed: where the period
+    average of the frozen-time sigma is 0. Returns the Figure.
+    """
+    import numpy as np
+
+    fig, axes = _axes(ax, 1, (7, 5))
+    a = axes[0]
+    rho = ds["floquet_exponent"].values
+    vmax = float(np.nanmax(np.abs(rho))) or 1.0
+    q_um = ds["amplitude"].values * 1e6
+    mesh = a.pcolormesh(ds["mu"].values, q_um, rho.T, cmap="RdBu_r", vmin=-vmax, vmax=vmax, shading="auto")
+    fig.colorbar(mesh, ax=a, label="Floquet exponent [1/s]")
+    if ds.sizes["mu"] > 1 and ds.sizes["amplitude"] > 1:
+        a.contour(ds["mu"].values, q_um, rho.T, levels=[0.0], colors="k", linewidths=1.2)
+        a.contour(ds["mu"].values, q_um, ds["frozen_mean"].values.T, levels=[0.0], colors="k", linestyles="--",
+                  linewidths=1.0)
+    a.set_xlabel("friction coefficient mu")
+    a.set_ylabel("run-out amplitude q0 [um]")
+    a.set_title(f"Floquet exponent, lambda = {ds.attrs['wavelength'] * 1e3:g} mm, v = {ds.attrs['speed']:g} m/s "
+                "(solid: 0; dashed: frozen-time mean 0)", fontsize=9)
     return fig

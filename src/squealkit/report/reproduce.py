@@ -77,6 +77,10 @@ def _paper_steps(
         ("critical friction", lambda fig, dat: critical_step(model, fig, dat)),
         ("Figs. 3-4 transients", lambda fig, dat: transient_step(model, fig, dat, quick=quick)),
     ]
+    if "kinematics" in model.parameter_info():
+        from .steps_beyond import beyond_step
+
+        steps.append(("beyond the paper", lambda fig, dat: beyond_step(model, fig, dat)))
     if recording is None:
         steps.append(("Figs. 6-13 measurement", lambda fig, dat: measurement_step(model, fig, dat, quick=quick)))
     else:
@@ -134,7 +138,7 @@ def reproduce(
     default = model is None
     model = get_preset("lv2013") if model is None else model
     if rig is None and default:
-        rig = PinOnDiscRig()
+        rig = PinOnDiscRig.paper()
     steps = _paper_steps(model, rig, published=True, quick=quick, recording=recording)
     start = time.perf_counter()
     # staged and moved into place only when complete; never deletes what squealkit did not write

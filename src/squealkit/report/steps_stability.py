@@ -48,6 +48,22 @@ def parameters_step(model: FrictionModel, rig: PinOnDiscRig | None, figures: Pat
     tables: list[Table] = []
     if rig is not None:
         derived = rig.to_model()
+        tables.append(Table(
+            "Modal frequencies the model is built from, and where each came from",
+            ("mode", "frequency [Hz]", "source"),
+            tuple((name.replace("_", " "), v["frequency_hz"], v["source"])
+                  for name, v in rig.frequency_sources().items()),
+        ))
+        n_static = float(derived.static_contact_force(0.0))
+        paragraphs.append(
+            f"Choices of the derivation (the paper's unless changed in the rig): k = m1 (2 pi f)^2 with m1 = "
+            f"{rig.pin_mass_factor:g} x the pin's mass (the tip modal mass of a cantilever's first bending mode is "
+            "about 0.25 of it: pin_mass_factor); kc = E A / L is the pin's own axial stiffness, which k2 also "
+            f"represents; the load P = {rig.P:g} N is "
+            + ("the static contact force (preload = \"contact_force\")." if rig.preload == "contact_force" else
+               f"applied to the pin while k2 is grounded, so the static contact force is {n_static:.2f} N "
+               "(preload = \"contact_force\" makes P the contact force).")
+        )
         for name, (value, unit) in PAPER_PARAMETERS.items():
             got = float(getattr(derived, name))
             comparisons.append(Comparison(f"{name} from the rig", value, got, unit,

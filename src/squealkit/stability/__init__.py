@@ -4,8 +4,10 @@ mode shapes and sensitivities."""
 from ._solve import IndeterminateWarning
 from .critical import (
     ONSET_STATUS,
+    REALISTIC_MU_MAX,
     CriticalFriction,
     RunoutTolerance,
+    UnrealisticFrictionWarning,
     critical_friction,
     critical_friction_curve,
     runout_tolerance,
@@ -27,12 +29,14 @@ from .tracking import lock_in, track_modes
 
 __all__ = [
     "ONSET_STATUS",
+    "REALISTIC_MU_MAX",
     "UNSTABLE_RTOL",
     "VERDICTS",
     "CriticalFriction",
     "IndeterminateWarning",
     "ModelEnsemble",
     "RunoutTolerance",
+    "UnrealisticFrictionWarning",
     "critical_friction",
     "critical_friction_curve",
     "critical_friction_sensitivity",

@@ -187,7 +187,8 @@ def _find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, N: int, roundin
     stable3 = (verdict[:, :-2] == STABLE) & (verdict[:, 1:-1] == STABLE) & (verdict[:, 2:] == STABLE)
     is_min = (mid <= left) & (mid <= right) & (depth > _DEPTH) & stable3[..., None]
     # the most pronounced (relative depth) first, at most _MAX_CANDIDATES per row
-    score = np.where(is_min, depth / (np.abs(mid) + depth), -1.0)
+    score = np.full(depth.shape, -1.0)
+    np.divide(depth, np.abs(mid) + depth, out=score, where=is_min)  # depth > 0 where is_min
     flat = score.reshape(B, -1)
     k = min(_MAX_CANDIDATES, flat.shape[1])
     top = np.argsort(-flat, axis=1)[:, :k]

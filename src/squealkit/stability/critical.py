@@ -28,10 +28,21 @@ from ._solve import IndeterminateWarning
 from ._windows import ONSET_STATUS, SCAN_POINTS, Windows, find_windows
 from .eigen import _solve_grid
 
+#: Largest friction coefficient of brake friction materials worth calling realistic (dry pads:
+#: about 0.3-0.7); onsets beyond it draw an :class:`UnrealisticFrictionWarning`.
+REALISTIC_MU_MAX = 1.0
+
+
+class UnrealisticFrictionWarning(UserWarning):
+    """Mode coupling sets in only at a friction coefficient no brake material has."""
+
+
 __all__ = [
     "ONSET_STATUS",
+    "REALISTIC_MU_MAX",
     "CriticalFriction",
     "RunoutTolerance",
+    "UnrealisticFrictionWarning",
     "critical_friction",
     "critical_friction_curve",
     "runout_tolerance",
@@ -166,6 +177,9 @@ def critical_friction_curve(
     -----
     IndeterminateWarning
         When some window could not be decided within rounding.
+    UnrealisticFrictionWarning
+        When every onset found needs ``mu > REALISTIC_MU_MAX`` (1): squeal by mode coupling
+        would need friction no brake material has.
     """
     friction, speed = validate_friction(model, friction, speed)
     fr = {} if friction is None else {"friction": friction, "speed": speed}
@@ -202,6 +216,13 @@ def critical_friction_curve(
     if back.size and np.isfinite(mu_c[back]).any():
         ok = back[np.isfinite(mu_c[back])]
         omega[ok] = _onset_frequency(model, mu_c[ok] + 1e-6 * np.maximum(1.0, np.abs(mu_c[ok])), t[ok], damped, fr)
+    onsets = mu_c[status == 0]
+    if onsets.size and onsets.min() > REALISTIC_MU_MAX:
+        warnings.warn(
+            f"Mode coupling needs friction mu_crit = {onsets.min():.4g} or more, beyond brake friction materials "
+            f"(about 0.3-0.7, at most {REALISTIC_MU_MAX:g}): the modes that couple are far apart in frequency "
+            "(for a pin-on-disc rig compare the pin bending and disc frequencies).",
+            UnrealisticFrictionWarning, stacklevel=2)
     uns = _intervals_array(up, B, True)
     ind = _intervals_array(up, B, False)
     if np.isfinite(ind).any():

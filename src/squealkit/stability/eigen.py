@@ -85,18 +85,26 @@ def _matrices(
     S = 1, one model for every point, unless a speed-dependent ``friction`` law is given:
     its linearisation adds the damping ``dmu/dv N0 D`` (``FrictionModel.friction_damping``)
     at each point of the flat arrays ``mu`` (kinetic) and ``tan_theta``, whether or not
-    ``damped`` (it belongs to the friction law, not to the structure). Then S is the number
-    of points (broadcast views of the shared matrices), each point solved on its own.
+    ``damped`` (it belongs to the friction law, not to the structure); or the model's contact
+    parts depend on the slope (consistent kinematics, ``FrictionModel.contact_parts``). Then
+    S is the number of points (broadcast views of the shared matrices), each point solved on
+    its own.
     """
     M = np.asarray(model.mass_matrix(), dtype=float)
     C = np.asarray(model.damping_matrix(), dtype=float) if damped else np.zeros_like(M)
     K0, Kn, Kf = (np.asarray(x, dtype=float) for x in model.stiffness_parts())
+    per_point = model.slope_coupled and tan_theta is not None
+    if per_point:
+        Kn, Kf = model.contact_parts(tan_theta)
     # The friction damping vanishes at every point when the law is flat at this speed or the
     # model has no static load (N0 = 0); decided from the law and the model, never from the
     # points, so that any split of a grid into blocks solves each point the same way.
     if friction is not None and not friction.flat_at(speed) and np.any(model.load_parts()[0]):
         Cf = model.friction_damping(friction, mu, tan_theta, speed=speed)
         return (np.broadcast_to(M, Cf.shape), C + Cf, *(np.broadcast_to(a, Cf.shape) for a in (K0, Kn, Kf)))
+    if per_point:
+        shape = Kn.shape
+        return (np.broadcast_to(M, shape), np.broadcast_to(C, shape), np.broadcast_to(K0, shape), Kn, Kf)
     return tuple(np.ascontiguousarray(a[None]) for a in (M, C, K0, Kn, Kf))
 
 
@@ -244,7 +252,7 @@ def _solve_grid(model, mu, tan_theta, damped, progress=None, friction=None, spee
     for start in range(0, total, block):
         stop = min(total, start + block)
         sl = slice(start, stop)
-        if friction is not None:
+        if friction is not None or model.slope_coupled:
             mats = _matrices(model, damped, friction, speed, mu_b.ravel()[sl], t_b.ravel()[sl])
         with limit_threads(threads_for(stop - start)):  # small blocks: no parallel start-up
             _solve_block(mats, g[sl], e[sl], row, high_precision, (lam[sl], err[sl], verdict[sl], thr[sl]), work)

@@ -41,6 +41,9 @@ class ModelEnsemble:
         normal-contact and friction parts of the stiffness [N/m] (paper, eq. 4).
     sliding : ndarray of int, shape (S,)
         Sliding direction of each model.
+    Knx, Kfx : ndarray, shape (S, n, n), optional
+        Slope parts of the contact (consistent kinematics, ``FrictionModel.slope_parts``);
+        None for the paper's kinematics.
     """
 
     M: NDArray[np.float64]
@@ -49,6 +52,8 @@ class ModelEnsemble:
     Kn: NDArray[np.float64]
     Kf: NDArray[np.float64]
     sliding: NDArray[np.int64]
+    Knx: NDArray[np.float64] | None = None
+    Kfx: NDArray[np.float64] | None = None
 
     @classmethod
     def from_models(cls, models: Sequence[FrictionModel], *, damped: bool = False) -> ModelEnsemble:
@@ -73,7 +78,11 @@ class ModelEnsemble:
         K0, Kn, Kf = (np.stack([p[i] for p in parts]).astype(float) for i in range(3))
         sliding = np.array([m.sliding_direction for m in models], dtype=np.int64)
         check_magnitudes(M, C, K0, Kn, Kf)
-        return cls(M, C, K0, Kn, Kf, sliding)
+        if not any(m.slope_coupled for m in models):
+            return cls(M, C, K0, Kn, Kf, sliding)
+        slope = [m.slope_parts() for m in models]
+        Knx, Kfx = (np.stack([p[i] for p in slope]).astype(float) for i in range(2))
+        return cls(M, C, K0, Kn, Kf, sliding, Knx, Kfx)
 
     def __len__(self) -> int:
         return self.M.shape[0]
@@ -85,7 +94,15 @@ class ModelEnsemble:
     def take(self, index: ArrayLike) -> ModelEnsemble:
         """The sub-ensemble of the models at ``index``."""
         i = np.asarray(index)
-        return ModelEnsemble(self.M[i], self.C[i], self.K0[i], self.Kn[i], self.Kf[i], self.sliding[i])
+        slope = (None, None) if self.Knx is None else (self.Knx[i], self.Kfx[i])
+        return ModelEnsemble(self.M[i], self.C[i], self.K0[i], self.Kn[i], self.Kf[i], self.sliding[i], *slope)
+
+    def contact_parts(self, tan_theta: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(Kn(t), Kf(t))`` of every model at the slope ``tan_theta`` (see ``FrictionModel.contact_parts``)."""
+        if self.Knx is None:
+            return self.Kn, self.Kf
+        st = (self.sliding * tan_theta)[:, None, None]
+        return self.Kn + st * self.Knx, self.Kf + st * self.Kfx
 
 
 def _solve_rows(ens: ModelEnsemble, which: NDArray, mu: NDArray, tan_theta: NDArray | float,
@@ -96,7 +113,7 @@ def _solve_rows(ens: ModelEnsemble, which: NDArray, mu: NDArray, tan_theta: NDAr
     mu = np.asarray(mu, dtype=float)
     g = np.ascontiguousarray(1.0 - mu * tan_theta)
     e = np.ascontiguousarray(ens.sliding[which] * (mu + tan_theta))
-    mats = tuple(np.ascontiguousarray(a) for a in (ens.M, ens.C, ens.K0, ens.Kn, ens.Kf))
+    mats = tuple(np.ascontiguousarray(a) for a in (ens.M, ens.C, ens.K0, *ens.contact_parts(tan_theta)))
     with limit_threads(threads_for(which.size)):  # a search step of a few models: serial
         return _solve_models(mats, which, g, e, high_precision)
 

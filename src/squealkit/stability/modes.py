@@ -70,8 +70,11 @@ def _parts(model: FrictionModel, damped: bool) -> tuple[NDArray, ...]:
 
 
 def _stiffness(model: FrictionModel, K0: NDArray, Kn: NDArray, Kf: NDArray, mu: float, t: float) -> NDArray:
-    """K = K0 + (1 - mu t) Kn + s (mu + t) Kf (paper eq. 4)."""
-    return K0 + (1.0 - mu * t) * Kn + model.sliding_direction * (mu + t) * Kf
+    """K = K0 + (1 - mu t) Kn(t) + s (mu + t) Kf(t) (paper eq. 4; ``Kn(t) = Kn + s t Knx`` and
+    ``Kf(t) = Kf + s t Kfx`` with consistent kinematics, ``FrictionModel.slope_parts``)."""
+    s = model.sliding_direction
+    Knx, Kfx = model.slope_parts()
+    return K0 + (1.0 - mu * t) * (Kn + s * t * Knx) + s * (mu + t) * (Kf + s * t * Kfx)
 
 
 def _quadratic_eig(M: NDArray, C: NDArray, K: NDArray) -> tuple[NDArray, NDArray, NDArray]:
@@ -457,10 +460,13 @@ def _matrix_derivatives(
     M, _C, _K0, Kn, Kf = _parts(model, damped)
     zero = np.zeros_like(M)
     s = model.sliding_direction
+    Knx, Kfx = model.slope_parts()
+    Kn_t, Kf_t = Kn + s * t * Knx, Kf + s * t * Kfx
     if parameter == "mu":
-        return zero, zero, -t * Kn + s * Kf, "1", mu
+        return zero, zero, -t * Kn_t + s * Kf_t, "1", mu
     if parameter in ("tan_theta", "theta"):
-        dK = -mu * Kn + s * Kf
+        # d/dt of g Kn(t) + e Kf(t): the contact factors' and the slope parts' share
+        dK = -mu * Kn_t + s * Kf_t + s * ((1.0 - mu * t) * Knx + s * (mu + t) * Kfx)
         if parameter == "theta":  # d tan(theta) / d theta = 1 + tan^2
             return zero, zero, (1.0 + t * t) * dK, "rad", math.atan(t)
         return zero, zero, dK, "1", t

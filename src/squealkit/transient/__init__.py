@@ -9,7 +9,14 @@
 
 from .contact import Contact
 from .profiles import DiscRunOut, RandomRoughness, SampledProfile, SineRunOut, Smooth, SurfaceProfile
-from .simulate import response_envelope, simulate, simulate_batch, transient_summary
+from .simulate import (
+    TensileContactWarning,
+    response_envelope,
+    simulate,
+    simulate_batch,
+    step_bound,
+    transient_summary,
+)
 
 __all__ = [
     "Contact",
@@ -19,8 +26,10 @@ __all__ = [
     "SineRunOut",
     "Smooth",
     "SurfaceProfile",
+    "TensileContactWarning",
     "response_envelope",
     "simulate",
     "simulate_batch",
+    "step_bound",
     "transient_summary",
 ]

@@ -1,4 +1,8 @@
-"""Compiled fixed-step RK4 integration of M x'' + C x' + f(x, x', q, tan_theta) = F0.
+"""Compiled integration of M x'' + C x' + f(x, x', q, tan_theta) = F0, and the monodromy matrix.
+
+Three kernels: ``integrate_chunk`` (fixed-step classical RK4), ``integrate_adaptive``
+(Dormand-Prince 5(4) with error control, dense output and event location) and ``monodromy``
+(Floquet: the periodic linear system over one period).
 
 All matrices and load vectors arrive premultiplied by M^-1 (``K0 = M^-1 K0`` and so on; ``bM``
 and ``fM`` are M^-1 b and M^-1 f), so the right-hand side is the acceleration directly.
@@ -9,7 +13,9 @@ batch of R independent runs by one chunk of steps, in parallel over runs (``pran
 Contact force (the part of eq. 4 carried by the contact), for each run::
 
     linear:     -g (Kn x - q fn) - e (Kf x - q ff),   g = 1 - mu t, e = s (mu + t)
-    structured: Nc (g b + e f),  Nc = -kc (b.x - q) = N cos(theta) (eq. 2)
+                  - s t (g Knx x + e Kfx x)   (consistent kinematics only, ``kin = 1``)
+    structured: Nc (g b + e f),  Nc = -kc (b_t.x - q) = N cos(theta) (eq. 2)
+                with b_t = b (paper) or b + s t fhat (consistent kinematics)
                 with Nc >= 0 if contact may open, and mu -> mu(w) phi(w) where w is the
                 sliding speed of the disc past the pin, phi = tanh(w / v_reg).
 
@@ -25,7 +31,7 @@ from numba import njit, prange
 
 
 @njit(cache=True, inline="always")
-def _rhs(x, xd, q, t, mu, v, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, opts, r, acc):
+def _rhs(x, xd, q, t, mu, v, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, opts, r, acc):
     """Accelerations ``acc`` at state (x, xd); returns (N cos theta, effective mu)."""
     n = x.shape[0]
     for i in range(n):
@@ -44,11 +50,15 @@ def _rhs(x, xd, q, t, mu, v, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, 
             for j in range(n):
                 kn += Kn[i, j] * x[j]
                 kf += Kf[i, j] * x[j]
+            if kin != 0.0:
+                for j in range(n):
+                    kn += s * t * Knx[i, j] * x[j]
+                    kf += s * t * Kfx[i, j] * x[j]
             r[i] -= g * kn + e * kf
     else:
         d = -q
         for j in range(n):
-            d += b[j] * x[j]
+            d += (b[j] + kin * s * t * fhat[j]) * x[j]
         nc = -kc * d
         if opts[1] != 0.0 and nc < 0.0:
             nc = 0.0
@@ -73,7 +83,7 @@ def _rhs(x, xd, q, t, mu, v, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, 
 
 @njit(cache=True, parallel=True)
 def integrate_chunk(
-    X, V, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+    X, V, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
     qh, th, dt, n_steps, stride, out_x, out_v, out_a, out_nc, out_me, o_start, limit, status, n_valid,
 ):
     """Advance each run r by ``n_steps`` RK4 steps of ``dt``; record every ``stride`` steps.
@@ -102,11 +112,13 @@ def integrate_chunk(
         o = o_start
         mu_r, v_r, kc_r, s_r = mu[r], v[r], kc[r], s[r]
         bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r = bM[r], fM[r], C[r], K0[r], Kn[r], Kf[r]
+        Knx_r, Kfx_r, kin_r = Knx[r], Kfx[r], kin[r]
         F0_r, fn_r, ff_r, b_r, f_r, fhat_r = F0[r], fn[r], ff[r], b[r], f[r], fhat[r]
         for k in range(n_steps + 1):
             i0 = 2 * k
             if k % stride == 0 and (k < n_steps or n_steps == 0):
                 nc, me = _rhs(x, xd, qh[r, i0], th[r, i0], mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+                              Knx_r, Kfx_r, kin_r,
                  F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k1v)
                 bad = False
                 for i in range(n):
@@ -129,25 +141,25 @@ def integrate_chunk(
             q0, t0 = qh[r, i0], th[r, i0]
             q1, t1 = qh[r, i0 + 1], th[r, i0 + 1]
             q2, t2 = qh[r, i0 + 2], th[r, i0 + 2]
-            _rhs(x, xd, q0, t0, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+            _rhs(x, xd, q0, t0, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
                  F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k1v)
             for i in range(n):
                 k1x[i] = xd[i]
                 xt[i] = x[i] + 0.5 * dt * k1x[i]
                 vt[i] = xd[i] + 0.5 * dt * k1v[i]
-            _rhs(xt, vt, q1, t1, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+            _rhs(xt, vt, q1, t1, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
                  F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k2v)
             for i in range(n):
                 k2x[i] = vt[i]
                 xt[i] = x[i] + 0.5 * dt * k2x[i]
                 vt[i] = xd[i] + 0.5 * dt * k2v[i]
-            _rhs(xt, vt, q1, t1, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+            _rhs(xt, vt, q1, t1, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
                  F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k3v)
             for i in range(n):
                 k3x[i] = vt[i]
                 xt[i] = x[i] + dt * k3x[i]
                 vt[i] = xd[i] + dt * k3v[i]
-            _rhs(xt, vt, q2, t2, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+            _rhs(xt, vt, q2, t2, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
                  F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k4v)
             for i in range(n):
                 x[i] += dt / 6.0 * (k1x[i] + 2.0 * k2x[i] + 2.0 * k3x[i] + vt[i])
@@ -156,3 +168,343 @@ def integrate_chunk(
             X[r, i] = x[i]
             V[r, i] = xd[i]
 
+
+
+# -- error-controlled integration: Dormand-Prince 5(4) with dense output and events ---------------
+#
+# The tableau (A, B, C), the error weights E = b5 - b4 and the 4th-order dense-output matrix P
+# are those of Dormand & Prince (1980) as tabulated by SciPy's RK45 (Hairer, Norsett & Wanner,
+# Solving ODEs I, II.4-II.6); simulate.py passes them in. Event codes recorded per run:
+EVENT_CONTACT_OPENS = 1
+EVENT_CONTACT_CLOSES = 2
+EVENT_STICK = 3   # the sliding speed |w| falls into the regularisation band v_reg
+EVENT_SLIP = 4    # ... and leaves it
+
+
+@njit(cache=True, inline="always")
+def _forcing(tt, tg0, hg, qg, tgr, vel):
+    """q and tan(theta) at time tt: cubic Hermite in time through the samples of q and dq/dt = v tan(theta)."""
+    G = qg.shape[0]
+    u = (tt - tg0) / hg
+    j = math.floor(u)
+    if j < 0:
+        j = 0
+    if j > G - 2:
+        j = G - 2
+    u -= j
+    q0 = qg[j]
+    q1 = qg[j + 1]
+    d0 = tgr[j] * vel * hg
+    d1 = tgr[j + 1] * vel * hg
+    u2 = u * u
+    u3 = u2 * u
+    q = (2 * u3 - 3 * u2 + 1) * q0 + (u3 - 2 * u2 + u) * d0 + (-2 * u3 + 3 * u2) * q1 + (u3 - u2) * d1
+    if vel != 0.0:
+        dq = (6 * u2 - 6 * u) * q0 + (3 * u2 - 4 * u + 1) * d0 + (-6 * u2 + 6 * u) * q1 + (3 * u2 - 2 * u) * d1
+        tan_t = dq / (vel * hg)
+    else:
+        tan_t = tgr[j] + u * (tgr[j + 1] - tgr[j])
+    return q, tan_t
+
+
+@njit(cache=True, inline="always")
+def _f(tt, z, dz, n, tg0, hg, qg, tgr, mu, v, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat,
+       kc, s, opts, work, acc):
+    """First-order right-hand side dz = [x', x''] at (tt, z); returns (N cos theta, mu_eff, q, tan theta)."""
+    q, tan_t = _forcing(tt, tg0, hg, qg, tgr, v)
+    nc, me = _rhs(z[:n], z[n:], q, tan_t, mu, v, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat,
+                  kc, s, opts, work, acc)
+    for i in range(n):
+        dz[i] = z[n + i]
+        dz[n + i] = acc[i]
+    return nc, me, q, tan_t
+
+
+@njit(cache=True, inline="always")
+def _gap_and_slip(x, xd, q, tan_t, v, b, fhat, kc, s, kin):
+    """Contact force without clamping, -kc (b_t.x - q), and |w| (sliding speed of disc past pin)."""
+    n = x.shape[0]
+    d = -q
+    w = v
+    for j in range(n):
+        d += (b[j] + kin * s * tan_t * fhat[j]) * x[j]
+        w -= s * fhat[j] * xd[j]
+    return -kc * d, abs(w)
+
+
+@njit(cache=True, inline="always")
+def _dense(z, K, P, h, th, out):
+    """State at t + th h from the step's stages (4th-order continuous extension)."""
+    m = z.shape[0]
+    p0 = th
+    p1 = th * th
+    p2 = p1 * th
+    p3 = p2 * th
+    for i in range(m):
+        acc = 0.0
+        for j in range(K.shape[0]):
+            acc += K[j, i] * (P[j, 0] * p0 + P[j, 1] * p1 + P[j, 2] * p2 + P[j, 3] * p3)
+        out[i] = z[i] + h * acc
+
+
+@njit(cache=True, parallel=True)
+def integrate_adaptive(
+    X, V, H, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+    qg, tgr, tg0, hg, t_a, t_b, fs, o_first, o_last, A, Bw, Cn, E, P, rtol, atol, h_max,
+    out_x, out_v, out_a, out_nc, out_me, limit, status, n_valid, counts, ev_t, ev_k, n_ev,
+):
+    """Advance each run from ``t_a`` to ``t_b`` by Dormand-Prince 5(4) with error control.
+
+    Output samples ``o_first..o_last`` (times ``o / fs``) inside ``[t_a, t_b]`` are written by
+    dense output. ``H[r]`` carries each run's step size between calls. ``atol`` has one entry per
+    state component (x then x'). ``counts[r] = [accepted, rejected, rhs calls, smallest step]``.
+    With contact loss (opts[1]) a sign change of the contact force inside a step is located by
+    bisection on the dense output and the step is retaken to end just past it, so no step
+    straddles the kink; the events (and stick/slip band crossings with the sign law) are recorded
+    in ``ev_t``/``ev_k``. ``status[r]``: 1 diverged (|x| > limit), 2 step size underflow.
+    """
+    R = X.shape[0]
+    n = X.shape[1]
+    m = 2 * n
+    S = A.shape[0]  # stages before the FSAL stage
+    for r in prange(R):
+        if status[r] != 0:
+            continue
+        z = np.empty(m)
+        for i in range(n):
+            z[i] = X[r, i]
+            z[n + i] = V[r, i]
+        K = np.empty((S + 1, m))
+        zt = np.empty(m)
+        znew = np.empty(m)
+        zd = np.empty(m)
+        dzd = np.empty(m)
+        work = np.empty(n)
+        acc = np.empty(n)
+        mu_r, v_r, kc_r, s_r, kin_r = mu[r], v[r], kc[r], s[r], kin[r]
+        bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r = bM[r], fM[r], C[r], K0[r], Kn[r], Kf[r]
+        Knx_r, Kfx_r = Knx[r], Kfx[r]
+        F0_r, fn_r, ff_r, b_r, f_r, fhat_r = F0[r], fn[r], ff[r], b[r], f[r], fhat[r]
+        qg_r, tg_r = qg[r], tgr[r]
+        t = t_a
+        h = H[r]
+        o = o_first
+        # the first sample of the chunk may sit exactly at t_a
+        nc, me, q, tt_ = _f(t, z, K[0], n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+                            Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+        counts[r, 2] += 1
+        if o <= o_last and o / fs <= t + 1e-12 / fs:
+            for i in range(n):
+                out_x[r, o, i] = z[i]
+                out_v[r, o, i] = z[n + i]
+                out_a[r, o, i] = K[0, n + i]
+            out_nc[r, o] = nc
+            out_me[r, o] = me
+            n_valid[r] = o + 1
+            o += 1
+        g_old, w_old = _gap_and_slip(z[:n], z[n:], q, tt_, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
+        retake = False
+        h_saved = h
+        while t < t_b and status[r] == 0:
+            h_min = 1e-14 * max(1.0, abs(t)) + 1e-300
+            if h > h_max[r]:
+                h = h_max[r]
+            last = False
+            if t + h >= t_b:
+                h = t_b - t
+                last = True
+            # stages
+            for k in range(1, S):
+                for i in range(m):
+                    a = 0.0
+                    for j in range(k):
+                        a += A[k, j] * K[j, i]
+                    zt[i] = z[i] + h * a
+                _f(t + Cn[k] * h, zt, K[k], n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r,
+                   Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+            for i in range(m):
+                a = 0.0
+                for j in range(S):
+                    a += Bw[j] * K[j, i]
+                znew[i] = z[i] + h * a
+            t_new = t + h if not last else t_b
+            nc, me, q, tt_ = _f(t_new, znew, K[S], n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r,
+                                Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r,
+                                opts, work, acc)
+            counts[r, 2] += S
+            err = 0.0
+            for i in range(m):
+                e = 0.0
+                for j in range(S + 1):
+                    e += E[j] * K[j, i]
+                sc = atol[r, i] + rtol * max(abs(z[i]), abs(znew[i]))
+                e = h * e / sc
+                err += e * e
+            err = math.sqrt(err / m)
+            if not (err <= 1.0):
+                counts[r, 1] += 1
+                fac = 0.9 * err ** -0.2 if err == err and err < 1e300 else 0.2
+                h *= max(0.2, fac)
+                if h < h_min:
+                    status[r] = 2
+                continue
+            # accepted: is there a contact event inside the step?
+            g_new, w_new = _gap_and_slip(znew[:n], znew[n:], q, tt_, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
+            if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0) and not retake:
+                lo, hi = 0.0, 1.0
+                for _ in range(50):
+                    mid = 0.5 * (lo + hi)
+                    _dense(z, K, P, h, mid, zd)
+                    qm, tm = _forcing(t + mid * h, tg0, hg, qg_r, tg_r, v_r)
+                    gm, _w = _gap_and_slip(zd[:n], zd[n:], qm, tm, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
+                    if (gm > 0.0) == (g_old > 0.0):
+                        lo = mid
+                    else:
+                        hi = mid
+                if hi < 1.0 - 1e-9 and hi * h > h_min:
+                    # retake the step to end just past the crossing: no step straddles the kink
+                    # (K[0] = f(t, z) is still valid: the stages only overwrote K[1:])
+                    h_saved = h
+                    h = hi * h
+                    retake = True
+                    continue
+            counts[r, 0] += 1
+            if h < counts[r, 3] or counts[r, 3] == 0.0:
+                counts[r, 3] = h
+            # events: contact (located above) and stick/slip band crossings (located here)
+            if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0):
+                k_ev = n_ev[r]
+                if k_ev < ev_t.shape[1]:
+                    ev_t[r, k_ev] = t_new
+                    ev_k[r, k_ev] = EVENT_CONTACT_OPENS if g_new <= 0.0 else EVENT_CONTACT_CLOSES
+                n_ev[r] = k_ev + 1
+            if opts[2] != 0.0 and (w_old < opts[4]) != (w_new < opts[4]):
+                lo, hi = 0.0, 1.0
+                for _ in range(40):
+                    mid = 0.5 * (lo + hi)
+                    _dense(z, K, P, h, mid, zd)
+                    qm, tm = _forcing(t + mid * h, tg0, hg, qg_r, tg_r, v_r)
+                    _g, wm = _gap_and_slip(zd[:n], zd[n:], qm, tm, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
+                    if (wm < opts[4]) == (w_old < opts[4]):
+                        lo = mid
+                    else:
+                        hi = mid
+                k_ev = n_ev[r]
+                if k_ev < ev_t.shape[1]:
+                    ev_t[r, k_ev] = t + hi * h
+                    ev_k[r, k_ev] = EVENT_STICK if w_new < opts[4] else EVENT_SLIP
+                n_ev[r] = k_ev + 1
+            # output samples inside (t, t_new] by dense output
+            while o <= o_last and o / fs <= t_new * (1.0 + 1e-15):
+                th = (o / fs - t) / h
+                if th > 1.0:
+                    th = 1.0
+                _dense(z, K, P, h, th, zd)
+                ncs, mes, _q, _t = _f(o / fs, zd, dzd, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r,
+                                      Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r,
+                                      s_r, opts, work, acc)
+                bad = False
+                for i in range(n):
+                    if not (abs(zd[i]) <= limit):
+                        bad = True
+                if bad:
+                    status[r] = 1
+                    break
+                for i in range(n):
+                    out_x[r, o, i] = zd[i]
+                    out_v[r, o, i] = zd[n + i]
+                    out_a[r, o, i] = dzd[n + i]
+                out_nc[r, o] = ncs
+                out_me[r, o] = mes
+                n_valid[r] = o + 1
+                o += 1
+            if status[r] != 0:
+                break
+            # advance (FSAL: the last stage is the next step's first)
+            t = t_new
+            for i in range(m):
+                z[i] = znew[i]
+                K[0, i] = K[S, i]
+            g_old, w_old = g_new, w_new
+            if not retake:
+                fac = 0.9 * err ** -0.2 if err > 0.0 else 10.0
+                h = h * min(10.0, max(0.2, fac))
+            else:
+                h = h_saved  # after the event, the step the controller had before it
+            retake = False
+            if h < h_min:
+                status[r] = 2
+        for i in range(n):
+            X[r, i] = z[i]
+            V[r, i] = z[n + i]
+        H[r] = h
+
+
+# -- monodromy matrix of the periodic linear system (Floquet) --------------------------------------
+
+
+@njit(cache=True, inline="always")
+def _state_matrix(tan_t, mu, s, kin, MC, MK0, MKn, MKf, MKnx, MKfx, A):
+    """A(t) = [[0, I], [-M^-1 K(mu, tan_t), -M^-1 C]] into A (paper eq. 4, homogeneous part)."""
+    n = MC.shape[0]
+    g = 1.0 - mu * tan_t
+    e = s * (mu + tan_t)
+    st = kin * s * tan_t
+    for i in range(n):
+        for j in range(n):
+            A[i, j] = 0.0
+            A[i, n + j] = 1.0 if i == j else 0.0
+            k = MK0[i, j] + g * (MKn[i, j] + st * MKnx[i, j]) + e * (MKf[i, j] + st * MKfx[i, j])
+            A[n + i, j] = -k
+            A[n + i, n + j] = -MC[i, j]
+
+
+@njit(cache=True, inline="always")
+def _slope_at(tg, u):
+    """Periodic linear interpolation of the slope samples tg (one period) at phase u in [0, 1]."""
+    M = tg.shape[0]
+    x = u * M
+    j = math.floor(x)
+    w = x - j
+    j = j % M
+    return tg[j] + w * (tg[(j + 1) % M] - tg[j])
+
+
+@njit(cache=True, parallel=True)
+def monodromy(tg, mu, s, kin, MC, MK0, MKn, MKf, MKnx, MKfx, period, n_steps, out):
+    """Monodromy matrices Phi(T) of z' = A(t) z over one ``period`` [s], by classical RK4 (``n_steps``).
+
+    Case b has the slope samples ``tg[b]`` over one period (periodic), friction ``mu[b]`` and
+    model matrices ``M^-1 C``, ``M^-1 K0``... (``[b]``); ``out[b]`` receives Phi(T), shape (2n, 2n).
+    """
+    B = tg.shape[0]
+    m = 2 * MC.shape[1]
+    h = period / n_steps
+    du = 1.0 / n_steps  # the step in units of the period (phase of the slope samples)
+    for bi in prange(B):
+        Phi = np.eye(m)
+        A0 = np.empty((m, m))
+        A1 = np.empty((m, m))
+        A2 = np.empty((m, m))
+        k1 = np.empty((m, m))
+        k2 = np.empty((m, m))
+        k3 = np.empty((m, m))
+        k4 = np.empty((m, m))
+        tmp = np.empty((m, m))
+        for step in range(n_steps):
+            u = step * du
+            _state_matrix(_slope_at(tg[bi], u), mu[bi], s[bi], kin[bi], MC[bi], MK0[bi], MKn[bi], MKf[bi],
+                          MKnx[bi], MKfx[bi], A0)
+            _state_matrix(_slope_at(tg[bi], u + 0.5 * du), mu[bi], s[bi], kin[bi], MC[bi], MK0[bi], MKn[bi],
+                          MKf[bi], MKnx[bi], MKfx[bi], A1)
+            _state_matrix(_slope_at(tg[bi], u + du), mu[bi], s[bi], kin[bi], MC[bi], MK0[bi], MKn[bi], MKf[bi],
+                          MKnx[bi], MKfx[bi], A2)
+            k1[:, :] = A0 @ Phi
+            tmp[:, :] = Phi + 0.5 * h * k1
+            k2[:, :] = A1 @ tmp
+            tmp[:, :] = Phi + 0.5 * h * k2
+            k3[:, :] = A1 @ tmp
+            tmp[:, :] = Phi + h * k3
+            k4[:, :] = A2 @ tmp
+            Phi += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        out[bi] = Phi

@@ -1,14 +1,28 @@
 """Transient time simulation of a friction model sliding over a disc surface profile.
 
 Solves the paper's equations of motion (eqs. 1-4) with time-varying run-out q(t) and slope
-tan(theta(t)) = dq/dx at x = x_start + v t (eqs. 9-11) by fixed-step classical RK4 in
-compiled code, and returns an :class:`xarray.Dataset` sampled at ``fs``.
+tan(theta(t)) = dq/dx at x = x_start + v t (eqs. 9-11) in compiled code, and returns an
+:class:`xarray.Dataset` sampled at ``fs``. Two integrators:
+
+- ``"dopri5"`` (default): Dormand-Prince 5(4) with error control (``rtol``, ``atol``), a step
+  per run, output by its 4th-order dense interpolant at ``fs``; contact loss and closure are
+  located inside a step (bisection on the interpolant) and the step is retaken to end there;
+  stick/slip transitions of the regularised friction law are located and recorded.
+- ``"rk4"``: classical RK4 with a fixed step (the earlier integrator, for order studies).
+
+Both respect a step bound from the fastest mode and from the friction law's own stiffness:
+regularised friction ``mu N tanh(w / v_reg)`` acts like a damper ``mu N / v_reg`` on the sliding
+direction (and a Stribeck law adds ``(mu_static - mu) N / v_stribeck``), whose explicit
+stability limit ``~2.5 / (c fhat.M^-1.fhat)`` can be far below the modes' (see
+:func:`step_bound`). The q and slope samples are interpolated in time by cubic Hermite
+polynomials through q and dq/dt = v tan(theta) (4 samples per output sample).
 """
 
 from __future__ import annotations
 
 import itertools
 import math
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,10 +40,39 @@ from . import _kernels
 from .contact import Contact, as_contact, contact_geometry
 from .profiles import Smooth, SurfaceProfile
 
-__all__ = ["response_envelope", "simulate", "simulate_batch", "transient_summary"]
+__all__ = ["TensileContactWarning", "response_envelope", "simulate", "simulate_batch", "step_bound",
+           "transient_summary"]
 
 #: RK4 step as a fraction of the period of the fastest mode: dt <= STEP_FACTOR / omega_max.
 STEP_FACTOR = 0.25
+#: Explicit stability of a damper c on a mass m: h <= STABILITY_FACTOR m / c (RK4's real-axis
+#: limit is 2.79, Dormand-Prince 5's 3.3; kept below both).
+STABILITY_FACTOR = 2.5
+#: Largest Dormand-Prince step as a multiple of 1 / omega_max (its stability limit ~3.3 on the
+#: imaginary axis is never reached by the error control at useful tolerances).
+DOPRI_OMEGA_FACTOR = 3.0
+#: Samples of the surface profile per output sample (cubic Hermite in time between them).
+_FORCING_PER_SAMPLE = 4
+#: Output samples per compiled call of the adaptive integrator.
+_CHUNK_SAMPLES = 1 << 14
+#: Events recorded per run (contact loss/closure, stick/slip); later ones are counted only.
+_MAX_EVENTS = 4096
+METHODS = ("dopri5", "rk4")
+_EVENT_NAMES = {1: "contact_opens", 2: "contact_closes", 3: "stick", 4: "slip"}
+_STATUS = {0: "completed", 1: "diverged", 2: "failed"}
+
+
+class TensileContactWarning(UserWarning):
+    """The linear (paper's) contact law carried a pulling normal force: run with contact loss."""
+
+
+def _dopri_tableau():
+    from scipy.integrate._ivp.rk import RK45
+
+    A = np.zeros((RK45.n_stages, RK45.n_stages))
+    A[:, : RK45.A.shape[1]] = RK45.A
+    return (np.ascontiguousarray(A), np.ascontiguousarray(RK45.B), np.ascontiguousarray(RK45.C),
+            np.ascontiguousarray(RK45.E), np.ascontiguousarray(RK45.P))
 #: Steps per compiled call (progress and divergence are checked between calls).
 _CHUNK_STEPS = 1 << 17
 
@@ -50,21 +93,96 @@ def _validate_model(model: object) -> FrictionModel:
     return model
 
 
-def _step_size(runs: Sequence[_Run], fs: float, dt: float | None) -> tuple[float, int]:
-    """RK4 step dt [s] and the number of steps per output sample (1/fs = stride * dt)."""
+def _omega_max(runs: Sequence[_Run]) -> float:
+    """Largest |lambda| [rad/s] of the damped linear models of the runs (flat disc)."""
+    wmax = 0.0
+    by_model: dict[int, tuple[FrictionModel, list[float]]] = {}
+    for run in runs:
+        by_model.setdefault(id(run.model), (run.model, []))[1].append(run.mu)
+    for model, mus in by_model.values():
+        lam = eigenvalues(model, np.unique(mus), 0.0, damped=True)
+        wmax = max(wmax, float(np.abs(lam).max()))
+    return wmax
+
+
+def _friction_rate(run: _Run, contact: Contact) -> float:
+    """Largest rate [1/s] of the friction law's velocity dependence: ``c fhat.M^-1.fhat`` with
+    ``c = mu N0 / v_reg`` (sign law) plus ``|mu_static - mu| N0 / v_stribeck`` (Stribeck), N0 the
+    static contact force (doubled: the dynamic force swings about it). 0 for the linear law."""
+    if contact.is_linear:
+        return 0.0
+    ok, _kc, _b, f = contact_geometry(run.model)
+    if not ok:
+        return 0.0
+    fhat = f / max(float(np.linalg.norm(f)), 1e-300)
+    mob = float(fhat @ np.linalg.solve(run.model.mass_matrix(), fhat))
+    n0 = 2.0 * abs(float(run.model.static_contact_force(contact.sliding_mu(run.mu, run.speed))))
+    mu_top = max(abs(run.mu), contact.mu_static or 0.0)
+    c = mu_top * n0 / contact.v_reg if contact.sign_friction else 0.0
+    if contact.mu_static is not None:
+        c += abs(contact.mu_static - run.mu) * n0 / contact.v_stribeck
+    return c * mob
+
+
+def step_bound(model: FrictionModel, *, mu: float, contact: Contact | str = "linear", speed: float = 0.02,
+               method: str = "dopri5") -> dict[str, float]:
+    """The largest stable explicit step [s] for a model, and what sets it.
+
+    Returns ``{"omega_max": ..., "friction_rate": ..., "mode_bound": ..., "friction_bound": ...,
+    "bound": ...}``: the fastest mode omega_max [rad/s] gives ``0.25 / omega_max`` (RK4, for
+    accuracy) or ``3 / omega_max`` (Dormand-Prince, stability); a regularised or Stribeck
+    friction law a rate ``c fhat.M^-1.fhat`` [1/s] (``c = mu N / v_reg``: see the module notes)
+    and ``2.5 / rate``. ``bound`` is the smaller.
+
+    Examples
+    --------
+    >>> from squealkit.models import get_preset
+    >>> from squealkit.transient import Contact
+    >>> b = step_bound(get_preset("lv2013"), mu=0.4, contact=Contact.nonlinear(v_reg=1e-5), speed=0.0)
+    >>> b["friction_bound"] < b["mode_bound"]     # the friction law is the stiffer part
+    True
+    """
+    run = _Run(_validate_model(model), validate_finite("mu", mu), Smooth(), validate_positive("speed", speed,
+                                                                                              allow_zero=True))
+    return _bounds([run], as_contact(contact), _validate_method(method))
+
+
+def _bounds(runs: Sequence[_Run], contact: Contact, method: str) -> dict[str, float]:
+    wmax = _omega_max(runs)
+    rate = max(_friction_rate(r, contact) for r in runs)
+    mode = (STEP_FACTOR if method == "rk4" else DOPRI_OMEGA_FACTOR) / wmax if wmax > 0 else math.inf
+    fric = STABILITY_FACTOR / rate if rate > 0 else math.inf
+    return {"omega_max": wmax, "friction_rate": rate, "mode_bound": mode, "friction_bound": fric,
+            "bound": min(mode, fric)}
+
+
+def _validate_method(method: object) -> str:
+    if method not in METHODS:
+        raise InputError(f"Parameter method={method!r} must be one of {', '.join(map(repr, METHODS))}.")
+    return str(method)
+
+
+def _step_size(runs: Sequence[_Run], fs: float, dt: float | None, contact: Contact | None = None,
+               method: str = "rk4") -> tuple[float, int, dict[str, float]]:
+    """Step dt [s] (RK4: fixed; Dormand-Prince: the largest), steps per output sample (RK4:
+    1/fs = stride * dt) and the bounds. A given ``dt`` beyond the friction law's stability
+    bound is an error for RK4 (it would integrate noise) and is cut to it for Dormand-Prince."""
+    bounds = _bounds(runs, contact or Contact.linear(), method)
     if dt is None:
-        wmax = 0.0
-        by_model: dict[int, tuple[FrictionModel, list[float]]] = {}
-        for run in runs:
-            by_model.setdefault(id(run.model), (run.model, []))[1].append(run.mu)
-        for model, mus in by_model.values():
-            lam = eigenvalues(model, np.unique(mus), 0.0, damped=True)
-            wmax = max(wmax, float(np.abs(lam).max()))
-        dt_max = STEP_FACTOR / wmax if wmax > 0 else 1.0 / fs
+        dt_max = bounds["bound"] if math.isfinite(bounds["bound"]) else 1.0 / fs
     else:
         dt_max = validate_positive("dt", dt)
+        if dt_max > bounds["friction_bound"] * (1 + 1e-12):
+            if method == "rk4":
+                raise InputError(
+                    f"Parameter dt={dt!r} s exceeds the stability bound {bounds['friction_bound']:.3g} s of the "
+                    "friction law (mu N / v_reg acts as a damper on the sliding direction); use a smaller dt or "
+                    "method='dopri5'.")
+            dt_max = bounds["friction_bound"]
+    if method == "dopri5":
+        return dt_max, 1, bounds
     stride = max(1, math.ceil((1.0 / fs) / dt_max * (1 - 1e-12)))
-    return 1.0 / (fs * stride), stride
+    return 1.0 / (fs * stride), stride, bounds
 
 
 def _initial_state(
@@ -114,7 +232,16 @@ def _integrate(
     dt: float | None,
     limit: float,
     progress: Progress | None,
+    method: str = "dopri5",
+    rtol: float = 1e-8,
+    atol: float | None = None,
 ):
+    method = _validate_method(method)
+    rtol = validate_positive("rtol", rtol)
+    if not 1e-13 <= rtol < 1:
+        raise InputError(f"Parameter rtol={rtol!r} must lie in [1e-13, 1).")
+    if atol is not None:
+        atol = validate_positive("atol", atol)
     duration = validate_positive("duration", duration)
     fs = validate_fs(fs)
     limit = validate_positive("limit", limit)
@@ -126,9 +253,10 @@ def _integrate(
     n = runs[0].model.n_dof
     if any(r.model.n_dof != n for r in runs):
         raise InputError("All models of a batch must have the same number of degrees of freedom.")
-    dt, stride = _step_size(runs, fs, dt)
+    dt_user = dt
+    dt, stride, bounds = _step_size(runs, fs, dt, contact, method)
     n_steps = (n_out - 1) * stride
-    t_end = n_steps * dt
+    t_end = (n_out - 1) / fs
     for run in runs:
         run.profile.check_range(min(x_start, x_start + run.speed * t_end), max(x_start, x_start + run.speed * t_end))
 
@@ -149,6 +277,9 @@ def _integrate(
     K0 = stack(lambda r: r.model.stiffness_parts()[0])
     Kn = stack(lambda r: r.model.stiffness_parts()[1])
     Kf = stack(lambda r: r.model.stiffness_parts()[2])
+    Knx = stack(lambda r: r.model.slope_parts()[0])
+    Kfx = stack(lambda r: r.model.slope_parts()[1])
+    kin = np.array([float(r.model.slope_coupled) for r in runs])
     F0 = stack(lambda r: r.model.load_parts()[0])
     fn = stack(lambda r: r.model.load_parts()[1])
     ff = stack(lambda r: r.model.load_parts()[2])
@@ -176,35 +307,96 @@ def _integrate(
     status = np.zeros(R, dtype=np.int64)
     n_valid = np.zeros(R, dtype=np.int64)
 
+    arrays = (bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts)
+    outs = (out_x, out_v, out_a, out_nc, out_me)
+    extra: dict[str, Any] = {"bounds": bounds, "method": method}
+    if method == "rk4":
+        _run_rk4(runs, X, V, arrays, outs, dt, stride, n_steps, x_start, limit, status, n_valid, progress)
+    else:
+        extra.update(_run_dopri5(runs, X, V, arrays, outs, dt_user, contact, fs, n_out, x_start, limit, status,
+                                 n_valid, progress, rtol, atol))
+    time = np.arange(n_out) / fs
+    return dict(
+        time=time, x=out_x, v=out_v, a=out_a, nc=out_nc, me=out_me, status=status, n_valid=n_valid,
+        dt=dt, stride=stride, x_start=x_start, limit=limit, contact=contact, rtol=rtol, **extra,
+    )
+
+
+def _profile_samples(runs: Sequence[_Run], x_start: float, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """q and tan(theta) of every run at ``times`` (runs sharing a profile and speed evaluated once)."""
+    R = len(runs)
+    qh = np.empty((R, times.size))
+    th = np.empty((R, times.size))
+    seen: dict[tuple[int, float], int] = {}
+    for i, run in enumerate(runs):
+        j = seen.setdefault((id(run.profile), run.speed), i)
+        if j == i:
+            qh[i], th[i] = run.profile.evaluate(x_start + run.speed * times)
+        else:
+            qh[i], th[i] = qh[j], th[j]
+    return qh, th
+
+
+def _run_rk4(runs, X, V, arrays, outs, dt, stride, n_steps, x_start, limit, status, n_valid, progress) -> None:
+    """Fixed-step classical RK4, chunk by chunk (q and slope at the half steps)."""
+    R = len(runs)
     chunk = max(stride, (_CHUNK_STEPS // stride) * stride)
     done = 0
     while True:
         m = min(chunk, n_steps - done)  # m == 0: record the final state only
-        th_t = (done + 0.5 * np.arange(2 * m + 1)) * dt
-        qh = np.empty((R, 2 * m + 1))
-        th = np.empty((R, 2 * m + 1))
-        seen: dict[tuple[int, float], int] = {}
-        for i, run in enumerate(runs):
-            j = seen.setdefault((id(run.profile), run.speed), i)  # runs sharing a profile and speed
-            if j == i:
-                qh[i], th[i] = run.profile.evaluate(x_start + run.speed * th_t)
-            else:
-                qh[i], th[i] = qh[j], th[j]
+        qh, th = _profile_samples(runs, x_start, (done + 0.5 * np.arange(2 * m + 1)) * dt)
         with limit_threads(threads_for(R, serial_below=2)):  # parallel over runs: one run is serial
-            _kernels.integrate_chunk(
-                X, V, bM, fM, C, K0, Kn, Kf, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
-                qh, th, dt, m, stride, out_x, out_v, out_a, out_nc, out_me, done // stride, limit, status, n_valid,
-            )
+            _kernels.integrate_chunk(X, V, *arrays, qh, th, dt, m, stride, *outs, done // stride, limit, status,
+                                     n_valid)
         done += m
         if progress is not None:
             progress(done, n_steps)
         if m == 0 or np.all(status != 0):
             break
-    time = np.arange(n_out) / fs
-    return dict(
-        time=time, x=out_x, v=out_v, a=out_a, nc=out_nc, me=out_me, status=status, n_valid=n_valid,
-        dt=dt, stride=stride, x_start=x_start, limit=limit, contact=contact,
-    )
+
+
+def _run_dopri5(runs, X, V, arrays, outs, dt_user, contact, fs, n_out, x_start, limit, status, n_valid, progress,
+                rtol, atol) -> dict[str, Any]:
+    """Dormand-Prince 5(4) with error control, chunk by chunk of output samples. Each run has its
+    own step bound and tolerances (from its own model and friction), so that a run's numbers do not
+    depend on the batch it is in."""
+    R, n = X.shape
+    per_run = [_step_size([run], fs, dt_user, contact, "dopri5") for run in runs]
+    h_max = np.array([p[0] for p in per_run])
+    w = np.array([max(p[2]["omega_max"], 1.0) for p in per_run])
+    if atol is None:
+        # displacement scale: the static deflection (or 1 nm); velocities scaled by omega_max
+        x_ref = np.maximum(np.abs(X).max(axis=1), 1e-9)
+        atol_x = 1e-3 * rtol * x_ref
+    else:
+        atol_x = np.full(R, atol)
+    atol_a = np.ascontiguousarray(np.concatenate([np.repeat(atol_x[:, None], n, axis=1),
+                                                  np.repeat((atol_x * w)[:, None], n, axis=1)], axis=1))
+    A, B, Cn, E, P = _dopri_tableau()
+    H = np.minimum(h_max, 0.1 / w)
+    counts = np.zeros((R, 4))
+    ev_t = np.full((R, _MAX_EVENTS), np.nan)
+    ev_k = np.zeros((R, _MAX_EVENTS), dtype=np.int64)
+    n_ev = np.zeros(R, dtype=np.int64)
+    per = _FORCING_PER_SAMPLE
+    o_first = 0
+    while o_first < n_out:
+        o_last = min(n_out - 1, o_first + _CHUNK_SAMPLES)
+        t_a, t_b = (o_first - (o_first > 0)) / fs, o_last / fs
+        k_a = o_first - (o_first > 0)
+        g = np.arange(k_a * per, o_last * per + 1) / (fs * per)
+        qg, tg = _profile_samples(runs, x_start, g)
+        with limit_threads(threads_for(R, serial_below=2)):  # parallel over runs: one run is serial
+            _kernels.integrate_adaptive(
+                X, V, H, *arrays, qg, tg, g[0], 1.0 / (fs * per), t_a, t_b, fs, o_first, o_last, A, B, Cn, E, P,
+                rtol, atol_a, h_max, *outs, limit, status, n_valid, counts, ev_t, ev_k, n_ev,
+            )
+        if progress is not None:
+            progress(o_last, n_out - 1)
+        o_first = o_last + 1
+        if np.all(status != 0):
+            break
+    return {"counts": counts, "ev_t": ev_t, "ev_k": ev_k, "n_ev": n_ev, "atol": atol_a, "h_max": h_max}
 
 
 def _run_dataset(run: _Run, raw: dict, i: int, n_keep: int) -> xr.Dataset:
@@ -215,10 +407,11 @@ def _run_dataset(run: _Run, raw: dict, i: int, n_keep: int) -> xr.Dataset:
     q, tan_theta = run.profile.evaluate(pos)
     nc = raw["nc"][i, :n_keep]
     me = raw["me"][i, :n_keep]
-    structured, kc, b, _ = contact_geometry(model)
+    structured, kc, _, _ = contact_geometry(model)
     if raw["contact"].is_linear:
-        # N cos(theta) = -kc (b.x - q) (eq. 2), also for output of the linear law.
-        nc = -kc * (raw["x"][i, :n_keep] @ b - q) if structured else np.full(n_keep, np.nan)
+        # N cos(theta) = -kc (b_t.x - q) (eq. 2), also for output of the linear law.
+        nc = (-kc * (np.sum(raw["x"][i, :n_keep] * model.contact_normal(tan_theta), axis=-1) - q)
+              if structured else np.full(n_keep, np.nan))
     normal = nc * np.sqrt(1.0 + tan_theta**2)  # eq. (2): N = -kc (y1 - y2 - q) / cos(theta)
     # sigma depends on tan(theta) only (mu fixed): solve once per distinct slope (to 1e-12).
     slopes, inverse = np.unique(np.round(tan_theta, 12), return_inverse=True)
@@ -241,21 +434,27 @@ def _run_dataset(run: _Run, raw: dict, i: int, n_keep: int) -> xr.Dataset:
         "time", sigma,
         {"units": "1/s", "long_name": "frozen-time growth rate sigma(t) = max Re(lambda) (eq. 8, damped)"},
     )
+    attrs = {}
+    if raw["contact"].is_linear and np.isfinite(normal).any():
+        # the paper's law keeps the contact closed whatever the force: say how often it pulled
+        attrs = {"tensile_fraction": float(np.mean(normal < 0.0)), "min_normal_force": float(np.nanmin(normal))}
     return xr.Dataset(
         data,
         coords={
             "time": ("time", time, {"units": "s", "long_name": "time"}),
             "position": ("time", pos, {"units": "m", "long_name": "sliding position x = x_start + v t"}),
         },
+        attrs=attrs,
     )
 
 
-def _attrs(run: _Run, raw: dict, status: str, t_stop: float, fs: float) -> dict:
+def _attrs(run: _Run, raw: dict, status: str, t_stop: float, fs: float, i: int = 0) -> dict:
     return {
         "title": "squealkit transient simulation",
         "reference": "Lv, Zhang & Yu, J. Vibroeng. 15(2) 2013, eqs. 1-4 and 9-11",
         "model": run.model.to_json(),
         "model_kind": run.model.kind,
+        "kinematics": run.model.kinematics_option,
         "mu": run.mu,
         "speed": run.speed,
         "speed_units": "m/s",
@@ -263,13 +462,27 @@ def _attrs(run: _Run, raw: dict, status: str, t_stop: float, fs: float) -> dict:
         "profile_kind": run.profile.kind,
         "contact": raw["contact"].describe(),
         "fs": fs,
-        "integrator": "classical RK4, fixed step (numba)",
-        "dt": raw["dt"],
-        "steps_per_sample": raw["stride"],
         "status": status,
         "t_stop": t_stop,
         "divergence_limit": raw["limit"],
+        **_integrator_attrs(raw, i),
     }
+
+
+def _integrator_attrs(raw: dict, i: int) -> dict:
+    """What the integrator did for run i: method, steps, bounds (one vocabulary for both methods)."""
+    b = raw["bounds"]
+    dt = raw["dt"] if raw["method"] == "rk4" else float(raw["h_max"][i])
+    out = {"method": raw["method"], "dt": dt, "step_bound_modes": b["mode_bound"],
+           "step_bound_friction": b["friction_bound"] if math.isfinite(b["friction_bound"]) else 0.0}
+    if raw["method"] == "rk4":
+        out.update(integrator="classical RK4, fixed step (numba)", steps_per_sample=raw["stride"])
+    else:
+        steps, rejected, calls, hmin = raw["counts"][i]
+        out.update(integrator="Dormand-Prince 5(4), error control, dense output, event location (numba)",
+                   rtol=raw["rtol"], atol=float(raw["atol"][i, 0]), steps=int(steps), rejected_steps=int(rejected),
+                   rhs_calls=int(calls), min_step=float(hmin))
+    return out
 
 
 def _as_runs(models, mus, profiles, speeds) -> list[_Run]:
@@ -315,13 +528,16 @@ def simulate(
     dt: float | None = None,
     limit: float = 1.0,
     progress: Progress | None = None,
+    method: str = "dopri5",
+    rtol: float = 1e-8,
+    atol: float | None = None,
 ) -> xr.Dataset:
     """Time response of a model sliding over a disc surface profile (paper section 4).
 
     Integrates ``M x'' + C x' + K(mu, tan_theta(t)) x = F(mu, tan_theta(t), q(t))`` (eq. 4)
     with q and tan(theta) from the profile at ``x = x_start + speed * t`` (eqs. 9-11), by
-    classical RK4 with a fixed step ``dt <= 0.25 / omega_max`` (fastest mode), output every
-    ``1/fs``.
+    Dormand-Prince 5(4) with error control (default) or classical RK4 with a fixed step,
+    output every ``1/fs`` (see the module notes for the step bound and the events).
 
     Parameters
     ----------
@@ -350,11 +566,21 @@ def simulate(
     x_start : float
         Position on the profile at t = 0 [m].
     dt : float, optional
-        Largest RK4 step [s] (rounded down so that ``1/fs`` is a whole number of steps).
+        Largest step [s]. RK4: its fixed step (rounded down so that ``1/fs`` is a whole number
+        of steps; default ``min(0.25 / omega_max, 2.5 / friction rate)``, and an error if it
+        exceeds the friction law's stability bound, :func:`step_bound`). Dormand-Prince: the
+        largest step the error control may take (cut to the stability bound).
     limit : float
         A run whose displacement exceeds ``limit`` [m] stops with status ``"diverged"``.
     progress : callable, optional
-        Called as ``progress(steps_done, steps_total)``.
+        Called as ``progress(done, total)``.
+    method : {"dopri5", "rk4"}
+        Integrator: Dormand-Prince 5(4) with error control and event location, or fixed-step RK4.
+    rtol : float
+        Relative tolerance of the error control (Dormand-Prince).
+    atol : float, optional
+        Absolute displacement tolerance [m]; velocities get ``atol * omega_max``. Default
+        ``1e-3 rtol`` times the largest initial displacement (at least 1 nm).
 
     Returns
     -------
@@ -366,8 +592,13 @@ def simulate(
         damped linear model at (mu, tan_theta(t)) (with a Stribeck contact, linearised about
         sliding at ``speed``: see :func:`~squealkit.stability.eigenvalues`). A run starts at rest
         in the static equilibrium of steady sliding (friction ``mu(speed)`` for a Stribeck
-        contact) unless ``x0`` is given. Attribute ``status`` is ``"completed"``
-        or ``"diverged"``; a diverged run is cut at its last finite sample (``t_stop``).
+        contact) unless ``x0`` is given. Attribute ``status`` is ``"completed"``,
+        ``"diverged"`` or ``"failed"`` (the error control could not meet ``rtol`` above the
+        smallest step); such a run is cut at its last sample (``t_stop``). Dormand-Prince runs
+        carry ``steps``, ``rejected_steps``, ``rhs_calls``, ``min_step`` and the located events
+        (``event_time``, ``event_kind`` over ``event``: contact_opens / contact_closes / stick /
+        slip). A linear contact whose normal force pulls has ``tensile_fraction`` > 0 and
+        ``min_normal_force`` < 0 and warns (:class:`TensileContactWarning`).
 
     Examples
     --------
@@ -381,13 +612,41 @@ def simulate(
     runs = _as_runs([model], [mu], [profile], [speed])
     raw = _integrate(
         runs, duration=duration, fs=fs, contact=as_contact(contact), x0=x0, v0=v0, perturbation=perturbation,
-        rng=rng, x_start=x_start, dt=dt, limit=limit, progress=progress,
+        rng=rng, x_start=x_start, dt=dt, limit=limit, progress=progress, method=method, rtol=rtol, atol=atol,
     )
-    n_keep = int(raw["n_valid"][0])
-    status = "diverged" if raw["status"][0] else "completed"
+    n_keep = max(1, int(raw["n_valid"][0]))
+    status = _STATUS[int(raw["status"][0])]
     ds = _run_dataset(runs[0], raw, 0, n_keep)
     ds.attrs.update(_attrs(runs[0], raw, status, float(raw["time"][n_keep - 1]), validate_fs(fs)))
+    ds = _with_events(ds, raw, 0)
+    _warn_tensile(ds)
     return ds
+
+
+def _with_events(ds: xr.Dataset, raw: dict, i: int) -> xr.Dataset:
+    """The run's located events as variables over ``event`` (Dormand-Prince runs)."""
+    if "n_ev" not in raw:
+        return ds
+    k = int(min(raw["n_ev"][i], _MAX_EVENTS))
+    ds.attrs["events"] = int(raw["n_ev"][i])
+    if k == 0:
+        return ds
+    codes = sorted(_EVENT_NAMES)
+    return ds.assign(
+        event_time=("event", raw["ev_t"][i, :k], {"units": "s", "long_name": "time of a located event"}),
+        event_kind=("event", raw["ev_k"][i, :k].astype(np.int8),
+                    {"long_name": "kind of event", "flag_values": np.array(codes, dtype=np.int8),
+                     "flag_meanings": " ".join(_EVENT_NAMES[c] for c in codes)}),
+    )
+
+
+def _warn_tensile(ds: xr.Dataset) -> None:
+    frac = ds.attrs.get("tensile_fraction", 0.0)
+    if frac > 0:
+        warnings.warn(
+            f"The normal force of the linear contact was tensile {100 * frac:.1f} % of the time (down to "
+            f"{ds.attrs['min_normal_force']:.4g} N): a real contact opens there. Run with contact='nonlinear' "
+            "(CLI: --contact nonlinear), which lets the contact open.", TensileContactWarning, stacklevel=3)
 
 
 def simulate_batch(
@@ -409,14 +668,20 @@ def simulate_batch(
     store: str | Path | None = None,
     client: Any = None,
     runs_per_task: int = 16,
+    method: str = "dopri5",
+    rtol: float = 1e-8,
+    atol: float | None = None,
 ) -> xr.Dataset:
     """Many runs at once, in parallel over runs (numba ``prange``, all cores).
 
     Each of ``models``, ``mu``, ``profiles`` and ``speed`` is one value for all runs or one
-    per run; the runs are their broadcast. All models need the same DOFs. The step ``dt``
-    is the smallest any run needs. Returns the variables of :func:`simulate` with a leading
-    ``run`` dimension and per-run ``status`` (``"completed"``/``"diverged"``), ``mu`` and
-    ``speed``; samples after a divergence are NaN.
+    per run; the runs are their broadcast. All models need the same DOFs. RK4's step ``dt``
+    is the smallest any run needs; Dormand-Prince steps each run on its own (``method``,
+    ``rtol``, ``atol`` as for :func:`simulate`), so a run's numbers do not depend on the
+    batch. Returns the variables of :func:`simulate` with a leading ``run`` dimension and
+    per-run ``status`` (``"completed"``/``"diverged"``/``"failed"``), ``mu``, ``speed``,
+    ``tensile_fraction`` and ``min_normal_force`` (linear contact), and with Dormand-Prince
+    ``steps`` and ``events``; samples after a divergence are NaN.
 
     With ``store`` (a ``.zarr`` path) the runs are computed ``runs_per_task`` at a time and
     written piece by piece into the store, which is returned opened lazily; with
@@ -437,11 +702,19 @@ def simulate_batch(
     speeds = np.atleast_1d(np.asarray(speed, dtype=float)).tolist()
     runs = _as_runs(models_l, mus, profs, speeds)
     kw = dict(duration=duration, fs=fs, contact=as_contact(contact), x0=x0, perturbation=perturbation, x_start=x_start,
-              dt=dt, limit=limit)
+              dt=dt, limit=limit, method=method, rtol=rtol, atol=atol)
     if store is None and client is not None:
         raise InputError("A cluster run streams its result to zarr: pass store='....zarr' with client.")
     if store is None:
-        return _batch_dataset(runs, rng=rng, progress=progress, **kw)
+        ds = _batch_dataset(runs, rng=rng, progress=progress, **kw)
+        tensile = ds["tensile_fraction"].values
+        if np.any(tensile > 0):
+            warnings.warn(
+                f"The normal force of the linear contact was tensile in {int(np.sum(tensile > 0))} of {tensile.size} "
+                f"runs (up to {100 * float(tensile.max()):.1f} % of the time; see tensile_fraction): a real contact "
+                "opens there. Run with contact='nonlinear' (CLI: --contact nonlinear).",
+                TensileContactWarning, stacklevel=2)
+        return ds
     if Path(store).suffix.lower() != ".zarr":
         raise InputError(f"Parameter store={str(store)!r} must be a zarr store ending in .zarr.")
     if isinstance(runs_per_task, bool) or not isinstance(runs_per_task, int) or runs_per_task < 1:
@@ -450,7 +723,8 @@ def simulate_batch(
     if any(r.model.n_dof != n for r in runs):
         raise InputError("All models of a batch must have the same number of degrees of freedom.")
     # one step and one set of perturbations for the whole batch, whatever the pieces
-    kw["dt"] = _step_size(runs, validate_fs(fs), dt)[0]
+    if _validate_method(method) == "rk4":  # RK4's step is the batch's; Dormand-Prince steps each run alone
+        kw["dt"] = _step_size(runs, validate_fs(fs), dt, kw["contact"], "rk4")[0]
     noise = _perturbation_noise(validate_positive("perturbation", perturbation, allow_zero=True), rng, len(runs), n)
     from ..scale import lazy_template, stream_to_zarr
 
@@ -471,21 +745,39 @@ def _batch_piece(arg: tuple) -> xr.Dataset:
 
 
 def _batch_dataset(runs: Sequence[_Run], *, duration, fs, contact, x0, perturbation, rng, x_start, dt, limit,
-                   progress) -> xr.Dataset:
+                   progress, method="dopri5", rtol=1e-8, atol=None) -> xr.Dataset:
     raw = _integrate(
         runs, duration=duration, fs=fs, contact=contact, x0=x0, v0=None, perturbation=perturbation,
-        rng=rng, x_start=x_start, dt=dt, limit=limit, progress=progress,
+        rng=rng, x_start=x_start, dt=dt, limit=limit, progress=progress, method=method, rtol=rtol, atol=atol,
     )
     n_out = raw["time"].size
     parts = [_run_dataset(run, raw, i, n_out) for i, run in enumerate(runs)]
-    ds = xr.concat(parts, dim="run", coords="different", compat="equals", join="exact")
+    tensile = [p.attrs.get("tensile_fraction", 0.0) for p in parts]
+    min_force = [p.attrs.get("min_normal_force", math.nan) for p in parts]
+    ds = xr.concat(parts, dim="run", coords="different", compat="equals", join="exact", combine_attrs="drop")
     ds = ds.assign_coords(run=np.arange(len(runs)))
-    ds["status"] = ("run", np.array(["diverged" if s else "completed" for s in raw["status"]]))
+    ds["status"] = ("run", np.array([_STATUS[int(s)] for s in raw["status"]]))
     ds["mu"] = ("run", np.array([r.mu for r in runs]), {"units": "1"})
     ds["speed"] = ("run", np.array([r.speed for r in runs]), {"units": "m/s"})
+    ds["tensile_fraction"] = ("run", np.array(tensile), {"units": "1", "long_name": "share of time the linear "
+                                                          "contact pulled (normal force < 0)"})
+    ds["min_normal_force"] = ("run", np.array(min_force), {"units": "N"})
+    if "counts" in raw:
+        ds["steps"] = ("run", raw["counts"][:, 0].astype(np.int64), {"long_name": "accepted steps"})
+        ds["events"] = ("run", raw["n_ev"].astype(np.int64), {"long_name": "located contact and stick/slip events"})
+        ds["max_step"] = ("run", raw["h_max"], {"units": "s", "long_name": "largest step (the run's stability bound)"})
+    # batch attributes may not depend on which runs a piece holds (streamed batches must equal
+    # the in-memory one): the per-run steps and bounds are variables, RK4's dt is fixed up front
+    integ = _integrator_attrs(raw, 0)
+    for k in ("steps", "rejected_steps", "rhs_calls", "min_step", "atol", "dt", "step_bound_modes",
+              "step_bound_friction"):
+        integ.pop(k, None)
+    if raw["method"] == "rk4":
+        integ["dt"] = float(raw["dt"])
     ds.attrs.update(
-        {"title": "squealkit transient simulation (batch)", "fs": float(fs), "dt": raw["dt"],
-         "integrator": "classical RK4, fixed step (numba, parallel over runs)", "contact": raw["contact"].describe()}
+        {"title": "squealkit transient simulation (batch)", "fs": float(fs), **integ,
+         "integrator": integ["integrator"].replace("(numba)", "(numba, parallel over runs)"),
+         "contact": raw["contact"].describe()}
     )
     return ds
 
@@ -547,6 +839,11 @@ def transient_summary(ds: xr.Dataset, *, max_stages: int = 50) -> dict[str, obje
         "profile": ds.attrs.get("profile"),
         "contact": ds.attrs.get("contact"),
         "dt": ds.attrs.get("dt"),
+        "method": ds.attrs.get("method"),
+        "steps": ds.attrs.get("steps"),
+        "events": ds.attrs.get("events"),
+        "tensile_fraction": ds.attrs.get("tensile_fraction"),
+        "min_normal_force": ds.attrs.get("min_normal_force"),
         "peak": {},
     }
     for d in model_dofs:

@@ -1,0 +1,150 @@
+"""Beyond the paper: the paper's contact kinematics beside the consistent ones.
+
+The paper's gap (eq. 2) leaves out that the contact point moves along the inclined surface with
+the pin; :meth:`squealkit.models.FrictionModel.slope_parts` derives what keeping it changes.
+This step puts the two side by side: critical friction and mu + tan(theta) over the incline,
+the run-out tolerance, and a frictionless check, with the prose written from the numbers.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+from numpy.typing import NDArray
+
+from ..io import save_dataset
+from ..models import FrictionModel
+from ..stability import critical_friction_curve, runout_tolerance, stability_verdict
+from .document import FigureRef, Section, Table
+
+__all__ = ["beyond_step"]
+
+#: Incline grid of the comparison [deg]: the paper's range (§3).
+THETA_DEG = np.linspace(-8.0, 8.0, 17)
+#: Slope of the frictionless check: the steepest slope of the paper's Fig. 4 run-out is 0.503.
+FRICTIONLESS_SLOPE = 0.5
+
+
+def _curves(models: dict[str, FrictionModel]) -> xr.Dataset:
+    """Critical-friction curves of each model over THETA_DEG, stacked along ``kinematics``."""
+    keep = ["mu_critical", "mu_e_critical", "frequency_hz", "status"]
+    parts = [critical_friction_curve(m, np.radians(THETA_DEG))[keep] for m in models.values()]
+    ds = xr.concat(parts, dim="kinematics", combine_attrs="drop_conflicts")
+    ds = ds.assign_coords(kinematics=("kinematics", list(models)))
+    ds.attrs.update(title="Critical friction over the run-out incline for two contact kinematics",
+                    reference="Lv, Zhang & Yu 2013, eqs. 2, 4-6; consistent gap: squealkit issue 12")
+    return ds
+
+
+def _side(mu_c: NDArray[np.float64]) -> str:
+    """Which sign of the incline lowers the critical friction (ends of the grid), in words."""
+    lo, hi = (float(x) if math.isfinite(x) else math.inf for x in (mu_c[0], mu_c[-1]))
+    return "negative" if lo < hi else "positive"
+
+
+def _meaning(pc: NDArray, cc: NDArray, i0: int, q_paper: float, q_cons: float, sliding: int) -> str:
+    """What the comparison means for the paper's conclusions, decided from the numbers."""
+    def lower(x: float) -> bool:
+        return math.isfinite(x) and x < cc[i0]
+
+    one_edge = lower(cc[0]) != lower(cc[-1])
+    text = ("What it means for the paper's conclusions: that the run-out incline changes the stability of the "
+            "brake, and so can make squeal intermittent once per disc turn, survives. That it acts exactly like "
+            "friction (mu_e = mu + tan(theta), eqs. 5-6) depends on the paper's linearisation of the gap: with "
+            "the contact point's motion kept, ")
+    text += ("only one edge of the run-out destabilises while the other stabilises"
+             if one_edge else "both edges move the threshold, by unequal amounts")
+    text += (", and run-out tolerances computed with eq. (6) are not conservative (they allow "
+             f"{q_paper / q_cons:.1f} times the amplitude)." if q_cons < q_paper else
+             ", though here the paper's tolerance is the stricter one.")
+    return text + (" Which edge destabilises depends on the sliding direction relative to the slope (this model "
+                   f"has sliding = {sliding:+d}).")
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.4f}" if math.isfinite(x) else "none up to mu = 2 (stable)"
+
+
+def beyond_step(model: FrictionModel, figures: Path, data: Path, *, mu_design: float = 0.3,
+                wavelength: float = 1e-3) -> Section:
+    """The section "Beyond the paper": both kinematics side by side, computed from ``model``.
+
+    ``model`` must have the ``kinematics`` option (the pin-on-disc model); its other parameters
+    are used unchanged for both.
+    """
+    from ..plotting.stability import kinematics_plot
+    from .steps_stability import _save_fig
+
+    models = {k: model.replace(kinematics=k) for k in ("paper", "consistent")}
+    ds = _curves(models)
+    save_dataset(ds, data / "critical_kinematics.nc")
+    _save_fig(kinematics_plot(ds), figures, "critical_kinematics")
+    tol = {k: runout_tolerance(m, mu_design, wavelength=wavelength) for k, m in models.items()}
+    frictionless = {k: str(stability_verdict(m, 0.0, FRICTIONLESS_SLOPE).item()) for k, m in models.items()}
+
+    mu_c = {k: ds.mu_critical.sel(kinematics=k).values for k in models}
+    mu_e = {k: ds.mu_e_critical.sel(kinematics=k).values for k in models}
+    spread = {}
+    for k in models:
+        fin = mu_e[k][np.isfinite(mu_e[k])]
+        spread[k] = float(np.ptp(fin) / np.mean(fin)) if fin.size else math.nan
+    i0 = int(np.argmin(np.abs(THETA_DEG)))
+    pc, cc = mu_c["paper"], mu_c["consistent"]
+    stable_c = THETA_DEG[~np.isfinite(cc)]
+    worst = int(np.nanargmin(np.where(np.isfinite(cc), cc, np.inf)))
+
+    paragraphs = [
+        "The paper's gap (eq. 2) is y1 - y2 - q: the run-out is read at the contact's rest position. But the "
+        "contact point moves with the pin along the inclined surface, q(v t + x1) ~ q + tan(theta) x1. Keeping "
+        "that term (kinematics = \"consistent\"; the derivation is in FrictionModel.slope_parts) makes the "
+        "normal force the gradient of the contact potential kc delta^2 / 2, so the frictionless stiffness is "
+        "symmetric, and the skew part that drives mode coupling is friction's alone, mu kc (1 + tan^2 theta).",
+        f"Frictionless check at tan(theta) = {FRICTIONLESS_SLOPE:g}, mu = 0: the paper's matrices give "
+        f"\"{frictionless['paper']}\", the consistent ones \"{frictionless['consistent']}\". "
+        + ("A frictionless elastic contact cannot flutter, so the paper's verdict there is an artefact of the "
+           "dropped term." if frictionless["paper"] != "stable" and frictionless["consistent"] == "stable" else
+           "Here both kinematics agree."),
+        f"On a flat disc both give mu_crit = {pc[i0]:.4f}. Over theta = {THETA_DEG[0]:g}..{THETA_DEG[-1]:g} deg "
+        f"the paper's mu_crit + tan(theta) varies by {100 * spread['paper']:.2f} %: eq. (6), mu_e = mu + "
+        f"tan(theta), holds in its model (mu_crit from {_fmt(pc[0])} at {THETA_DEG[0]:g} deg to {_fmt(pc[-1])} at "
+        f"{THETA_DEG[-1]:g} deg). With consistent kinematics mu_crit runs from {_fmt(cc[0])} at {THETA_DEG[0]:g} "
+        f"deg to {_fmt(cc[-1])} at {THETA_DEG[-1]:g} deg, lowest ({cc[worst]:.4f}) at {THETA_DEG[worst]:g} deg"
+        + (f"; from {stable_c.min():g} deg up it stays stable for every mu up to 2" if stable_c.size else "")
+        + f". The {_side(cc)} incline destabilises and the other stabilises, instead of the slope "
+        f"adding to friction: mu_crit + tan(theta) is far from constant.",
+        f"Run-out tolerance at mu = {mu_design:g} (undamped, wavelength {wavelength * 1e3:g} mm): the paper's "
+        f"model allows slopes up to {tol['paper'].tan_theta_max:.4f} ({tol['paper'].theta_max_deg:.2f} deg, "
+        f"q0 <= {tol['paper'].q0_max * 1e6:.2f} um), limited by the {tol['paper'].limiting_side} run-out; the "
+        f"consistent one {tol['consistent'].tan_theta_max:.4f} ({tol['consistent'].theta_max_deg:.2f} deg, "
+        f"q0 <= {tol['consistent'].q0_max * 1e6:.2f} um), limited by the {tol['consistent'].limiting_side} "
+        f"run-out: {tol['paper'].q0_max / tol['consistent'].q0_max:.1f} times "
+        + ("less" if tol["consistent"].q0_max < tol["paper"].q0_max else "more") + " run-out is tolerated.",
+        _meaning(pc, cc, i0, tol["paper"].q0_max, tol["consistent"].q0_max, getattr(model, "sliding", 1)),
+    ]
+    rows = tuple((float(t), float(a), float(b), float(c), float(d)) for t, a, b, c, d in zip(
+        THETA_DEG, pc, mu_e["paper"], cc, mu_e["consistent"], strict=True))
+    tables = (
+        Table("Critical friction over the run-out incline (undamped; nan: stable up to mu = 2)",
+              ("theta [deg]", "paper mu_crit", "paper mu_crit + tan(theta)", "consistent mu_crit",
+               "consistent mu_crit + tan(theta)"), rows),
+        Table(f"Run-out tolerance at mu = {mu_design:g}, wavelength {wavelength * 1e3:g} mm",
+              ("kinematics", "largest stable slope", "theta [deg]", "q0 max [um]", "limited by"),
+              tuple((k, t.tan_theta_max, t.theta_max_deg, t.q0_max * 1e6, t.limiting_side) for k, t in tol.items())),
+    )
+    numbers = {
+        "mu_crit_flat": float(pc[i0]),
+        "paper_mu_crit_theta_min": float(pc[0]), "paper_mu_crit_theta_max": float(pc[-1]),
+        "consistent_mu_crit_theta_min": float(cc[0]), "consistent_mu_crit_theta_max": float(cc[-1]),
+        "paper_mu_e_spread": spread["paper"], "consistent_mu_e_spread": spread["consistent"],
+        "paper_tan_theta_max": tol["paper"].tan_theta_max, "consistent_tan_theta_max": tol["consistent"].tan_theta_max,
+        "paper_q0_max": tol["paper"].q0_max, "consistent_q0_max": tol["consistent"].q0_max,
+        "paper_frictionless_stable": float(frictionless["paper"] == "stable"),
+        "consistent_frictionless_stable": float(frictionless["consistent"] == "stable"),
+    }
+    fig = FigureRef("critical_kinematics", "Critical friction (solid) and mu_crit + tan(theta) (dashed) over the "
+                    "run-out incline, with the paper's contact kinematics and with the consistent ones")
+    return Section("beyond", "Beyond the paper: contact kinematics", tuple(paragraphs), (), tables, (fig,),
+                   ("critical_kinematics.nc",), numbers=numbers)
