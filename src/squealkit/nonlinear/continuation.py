@@ -1,0 +1,379 @@
+"""Branches of limit cycles: pseudo-arclength continuation of harmonic balance from the Hopf point.
+
+The branch starts on the onset mode at a small amplitude (the mode shape and frequency of
+the Hopf point, :mod:`squealkit.nonlinear.hopf`), where the parameter is solved for at a
+fixed amplitude, and is followed by pseudo-arclength continuation (predictor along the
+tangent, Newton corrector orthogonal to it, step adapted to the corrector's effort). A
+fold is where the parameter's component of the tangent changes sign. Each cycle's
+stability comes from its Floquet multipliers: the monodromy matrix of the variational
+equations along the harmonic-balance solution (a product of matrix exponentials over
+``n_floquet`` sub-intervals of the period); the trivial multiplier (near 1, the phase
+shift) is set aside.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+from numpy.typing import NDArray
+from scipy.linalg import expm
+
+from .. import __version__
+from .._validation import InputError, validate_finite, validate_positive
+from .harmonic_balance import HBProblem, LimitCycle, SecondOrderSystem, _Basis, _newton, contact_system
+from .hopf import HopfPoint, hopf_point
+
+__all__ = ["Branch", "continue_branch", "floquet_multipliers", "limit_cycle_branch"]
+
+#: A non-trivial Floquet multiplier above 1 + this marks an unstable cycle.
+FLOQUET_TOL = 1e-4
+
+
+def floquet_multipliers(system: SecondOrderSystem, cycle: LimitCycle, *, n_floquet: int = 1024) -> NDArray:
+    """Floquet multipliers (2n,) of a cycle, largest modulus first, trivial one removed last.
+
+    The monodromy matrix is the product over ``n_floquet`` sub-intervals of
+    ``expm(A(t_j + dt/2) dt)`` with ``A`` the variational matrix along the cycle
+    (exponential midpoint rule, second order in ``dt``). Returns all 2n multipliers sorted
+    with the one nearest 1 (the trivial multiplier) last.
+    """
+    n = system.n_dof
+    N = int(n_floquet)
+    b = _Basis.make(cycle.harmonics, 2 * N)
+    X = (b.E @ cycle.coefficients)[1::2]  # midpoints of the N sub-intervals
+    Xd = cycle.omega * (b.dE @ cycle.coefficients)[1::2]
+    _, dfdx, dfdv, _ = system.force(X, Xd, cycle.p)
+    Minv = np.linalg.inv(system.M)
+    A = np.zeros((N, 2 * n, 2 * n))
+    A[:, :n, n:] = np.eye(n)
+    A[:, n:, :n] = Minv @ (dfdx - system.K)
+    A[:, n:, n:] = Minv @ (dfdv - system.C)
+    Phi = expm(A * (2 * math.pi / cycle.omega / N))
+    while Phi.shape[0] > 1:  # ordered product Phi_{N-1} ... Phi_1 Phi_0, pairwise
+        if Phi.shape[0] % 2:
+            Phi = np.concatenate([Phi, np.eye(2 * n)[None]], axis=0)
+        Phi = Phi[1::2] @ Phi[0::2]
+    rho = np.linalg.eigvals(Phi[0])
+    i = int(np.argmin(np.abs(rho - 1.0)))
+    rest = np.delete(rho, i)
+    rest = rest[np.argsort(-np.abs(rest))]
+    return np.r_[rest, rho[i]]
+
+
+@dataclass(frozen=True)
+class Branch:
+    """A continued branch of limit cycles (see :func:`continue_branch`)."""
+
+    cycles: tuple[LimitCycle, ...]
+    multipliers: NDArray[np.complex128]  # (points, 2n)
+    stable: NDArray[np.bool_]
+    tangent_p: NDArray[np.float64]  # d p / d s at each point (sign change: fold)
+    folds: tuple[int, ...]  # indices of the points nearest to each fold
+    hopf: HopfPoint
+    stop_reason: str
+
+
+def _fold_indices(tp: NDArray, p: NDArray, thresh: float = 1e-3) -> tuple[int, ...]:
+    """Points of extreme ``p`` between consecutive tangents whose ``dp/ds`` changes sign
+    (tangents with ``|dp/ds|`` below ``thresh``, e.g. a vertical start, are skipped)."""
+    sig = [(i, np.sign(t)) for i, t in enumerate(tp) if abs(t) > thresh]
+    out = []
+    for (i, s0), (j, s1) in itertools.pairwise(sig):
+        if s0 != s1:
+            seg = p[i:j + 1]
+            out.append(i + int(np.argmax(seg) if s0 > 0 else np.argmin(seg)))
+    return tuple(out)
+
+
+def continue_branch(
+    system: SecondOrderSystem,
+    hopf: HopfPoint,
+    p_range: tuple[float, float],
+    *,
+    harmonics: int = 10,
+    step: float | None = None,
+    max_points: int = 400,
+    amplitude_start: float = 0.05,
+    n_floquet: int = 1024,
+    max_amplitude: float = 1e3,
+) -> Branch:
+    """Follow the limit cycles born at ``hopf`` by pseudo-arclength continuation.
+
+    Parameters
+    ----------
+    system : SecondOrderSystem
+    hopf : HopfPoint
+        The onset (:func:`~squealkit.nonlinear.hopf.hopf_point`).
+    p_range : (float, float)
+        The branch is followed while the parameter stays in this range.
+    harmonics : int
+        Harmonics H of every cycle.
+    step : float, optional
+        Nominal parameter step (default 1/50 of the range); the arclength unit is this
+        step in ``p`` and ``system.length_scale`` in the Fourier coefficients.
+    max_points : int
+        Largest number of points.
+    amplitude_start : float
+        First cycle's amplitude, in ``length_scale`` units, on the onset mode.
+    n_floquet : int
+        Sub-intervals of the monodromy product.
+    max_amplitude : float
+        Stop when an amplitude exceeds this many ``length_scale``.
+
+    Returns
+    -------
+    Branch
+    """
+    lo, hi = (float(v) for v in p_range)
+    if not hi > lo:
+        raise InputError(f"Parameter range {p_range!r} must be increasing.")
+    H = int(harmonics)
+    n = system.n_dof
+    dp_nom = (hi - lo) / 50 if step is None else validate_positive("step", step)
+    j = int(np.argmax(np.abs(hopf.shape)))
+    prob = HBProblem(system, H, hopf.omega, j)
+    n_u = prob.n_u
+    W = np.r_[np.ones(n_u + 1), 1.0 / dp_nom]  # arclength weights on [u, w, p]
+    ia = 1 * n + j  # index of a_1 of the phase DOF in u
+
+    # first point: amplitude fixed on the onset mode, parameter and frequency solved for
+    Z = np.zeros((2 * H + 1, n))
+    Z[0] = hopf.x_eq
+    amp0 = amplitude_start * system.length_scale
+    Z[1] = amp0 * hopf.shape.real
+    Z[H + 1] = -amp0 * hopf.shape.imag
+    y = prob.pack(Z, hopf.omega, hopf.p)
+    a_fix = y[ia]
+
+    def fun_amp(z):
+        r, J = prob.residual(z)
+        row = np.zeros(n_u + 2)
+        row[ia] = 1.0
+        return np.r_[r, z[ia] - a_fix], np.vstack([J, row])
+
+    y, _, nr = _newton(fun_amp, y)
+    if not nr <= 1e-8:
+        raise InputError(f"No limit cycle found next to the Hopf point (residual {nr:.3g}).")
+
+    def tangent(J: NDArray, prev: NDArray | None) -> NDArray:
+        # null vector of J (n_u+1, n_u+2) in the weighted metric
+        Jw = J / W[None, :]
+        _, _, Vt = np.linalg.svd(Jw)
+        t = Vt[-1] / W
+        t = t / np.linalg.norm(t * W)
+        if prev is None:
+            return t if t[ia] > 0 else -t
+        return t if (t * W * W) @ prev >= 0 else -t
+
+    r, J = prob.residual(y)
+    t = tangent(J, None)
+    ys, ts = [y], [t]
+    h = 1.0
+    reason = "max_points"
+    while len(ys) < max_points:
+        y_pred = ys[-1] + h * ts[-1]
+        tw = ts[-1] * W * W
+
+        def fun(z, y_pred=y_pred, tw=tw):
+            r, J = prob.residual(z)
+            return np.r_[r, tw @ (z - y_pred)], np.vstack([J, tw])
+
+        z, it, nr = _newton(fun, y_pred, max_iter=12)
+        if not (nr <= 1e-8 and np.all(np.isfinite(z))):
+            h *= 0.5
+            if h < 1e-4:
+                reason = "corrector_failed"
+                break
+            continue
+        r, J = prob.residual(z)
+        t_new = tangent(J, ts[-1])
+        ys.append(z)
+        ts.append(t_new)
+        h = min(h * (1.5 if it <= 4 else 1.0 if it <= 7 else 0.6), 4.0)
+        p = z[-1]
+        if p < lo or p > hi:
+            reason = "left_range"
+            break
+        if np.abs(z[:n_u]).max() > max_amplitude:
+            reason = "max_amplitude"
+            break
+    cycles = []
+    mult = []
+    for y_i in ys:
+        r = float(np.linalg.norm(prob.residual(y_i)[0]))
+        c = prob.cycle(y_i, residual=r)
+        cycles.append(c)
+        mult.append(floquet_multipliers(system, c, n_floquet=n_floquet))
+    mult_a = np.array(mult)
+    stable = np.abs(mult_a[:, :-1]).max(axis=1) <= 1 + FLOQUET_TOL
+    tp = np.array([t_i[-1] * W[-1] for t_i in ts])
+    return Branch(tuple(cycles), mult_a, stable, tp, _fold_indices(tp, np.array([c.p for c in cycles])), hopf, reason)
+
+
+def _onset_kind(hopf: HopfPoint, branch_p: NDArray, stable: NDArray) -> tuple[str, str]:
+    """Sub/supercritical from l1, or (degenerate l1: a non-smooth onset) from the branch."""
+    if hopf.kind != "degenerate":
+        return hopf.kind, "lyapunov_coefficient"
+    # the branch leaves the Hopf point towards larger p with stable cycles: soft onset
+    d = branch_p - hopf.p
+    far = np.flatnonzero(np.abs(d) > 1e-6 * max(1.0, abs(hopf.p)))
+    if far.size == 0:
+        return "degenerate", "branch"
+    k = far[0]
+    return ("supercritical" if d[k] > 0 and stable[k] else "subcritical"), "branch"
+
+
+def limit_cycle_branch(
+    model,
+    mu: tuple[float, float] | NDArray,
+    *,
+    theta: float = 0.0,
+    contact=None,
+    speed: float = 0.02,
+    harmonics: int = 10,
+    n_points: int = 50,
+    max_points: int | None = None,
+    n_floquet: int = 1024,
+    check_harmonics: bool = True,
+) -> xr.Dataset:
+    """Squeal limit cycles of a squealkit model over friction, from the Hopf point (harmonic balance).
+
+    The Hopf point is the critical friction of the damped model (the transient's nonlinear
+    contact linearised about steady sliding; :func:`squealkit.stability.critical_friction`)
+    refined on the nonlinear system; the branch is continued in ``mu`` by pseudo-arclength
+    within ``[mu_start, mu_stop]``.
+
+    Parameters
+    ----------
+    model : FrictionModel
+        E.g. ``get_preset("lv2013")``; it needs one point contact.
+    mu : (float, float) or array
+        Friction range ``(start, stop)`` (an array: its min and max).
+    theta : float
+        Run-out incline [rad] (frozen slope tan(theta), mean surface q = 0).
+    contact : Contact or str, optional
+        Contact law (default ``Contact.nonlinear()``).
+    speed : float
+        Sliding speed [m/s].
+    harmonics : int
+        Harmonics H per cycle.
+    n_points : int
+        Nominal number of points over the range (sets the arclength step).
+    max_points : int, optional
+        Largest number of points (default ``10 n_points``).
+    n_floquet : int
+        Sub-intervals of the monodromy product (stability).
+    check_harmonics : bool
+        Re-solve every 5th point with 2H harmonics; the largest relative amplitude change
+        is the attribute ``harmonics_change``.
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``point`` (and ``dof``): ``mu``, ``frequency_hz``, ``omega_rad_s``,
+        ``amplitude`` [m] (half peak-to-peak over one period), ``mean`` [m],
+        ``contact_loss_fraction``, ``stable``, ``floquet_max`` (largest non-trivial
+        multiplier modulus), ``fold``; attrs: ``hopf_mu``, ``hopf_frequency_hz``,
+        ``lyapunov_coefficient``, ``kind``, ``kind_from``, ``folds`` (mu of each fold),
+        ``hysteresis_mu`` (the range of mu where a quiet and a squealing state coexist,
+        ``[]`` if none), ``harmonics``, ``harmonics_change``, ``stop_reason``, units.
+    """
+    from ..stability import critical_friction
+    from ..transient.contact import Contact, as_contact
+
+    contact = Contact.nonlinear() if contact is None else as_contact(contact)
+    theta = validate_finite("theta", theta)
+    mu_a = np.atleast_1d(np.asarray(mu, float))
+    lo, hi = float(mu_a.min()), float(mu_a.max())
+    if not hi > lo:
+        raise InputError(f"Parameter mu={mu!r} must span a range (start < stop).")
+    n_points = int(n_points)
+    if n_points < 2:
+        raise InputError(f"Parameter n_points={n_points!r} must be >= 2.")
+    t = math.tan(theta)
+    fr = {} if contact.mu_static is None else {"friction": contact.friction_law, "speed": speed}
+    crit = critical_friction(model, theta, damped=True, mu_max=max(2.0, 2 * hi), **fr)
+    if crit.status != "onset":
+        raise InputError(f"No squeal onset at theta = {math.degrees(theta):g} deg (status {crit.status}); "
+                         "there is no Hopf point to start a limit-cycle branch from.")
+    system = contact_system(model, contact, speed=speed, tan_theta=t)
+    hopf = hopf_point(system, crit.mu_critical)
+    br = continue_branch(system, hopf, (lo, hi), harmonics=harmonics, step=(hi - lo) / (n_points - 1),
+                         max_points=max_points or 10 * n_points, n_floquet=n_floquet)
+    return branch_dataset(system, br, harmonics=harmonics, check_harmonics=check_harmonics,
+                          attrs={"model": model.to_json(), "theta": theta, "theta_deg": math.degrees(theta),
+                                 "tan_theta": t, "speed": speed, "speed_units": "m/s",
+                                 "contact": contact.describe(), "mu_range": [lo, hi]})
+
+
+def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, check_harmonics: bool = True,
+                   attrs: dict | None = None) -> xr.Dataset:
+    """Label a :class:`Branch` as an xarray Dataset (see :func:`limit_cycle_branch`)."""
+    from .harmonic_balance import harmonic_balance
+
+    cyc = br.cycles
+    p = np.array([c.p for c in cyc])
+    omega = np.array([c.omega for c in cyc])
+    amp = np.array([c.amplitude for c in cyc])
+    change = float("nan")
+    if check_harmonics:
+        changes = []
+        for c in cyc[::5]:
+            if c.amplitude.max() <= 0:
+                continue
+            c2 = harmonic_balance(system, c.p, omega=c.omega, guess=c.coefficients, harmonics=2 * harmonics,
+                                  check_harmonics=False)
+            changes.append(float(np.max(np.abs(c2.amplitude - c.amplitude)) / np.max(c2.amplitude)))
+        change = max(changes) if changes else float("nan")
+    kind, kind_from = _onset_kind(br.hopf, p, br.stable)
+    fold_mu = [float(p[i]) for i in br.folds]
+    # hysteresis: squealing cycles (stable) exist below the Hopf point
+    below = p[(p < br.hopf.p - 1e-9) & br.stable]
+    hyst = [float(below.min()), float(br.hopf.p)] if below.size else []
+    fold_flag = np.zeros(p.size, dtype=bool)
+    fold_flag[list(br.folds)] = True
+    ds = xr.Dataset(
+        {
+            system.param: ("point", p, {"units": "1", "long_name": "friction coefficient"}),
+            "frequency_hz": ("point", omega / (2 * math.pi), {"units": "Hz", "long_name": "limit-cycle frequency"}),
+            "omega_rad_s": ("point", omega, {"units": "rad/s"}),
+            "amplitude": (("point", "dof"), amp,
+                          {"units": "m", "long_name": "displacement amplitude (half peak-to-peak over one period)"}),
+            "mean": (("point", "dof"), np.array([c.coefficients[0] for c in cyc]),
+                     {"units": "m", "long_name": "mean displacement over one period"}),
+            "contact_loss_fraction": ("point", np.array([c.contact_loss_fraction for c in cyc]),
+                                      {"units": "1", "long_name": "fraction of the period with contact open"}),
+            "stable": ("point", br.stable, {"long_name": "stable limit cycle (Floquet multipliers inside the unit "
+                                                         "circle)"}),
+            "floquet_max": ("point", np.abs(br.multipliers[:, :-1]).max(axis=1),
+                            {"units": "1", "long_name": "largest non-trivial Floquet multiplier modulus"}),
+            "fold": ("point", fold_flag, {"long_name": "point nearest to a fold (turning point in mu)"}),
+            "coefficients": (("point", "harmonic_row", "dof"), np.array([c.coefficients for c in cyc]),
+                             {"units": "m", "long_name": "Fourier coefficients [a0, a1..aH, b1..bH]"}),
+        },
+        coords={"point": np.arange(p.size), "dof": list(system.dof_names),
+                "harmonic_row": np.arange(2 * harmonics + 1)},
+        attrs={
+            "title": "Limit-cycle branch by harmonic balance",
+            "system": system.description,
+            "hopf_mu": br.hopf.p,
+            "hopf_frequency_hz": br.hopf.frequency_hz,
+            "lyapunov_coefficient": br.hopf.lyapunov_coefficient,
+            "lyapunov_units": f"per length_scale^2, length_scale = {system.length_scale:.6g} m",
+            "length_scale": system.length_scale,
+            "kind": kind,
+            "kind_from": kind_from,
+            "folds": fold_mu,
+            "hysteresis_mu": hyst,
+            "harmonics": harmonics,
+            "harmonics_change": change,
+            "stop_reason": br.stop_reason,
+            "squealkit_version": __version__,
+            **(attrs or {}),
+        },
+    )
+    return ds.set_coords(system.param) if system.param in ds else ds
