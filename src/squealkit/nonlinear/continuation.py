@@ -322,9 +322,10 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
     change = float("nan")
     if check_harmonics:
         changes = []
-        for c in cyc[::5]:
-            if c.amplitude.max() <= 0:
-                continue
+        # at the Hopf point itself a piecewise-linear law has cycles of any small amplitude
+        # (a vertical start): the check is made where the parameter has moved off it
+        moved = [c for c in cyc if abs(c.p - br.hopf.p) > 1e-6 * max(1.0, abs(br.hopf.p))]
+        for c in moved[::5]:
             c2 = harmonic_balance(system, c.p, omega=c.omega, guess=c.coefficients, harmonics=2 * harmonics,
                                   check_harmonics=False)
             changes.append(float(np.max(np.abs(c2.amplitude - c.amplitude)) / np.max(c2.amplitude)))

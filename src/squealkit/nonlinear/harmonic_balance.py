@@ -295,8 +295,8 @@ def hb_residual(sys: SecondOrderSystem, basis: _Basis, Z: NDArray, omega: float,
         return R
     JL, JLw = _linear_jacobian(sys, omega, H)
     # d f(t_j)/dZ[l, m] = dfdx[j] E[j, l] + omega dfdv[j] dE[j, l]
-    Jnl = np.einsum("kj,jim,jl->kilm", basis.P, dfdx, basis.E) + omega * np.einsum(
-        "kj,jim,jl->kilm", basis.P, dfdv, basis.dE)
+    T = dfdx[:, :, :, None] * basis.E[:, None, None, :] + omega * dfdv[:, :, :, None] * basis.dE[:, None, None, :]
+    Jnl = np.tensordot(basis.P, T, axes=(1, 0)).transpose(0, 1, 3, 2)  # (k, i, l, m)
     JZ = JL - Jnl
     Rw = np.einsum("kilm,lm->ki", JLw, Z) - basis.P @ np.einsum("jim,jm->ji", dfdv, basis.dE @ Z)
     Rp = -basis.P @ dfdp
