@@ -151,3 +151,31 @@ def test_limit_cycle_matches_a_long_transient_of_the_same_model(paper_branch, mu
     k = np.flatnonzero((x[:-1] < 0) & (x[1:] >= 0))
     tc = (k - x[k] / (x[k + 1] - x[k])) / fs
     assert 1 / np.mean(np.diff(tc)) == pytest.approx(lc.frequency_hz, rel=1e-5)
+
+
+def test_cli_limitcycle_json_plot_and_dataset(run, tmp_path):
+    import json
+
+    from squealkit.io import load_dataset
+
+    out, png = tmp_path / "branch.nc", tmp_path / "branch.png"
+    r = run("limitcycle", "--mu", "0.35:0.6:6", "--harmonics", "6", "--json", "--out", str(out), "--plot", str(png))
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.output)
+    assert set(d) >= {"mu", "frequency_hz", "amplitude", "stable", "hopf", "folds"}
+    assert set(d["amplitude"]) == {"x1", "y1", "y2"}
+    assert len(d["amplitude"]["x1"]) == len(d["mu"]) == len(d["stable"]) == len(d["frequency_hz"])
+    assert set(d["hopf"]) >= {"mu", "frequency_hz", "lyapunov_coefficient", "kind"}
+    assert d["hopf"]["kind"] in ("supercritical", "subcritical")
+    assert png.stat().st_size > 10_000
+    ds = load_dataset(out)
+    assert ds["amplitude"].attrs["units"] == "m" and ds.attrs["hopf_mu"] == pytest.approx(d["hopf"]["mu"])
+
+
+def test_cli_limitcycle_rejects_bad_input(run):
+    r = run("limitcycle", "--mu", "0.5")
+    assert r.exit_code == 2 and "START:STOP:N" in r.output
+    r = run("limitcycle", "--mu", "0.1:0.3:5")  # the onset (0.3977) is outside the range
+    assert r.exit_code == 2 and "outside the friction range" in r.output
+    r = run("limitcycle", "--mu", "0.3:0.6:5", "--set", "P=0")  # no load: nothing to squeal about
+    assert r.exit_code == 2 and "not pressed" in r.output

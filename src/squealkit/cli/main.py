@@ -35,6 +35,7 @@ COMMANDS: dict[str, str] = {
     "analyze": "squealkit.cli.analyze:analyze",
     "montecarlo": "squealkit.cli.montecarlo:montecarlo",
     "synth": "squealkit.cli.synth:synth",
+    "limitcycle": "squealkit.cli.limitcycle:limitcycle",
 }
 
 

@@ -24,10 +24,10 @@ from scipy.linalg import expm
 
 from .. import __version__
 from .._validation import InputError, validate_finite, validate_positive
-from .harmonic_balance import HBProblem, LimitCycle, SecondOrderSystem, _Basis, _newton, contact_system
+from .harmonic_balance import HBProblem, LimitCycle, SecondOrderSystem, _Basis, _newton, contact_system, solve_fixed_p
 from .hopf import HopfPoint, hopf_point
 
-__all__ = ["Branch", "continue_branch", "floquet_multipliers", "limit_cycle_branch"]
+__all__ = ["Branch", "continue_branch", "floquet_multipliers", "limit_cycle_branch", "limit_cycle_summary"]
 
 #: A non-trivial Floquet multiplier above 1 + this marks an unstable cycle.
 FLOQUET_TOL = 1e-4
@@ -191,13 +191,20 @@ def continue_branch(
             continue
         r, J = prob.residual(z)
         t_new = tangent(J, ts[-1])
-        ys.append(z)
-        ts.append(t_new)
-        h = min(h * (1.5 if it <= 4 else 1.0 if it <= 7 else 0.6), 4.0)
         p = z[-1]
         if p < lo or p > hi:
+            # end exactly on the range's bound: a fixed-parameter solve from the interpolated guess
+            edge = hi if p > hi else lo
+            frac = (edge - ys[-1][-1]) / (p - ys[-1][-1])
+            y_e, _, nr_e = solve_fixed_p(prob, ys[-1] + frac * (z - ys[-1]))
+            if nr_e <= 1e-8:
+                ys.append(y_e)
+                ts.append(t_new)
             reason = "left_range"
             break
+        ys.append(z)
+        ts.append(t_new)
+        h = min(h * (1.5 if it <= 4 else 1.0 if it <= 7 else 0.6), 1.0)
         if np.abs(z[:n_u]).max() > max_amplitude:
             reason = "max_amplitude"
             break
@@ -277,10 +284,10 @@ def limit_cycle_branch(
         Over ``point`` (and ``dof``): ``mu``, ``frequency_hz``, ``omega_rad_s``,
         ``amplitude`` [m] (half peak-to-peak over one period), ``mean`` [m],
         ``contact_loss_fraction``, ``stable``, ``floquet_max`` (largest non-trivial
-        multiplier modulus), ``fold``; attrs: ``hopf_mu``, ``hopf_frequency_hz``,
-        ``lyapunov_coefficient``, ``kind``, ``kind_from``, ``folds`` (mu of each fold),
+        multiplier modulus), ``fold``; over ``fold``: ``fold_mu`` (mu of each fold); attrs: ``hopf_mu``,
+        ``hopf_frequency_hz``, ``lyapunov_coefficient``, ``kind``, ``kind_from``,
         ``hysteresis_mu`` (the range of mu where a quiet and a squealing state coexist,
-        ``[]`` if none), ``harmonics``, ``harmonics_change``, ``stop_reason``, units.
+        NaN if none), ``harmonics``, ``harmonics_change``, ``stop_reason``, units.
     """
     from ..stability import critical_friction
     from ..transient.contact import Contact, as_contact
@@ -301,6 +308,9 @@ def limit_cycle_branch(
         raise InputError(f"No squeal onset at theta = {math.degrees(theta):g} deg (status {crit.status}); "
                          "there is no Hopf point to start a limit-cycle branch from.")
     system = contact_system(model, contact, speed=speed, tan_theta=t)
+    if not lo <= crit.mu_critical <= hi:
+        raise InputError(f"The squeal onset mu_crit = {crit.mu_critical:.6g} (theta = {math.degrees(theta):g} deg) "
+                         f"lies outside the friction range [{lo:g}, {hi:g}]; the branch starts there: widen the range.")
     hopf = hopf_point(system, crit.mu_critical)
     br = continue_branch(system, hopf, (lo, hi), harmonics=harmonics, step=(hi - lo) / (n_points - 1),
                          max_points=max_points or 10 * n_points, n_floquet=n_floquet)
@@ -334,7 +344,7 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
     fold_mu = [float(p[i]) for i in br.folds]
     # hysteresis: squealing cycles (stable) exist below the Hopf point
     below = p[(p < br.hopf.p - 1e-9) & br.stable]
-    hyst = [float(below.min()), float(br.hopf.p)] if below.size else []
+    hyst = [float(below.min()), float(br.hopf.p)] if below.size else [math.nan, math.nan]
     fold_flag = np.zeros(p.size, dtype=bool)
     fold_flag[list(br.folds)] = True
     ds = xr.Dataset(
@@ -353,6 +363,7 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
             "floquet_max": ("point", np.abs(br.multipliers[:, :-1]).max(axis=1),
                             {"units": "1", "long_name": "largest non-trivial Floquet multiplier modulus"}),
             "fold": ("point", fold_flag, {"long_name": "point nearest to a fold (turning point in mu)"}),
+            "fold_mu": ("fold", np.array(fold_mu, float), {"units": "1", "long_name": "friction at each fold"}),
             "coefficients": (("point", "harmonic_row", "dof"), np.array([c.coefficients for c in cyc]),
                              {"units": "m", "long_name": "Fourier coefficients [a0, a1..aH, b1..bH]"}),
         },
@@ -368,7 +379,6 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
             "length_scale": system.length_scale,
             "kind": kind,
             "kind_from": kind_from,
-            "folds": fold_mu,
             "hysteresis_mu": hyst,
             "harmonics": harmonics,
             "harmonics_change": change,
@@ -378,3 +388,41 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
         },
     )
     return ds.set_coords(system.param) if system.param in ds else ds
+
+
+def limit_cycle_summary(ds: xr.Dataset) -> dict[str, object]:
+    """A :func:`limit_cycle_branch` result as plain Python (what ``squealkit limitcycle --json`` prints).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`limit_cycle_branch`.
+
+    Returns
+    -------
+    dict
+        ``mu`` (list), ``frequency_hz`` (list), ``amplitude`` (DOF name -> list of
+        displacement amplitudes [m], half the peak-to-peak over one period), ``stable``
+        (list of booleans), ``contact_loss_fraction`` (list), ``hopf`` (``mu``,
+        ``frequency_hz``, ``lyapunov_coefficient``, ``kind``, ``kind_from``), ``folds``
+        (list of mu), ``hysteresis_mu`` ([start, end] or []), ``harmonics``,
+        ``harmonics_change``, ``stop_reason``, ``theta_deg``, ``contact``.
+    """
+    a = ds.attrs
+    return {
+        "mu": [float(v) for v in ds["mu"].values],
+        "frequency_hz": [float(v) for v in ds["frequency_hz"].values],
+        "amplitude": {str(d): [float(v) for v in ds["amplitude"].sel(dof=d).values] for d in ds["dof"].values},
+        "stable": [bool(v) for v in ds["stable"].values],
+        "contact_loss_fraction": [float(v) for v in ds["contact_loss_fraction"].values],
+        "hopf": {"mu": float(a["hopf_mu"]), "frequency_hz": float(a["hopf_frequency_hz"]),
+                 "lyapunov_coefficient": float(a["lyapunov_coefficient"]), "kind": str(a["kind"]),
+                 "kind_from": str(a["kind_from"])},
+        "folds": [float(v) for v in ds["fold_mu"].values],
+        "hysteresis_mu": [float(v) for v in np.atleast_1d(a["hysteresis_mu"]) if np.isfinite(v)],
+        "harmonics": int(a["harmonics"]),
+        "harmonics_change": float(a["harmonics_change"]),
+        "stop_reason": str(a["stop_reason"]),
+        "theta_deg": float(a.get("theta_deg", 0.0)),
+        "contact": str(a.get("contact", "")),
+    }

@@ -207,7 +207,13 @@ def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float
     def equilibrium(mu: float) -> NDArray:
         return model.static_equilibrium(contact.sliding_mu(mu, speed), t, 0.0)
 
-    L = abs(float(equilibrium(0.0) @ b)) or 1e-6  # the static approach of the contact
+    approach = float(equilibrium(0.0) @ b)  # the static approach of the contact (< 0: pressed)
+    if not approach < 0.0:
+        raise InputError(
+            f"The contact is not pressed in the static equilibrium (approach b.x = {approach:.3g} m >= 0): "
+            "there is no steady sliding to squeal about; give the model a load (P > 0)."
+        )
+    L = -approach
     return SecondOrderSystem(
         M=np.asarray(model.mass_matrix(), float), C=np.asarray(model.damping_matrix(), float), K=K0, F0=F0,
         force=force, dof_names=tuple(model.dof_names), param="mu", length_scale=L,
