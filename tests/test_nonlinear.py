@@ -179,3 +179,31 @@ def test_cli_limitcycle_rejects_bad_input(run):
     assert r.exit_code == 2 and "outside the friction range" in r.output
     r = run("limitcycle", "--mu", "0.3:0.6:5", "--set", "P=0")  # no load: nothing to squeal about
     assert r.exit_code == 2 and "not pressed" in r.output
+
+
+def test_subcritical_branch_fold_stability_and_hysteresis():
+    # x'' + x = eps (beta + x^2 - x^4) x' (Bautin-type): l1 = eps/4 > 0 (G&H 3.4.11), and averaging
+    # (Krylov-Bogoliubov: A^4 - 2 A^2 - 8 beta = 0) puts a fold at beta = -1/8, A = 1, with the inner
+    # branch unstable and the outer one stable: hysteresis over beta in [-1/8, 0]. Errors O(eps).
+    from squealkit.nonlinear import continue_branch
+    from squealkit.nonlinear.continuation import branch_dataset
+
+    eps = 0.05
+
+    def force(x, v, beta):
+        h = eps * (beta + x**2 - x**4)
+        return h * v, (eps * (2 * x - 4 * x**3) * v)[..., None], h[..., None], eps * v
+
+    sys = SecondOrderSystem(np.eye(1), np.zeros((1, 1)), np.eye(1), np.zeros(1), force, ("x",), "beta")
+    hopf = hopf_point(sys, 0.01)
+    assert hopf.lyapunov_coefficient == pytest.approx(eps / 4, rel=1e-5) and hopf.kind == "subcritical"
+    ds = branch_dataset(sys, continue_branch(sys, hopf, (-0.3, 0.1), harmonics=7, step=0.01, n_floquet=512),
+                        harmonics=7, check_harmonics=False)
+    assert ds.sizes["fold"] == 1
+    assert ds.fold_mu.values[0] == pytest.approx(-0.125, abs=0.125 * 2 * eps)
+    amp = ds.amplitude.sel(dof="x").values
+    inner, outer = amp < 0.95, amp > 1.05
+    assert not ds.stable.values[inner].any() and ds.stable.values[outer].all()
+    lo, hi = ds.attrs["hysteresis_mu"]
+    assert lo == pytest.approx(-0.125, abs=0.125 * 2 * eps) and abs(hi) < 1e-9
+    assert ds.attrs["kind"] == "subcritical"
