@@ -207,3 +207,19 @@ def test_subcritical_branch_fold_stability_and_hysteresis():
     lo, hi = ds.attrs["hysteresis_mu"]
     assert lo == pytest.approx(-0.125, abs=0.125 * 2 * eps) and abs(hi) < 1e-9
     assert ds.attrs["kind"] == "subcritical"
+
+
+def test_branch_over_the_run_out_slope_starts_where_mu_is_critical():
+    # continuation in tan(theta) at mu = 0.35 (below the smooth disc's 0.3977): the onset slope is
+    # where critical_friction(theta) is 0.35 (eq. 6: the slope acts like friction)
+    from squealkit.models import get_preset
+    from squealkit.nonlinear import limit_cycle_branch_slope
+    from squealkit.stability import critical_friction
+
+    model = get_preset("lv2013")
+    ds = limit_cycle_branch_slope(model, (-0.15, 0.15), mu=0.35, harmonics=6, n_points=8, n_floquet=256,
+                                  check_harmonics=False)
+    t_c = ds.attrs["hopf_mu"]
+    assert critical_friction(model, math.atan(t_c), damped=True).mu_critical == pytest.approx(0.35, rel=1e-5)
+    assert ds.tan_theta.values.max() == pytest.approx(0.15) and ds.stable.values.all()
+    assert (ds.contact_loss_fraction.values[ds.tan_theta.values > t_c + 0.02] > 0).all()

@@ -26,7 +26,14 @@ from .._validation import InputError, validate_finite, validate_positive
 from .harmonic_balance import HBProblem, LimitCycle, SecondOrderSystem, _Basis, _newton, contact_system, solve_fixed_p
 from .hopf import HopfPoint, hopf_point
 
-__all__ = ["Branch", "continue_branch", "floquet_multipliers", "limit_cycle_branch", "limit_cycle_summary"]
+__all__ = [
+    "Branch",
+    "continue_branch",
+    "floquet_multipliers",
+    "limit_cycle_branch",
+    "limit_cycle_branch_slope",
+    "limit_cycle_summary",
+]
 
 #: A non-trivial Floquet multiplier above 1 + this marks an unstable cycle.
 FLOQUET_TOL = 1e-4
@@ -93,7 +100,7 @@ class Branch:
 
 def _fold_indices(tp: NDArray, p: NDArray, thresh: float = 1e-3) -> tuple[int, ...]:
     """Points of extreme ``p`` between consecutive tangents whose ``dp/ds`` changes sign
-    (tangents with ``|dp/ds|`` below ``thresh``, e.g. a vertical start, are skipped)."""
+    (tangents with ``abs(dp/ds)`` below ``thresh``, e.g. a vertical start, are skipped)."""
     sig = [(i, np.sign(t)) for i, t in enumerate(tp) if abs(t) > thresh]
     out = []
     for (i, s0), (j, s1) in itertools.pairwise(sig):
@@ -334,6 +341,67 @@ def limit_cycle_branch(
                                  "contact": contact.describe(), "mu_range": [lo, hi]})
 
 
+def limit_cycle_branch_slope(
+    model,
+    tan_theta: tuple[float, float] | NDArray,
+    *,
+    mu: float,
+    contact=None,
+    speed: float = 0.02,
+    harmonics: int = 10,
+    n_points: int = 50,
+    max_points: int | None = None,
+    n_floquet: int = 1024,
+    check_harmonics: bool = True,
+    scan: int = 81,
+) -> xr.Dataset:
+    """Squeal limit cycles over the run-out slope tan(theta) at a fixed friction ``mu``.
+
+    As :func:`limit_cycle_branch` with the roles swapped: the Hopf point is the first slope in
+    the range where the damped linearisation loses stability (a scan of ``scan`` slopes, then a
+    secant on the growth rate), and the branch is continued in ``tan_theta`` (variable
+    ``tan_theta`` over ``point`` instead of ``mu``; ``hopf_mu`` then holds the critical slope).
+
+    Parameters
+    ----------
+    model : FrictionModel
+    tan_theta : (float, float) or array
+        Slope range ``(start, stop)``.
+    mu : float
+        Friction coefficient.
+    contact, speed, harmonics, n_points, max_points, n_floquet, check_harmonics
+        As for :func:`limit_cycle_branch`.
+    scan : int
+        Slopes scanned for the onset.
+
+    Returns
+    -------
+    xarray.Dataset
+    """
+    from ..transient.contact import Contact, as_contact
+    from .hopf import _growth
+
+    contact = Contact.nonlinear() if contact is None else as_contact(contact)
+    t_a = np.atleast_1d(np.asarray(tan_theta, float))
+    lo, hi = float(t_a.min()), float(t_a.max())
+    if not hi > lo:
+        raise InputError(f"Parameter tan_theta={tan_theta!r} must span a range (start < stop).")
+    system = contact_system(model, contact, speed=speed, mu=validate_finite("mu", mu), param="tan_theta")
+    grid = np.linspace(lo, hi, int(scan))
+    g = np.array([_growth(system, t)[0] for t in grid])
+    up = np.flatnonzero((g[:-1] < 0) & (g[1:] >= 0))
+    if up.size == 0:
+        raise InputError(f"No squeal onset for tan(theta) in [{lo:g}, {hi:g}] at mu = {mu:g}: "
+                         "there is no Hopf point to start a limit-cycle branch from.")
+    k = up[0]
+    hopf = hopf_point(system, float(grid[k] - g[k] * (grid[k + 1] - grid[k]) / (g[k + 1] - g[k])))
+    br = continue_branch(system, hopf, (lo, hi), harmonics=harmonics, step=(hi - lo) / (n_points - 1),
+                         max_points=max_points or 10 * n_points, n_floquet=n_floquet)
+    return branch_dataset(system, br, harmonics=harmonics, check_harmonics=check_harmonics,
+                          attrs={"model": model.to_json(), "mu": float(mu), "speed": speed, "speed_units": "m/s",
+                                 "contact": contact.describe(), "tan_theta_range": [lo, hi]})
+
+
 def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, check_harmonics: bool = True,
                    attrs: dict | None = None) -> xr.Dataset:
     """Label a :class:`Branch` as an xarray Dataset (see :func:`limit_cycle_branch`)."""
@@ -385,6 +453,7 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
                 "harmonic_row": np.arange(2 * harmonics + 1)},
         attrs={
             "title": "Limit-cycle branch by harmonic balance",
+            "param": system.param,
             "system": system.description,
             "hopf_mu": br.hopf.p,
             "hopf_frequency_hz": br.hopf.frequency_hz,

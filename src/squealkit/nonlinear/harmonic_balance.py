@@ -115,7 +115,8 @@ class SecondOrderSystem:
         return np.concatenate([v, acc], axis=-1)
 
 
-def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float = 0.0) -> SecondOrderSystem:
+def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float = 0.0, mu: float = 0.0,
+                   param: str = "mu") -> SecondOrderSystem:
     """The nonlinear pin-on-disc system of the transient solver, for harmonic balance.
 
     Reproduces the contact force of :mod:`squealkit.transient._kernels` (``_rhs``,
@@ -135,12 +136,16 @@ def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float
     speed : float
         Sliding speed v [m/s] (paper: 0.02 m/s).
     tan_theta : float
-        Run-out slope tan(theta) [1].
+        Run-out slope tan(theta) [1] (fixed when ``param="mu"``).
+    mu : float
+        Kinetic friction coefficient (fixed when ``param="tan_theta"``).
+    param : {"mu", "tan_theta"}
+        Which of the two is the system's parameter ``p``.
 
     Returns
     -------
     SecondOrderSystem
-        With parameter ``mu`` (the kinetic friction coefficient).
+        With parameter ``mu`` (the kinetic friction coefficient) or ``tan_theta``.
 
     Examples
     --------
@@ -153,7 +158,10 @@ def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float
 
     contact = Contact.nonlinear() if contact is None else as_contact(contact)
     speed = validate_positive("speed", speed)
-    t = validate_finite("tan_theta", tan_theta)
+    t_fixed = validate_finite("tan_theta", tan_theta)
+    mu_fixed = validate_finite("mu", mu)
+    if param not in ("mu", "tan_theta"):
+        raise InputError(f"Parameter param={param!r} must be 'mu' or 'tan_theta'.")
     ok, kc, b, f = contact_geometry(model)
     if not ok:
         raise InputError(
@@ -164,8 +172,6 @@ def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float
     F0 = np.asarray(model.load_parts()[0], float)
     s = float(model.sliding_direction)
     fhat = f / max(float(np.linalg.norm(f)), 1e-300)
-    d0 = b + s * t * f  # direction of N_c alone
-    d1 = -t * b + s * f  # direction of N_c mu_e
     sep, sign, strib = contact.separation, contact.sign_friction, contact.mu_static is not None
     v_reg, mu_s, v_s = contact.v_reg, (contact.mu_static or 0.0), contact.v_stribeck
 
@@ -187,7 +193,9 @@ def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float
             phi, dphi = np.ones_like(w), np.zeros_like(w)
         return mw * phi, dmw * phi + mw * dphi, dmu * phi
 
-    def force(x: NDArray, xd: NDArray, mu: float):
+    def force_mu_t(x: NDArray, xd: NDArray, mu: float, t: float):
+        d0 = b + s * t * f  # direction of N_c alone
+        d1 = -t * b + s * f  # direction of N_c mu_e
         nc = -kc * (x @ b)
         closed = nc > 0.0 if sep else np.ones_like(nc, dtype=bool)
         nc = np.where(closed, nc, 0.0)
@@ -198,16 +206,29 @@ def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float
         dnc_dx = np.where(closed[..., None], -kc * b, 0.0)
         dfdx = direction[..., :, None] * dnc_dx[..., None, :]
         dfdv = (nc * dme_dw)[..., None, None] * d1[:, None] * (-s * fhat)[None, :]
-        dfdp = (nc * dme_dmu)[..., None] * d1
-        return out, dfdx, dfdv, dfdp
+        dfdmu = (nc * dme_dmu)[..., None] * d1
+        dfdt = nc[..., None] * (s * f - me[..., None] * b)
+        return out, dfdx, dfdv, dfdmu, dfdt
+
+    if param == "mu":
+        def force(x: NDArray, xd: NDArray, p: float):
+            out, dfdx, dfdv, dfdmu, _ = force_mu_t(x, xd, p, t_fixed)
+            return out, dfdx, dfdv, dfdmu
+
+        def equilibrium(p: float) -> NDArray:
+            return model.static_equilibrium(contact.sliding_mu(p, speed), t_fixed, 0.0)
+    else:
+        def force(x: NDArray, xd: NDArray, p: float):
+            out, dfdx, dfdv, _, dfdt = force_mu_t(x, xd, mu_fixed, p)
+            return out, dfdx, dfdv, dfdt
+
+        def equilibrium(p: float) -> NDArray:
+            return model.static_equilibrium(contact.sliding_mu(mu_fixed, speed), p, 0.0)
 
     def contact_open(x: NDArray) -> NDArray:
         return (-kc * (x @ b)) <= 0.0
 
-    def equilibrium(mu: float) -> NDArray:
-        return model.static_equilibrium(contact.sliding_mu(mu, speed), t, 0.0)
-
-    approach = float(equilibrium(0.0) @ b)  # the static approach of the contact (< 0: pressed)
+    approach = float(model.static_equilibrium(0.0, 0.0, 0.0) @ b)  # the static approach of the contact (< 0: pressed)
     if not approach < 0.0:
         raise InputError(
             f"The contact is not pressed in the static equilibrium (approach b.x = {approach:.3g} m >= 0): "
@@ -216,9 +237,10 @@ def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float
     L = -approach
     return SecondOrderSystem(
         M=np.asarray(model.mass_matrix(), float), C=np.asarray(model.damping_matrix(), float), K=K0, F0=F0,
-        force=force, dof_names=tuple(model.dof_names), param="mu", length_scale=L,
+        force=force, dof_names=tuple(model.dof_names), param=param, length_scale=L,
         contact_open=contact_open if sep else None, equilibrium=equilibrium,
-        description=f"{model.kind}: {contact.describe()}; v = {speed:g} m/s, tan(theta) = {t:g}",
+        description=f"{model.kind}: {contact.describe()}; v = {speed:g} m/s, "
+        + (f"tan(theta) = {t_fixed:g}" if param == "mu" else f"mu = {mu_fixed:g}"),
     )
 
 

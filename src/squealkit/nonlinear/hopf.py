@@ -32,7 +32,7 @@ from .harmonic_balance import SecondOrderSystem
 
 __all__ = ["HopfPoint", "hopf_point", "lyapunov_coefficient"]
 
-#: |l1| below this (per L^2) is reported as degenerate: no smooth cubic term at onset.
+#: abs(l1) below this (per L^2) is reported as degenerate: no smooth cubic term at onset.
 DEGENERATE_L1 = 1e-6
 
 
@@ -75,7 +75,7 @@ class HopfPoint:
 
     @property
     def kind(self) -> str:
-        """``"supercritical"``, ``"subcritical"`` or ``"degenerate"`` (|l1| < DEGENERATE_L1)."""
+        """``"supercritical"``, ``"subcritical"`` or ``"degenerate"`` (``abs(l1) < DEGENERATE_L1``)."""
         if not abs(self.lyapunov_coefficient) >= DEGENERATE_L1:
             return "degenerate"
         return "supercritical" if self.lyapunov_coefficient < 0 else "subcritical"

@@ -25,7 +25,7 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 
 def limitcycle_plot(ds: xr.Dataset, *, fig=None):
-    """Bifurcation diagram: amplitude per DOF [um] and frequency [Hz] against mu.
+    """Bifurcation diagram: amplitude per DOF [um] and frequency [Hz] against mu (or tan(theta)).
 
     Stable cycles are solid, unstable ones dashed; the quiet state (amplitude 0) is solid
     below the Hopf point and dashed above it; the Hopf point is a black star, folds are
@@ -34,7 +34,7 @@ def limitcycle_plot(ds: xr.Dataset, *, fig=None):
     Parameters
     ----------
     ds : xarray.Dataset
-        A result of :func:`squealkit.nonlinear.limit_cycle_branch`.
+        A result of :func:`squealkit.nonlinear.limit_cycle_branch` (or ``limit_cycle_branch_slope``).
     fig : matplotlib Figure, optional
         Figure to draw into (cleared); a new one otherwise.
 
@@ -48,12 +48,13 @@ def limitcycle_plot(ds: xr.Dataset, *, fig=None):
     fig = fig or Figure(figsize=(7.5, 6.5), layout="constrained")
     fig.clf()
     ax_a, ax_f = fig.subplots(2, 1, sharex=True, height_ratios=[2.0, 1.0])
-    mu = ds["mu"].values
+    param = str(ds.attrs.get("param", "mu"))
+    mu = ds[param].values
     stable = ds["stable"].values.astype(bool)
     amp = ds["amplitude"].values * 1e6
     freq = ds["frequency_hz"].values
     mu_h = float(ds.attrs["hopf_mu"])
-    lo, hi = (float(v) for v in ds.attrs.get("mu_range", [mu.min(), mu.max()]))
+    lo, hi = (float(v) for v in ds.attrs.get(f"{param}_range", [mu.min(), mu.max()]))
     runs = _runs(stable)
     for j, dof in enumerate(ds["dof"].values):
         c = _COLORS[j % len(_COLORS)]
@@ -72,10 +73,10 @@ def limitcycle_plot(ds: xr.Dataset, *, fig=None):
         ax_f.plot([mu[i]], [freq[i]], "kx", ms=9, mew=2, zorder=5)
     kind = ds.attrs.get("kind", "")
     ax_a.set_title(f"Limit cycles by harmonic balance (H = {ds.attrs.get('harmonics')}): "
-                   f"Hopf at mu = {mu_h:.4f}, {ds.attrs['hopf_frequency_hz']:.1f} Hz, {kind}", fontsize=10)
+                   f"Hopf at {param} = {mu_h:.4f}, {ds.attrs['hopf_frequency_hz']:.1f} Hz, {kind}", fontsize=10)
     ax_a.set_ylabel("amplitude (half peak-to-peak) [um]")
     ax_f.set_ylabel("frequency [Hz]")
-    ax_f.set_xlabel("friction coefficient mu")
+    ax_f.set_xlabel("friction coefficient mu" if param == "mu" else "run-out slope tan(theta)")
     ax_f.set_xlim(lo, hi)
     handles = ax_a.get_legend_handles_labels()[0]
     handles += [Line2D([], [], color="0.3", ls="-", label="stable"),
