@@ -54,7 +54,8 @@ def limitcycle_plot(ds: xr.Dataset, *, fig=None):
     amp = ds["amplitude"].values * 1e6
     freq = ds["frequency_hz"].values
     mu_h = float(ds.attrs["hopf_mu"])
-    lo, hi = (float(v) for v in ds.attrs.get(f"{param}_range", [mu.min(), mu.max()]))
+    pad = 0.05 * float(np.ptp(mu)) if mu.size > 1 else 0.0
+    lo, hi = (float(v) for v in ds.attrs.get(f"{param}_range", [mu.min() - pad, mu.max() + pad]))
     runs = _runs(stable)
     for j, dof in enumerate(ds["dof"].values):
         c = _COLORS[j % len(_COLORS)]
@@ -76,7 +77,7 @@ def limitcycle_plot(ds: xr.Dataset, *, fig=None):
                    f"Hopf at {param} = {mu_h:.4f}, {ds.attrs['hopf_frequency_hz']:.1f} Hz, {kind}", fontsize=10)
     ax_a.set_ylabel("amplitude (half peak-to-peak) [um]")
     ax_f.set_ylabel("frequency [Hz]")
-    ax_f.set_xlabel("friction coefficient mu" if param == "mu" else "run-out slope tan(theta)")
+    ax_f.set_xlabel({"mu": "friction coefficient mu", "tan_theta": "run-out slope tan(theta)"}.get(param, param))
     ax_f.set_xlim(lo, hi)
     handles = ax_a.get_legend_handles_labels()[0]
     handles += [Line2D([], [], color="0.3", ls="-", label="stable"),
