@@ -223,3 +223,43 @@ def test_branch_over_the_run_out_slope_starts_where_mu_is_critical():
     assert critical_friction(model, math.atan(t_c), damped=True).mu_critical == pytest.approx(0.35, rel=1e-5)
     assert ds.tan_theta.values.max() == pytest.approx(0.15) and ds.stable.values.all()
     assert (ds.contact_loss_fraction.values[ds.tan_theta.values > t_c + 0.02] > 0).all()
+
+
+def test_stribeck_friction_gives_a_hard_onset_with_hysteresis_that_transients_confirm():
+    # Falling (Stribeck) friction adds a smooth cubic term at steady sliding: l1 > 0, the branch
+    # leaves the Hopf point towards lower friction (unstable), folds where contact loss sets in and
+    # comes back stable. Between the fold and the Hopf point the quiet state and the squeal coexist:
+    # a transient from rest decays, one started on the cycle stays there (measured: 1e-4 agreement).
+    from squealkit.models import get_preset
+    from squealkit.nonlinear import contact_system, limit_cycle_branch
+    from squealkit.nonlinear.harmonic_balance import _Basis
+    from squealkit.transient import Contact, simulate
+
+    model, contact = get_preset("lv2013"), Contact.nonlinear(mu_static=0.6, v_stribeck=0.01)
+    ds = limit_cycle_branch(model, (0.1, 0.8), contact=contact, harmonics=10, n_points=21, n_floquet=512,
+                            check_harmonics=False)
+    assert ds.attrs["lyapunov_coefficient"] > 0 and ds.attrs["kind"] == "subcritical"
+    assert ds.sizes["fold"] == 1
+    lo, hi = ds.attrs["hysteresis_mu"]
+    assert lo == pytest.approx(ds.fold_mu.values[0]) and hi == pytest.approx(ds.attrs["hopf_mu"])
+    sys = contact_system(model, contact)
+    # normal form: the unstable small cycles (contact not yet lost) follow the square-root law
+    hopf = hopf_point(sys, ds.attrs["hopf_mu"])
+    small = (ds.contact_loss_fraction.values == 0) & (ds.mu.values < hi - 5e-4)
+    assert small.sum() >= 2 and not ds.stable.values[small].any()
+    pred = hopf.amplitude(ds.mu.values[small])
+    assert np.allclose(ds.amplitude.values[small], pred, rtol=0.05)  # measured within 1.2 %
+    mu = 0.5 * (lo + hi)
+    i = int(np.flatnonzero(ds.stable.values & (ds.mu.values < hi))[0])
+    lc = harmonic_balance(sys, mu, omega=float(ds.omega_rad_s[i]), guess=ds.coefficients[i].values, harmonics=10,
+                          check_harmonics=False)
+    b = _Basis.make(10, 4)
+    fs = 100_000.0
+    on = simulate(model, mu=mu, duration=0.4, fs=fs, contact=contact, x0=(b.E @ lc.coefficients)[0],
+                  v0=lc.omega * (b.dE @ lc.coefficients)[0])
+    seg = on.x1.values[-2000:]
+    assert 0.5 * (seg.max() - seg.min()) == pytest.approx(lc.amplitude[0], rel=2e-3)
+    quiet = simulate(model, mu=mu, duration=0.4, fs=fs, contact=contact, perturbation=1e-8,
+                     rng=np.random.default_rng(0))
+    x = quiet.x1.values
+    assert np.ptp(x[-2000:]) < np.ptp(x[2000:4000])  # decays: the quiet state is stable here

@@ -8,7 +8,8 @@ fold is where the parameter's component of the tangent changes sign. Each cycle'
 stability comes from its Floquet multipliers: the monodromy matrix of the variational
 equations along the harmonic-balance solution (a product of matrix exponentials over
 ``n_floquet`` sub-intervals of the period); the trivial multiplier (near 1, the phase
-shift) is set aside.
+shift) is set aside, and its distance from 1 (the error of the truncated cycle and of the
+product) is the margin a multiplier must clear to call the cycle unstable.
 """
 
 from __future__ import annotations
@@ -35,8 +36,8 @@ __all__ = [
     "limit_cycle_summary",
 ]
 
-#: A non-trivial Floquet multiplier above 1 + this marks an unstable cycle.
-FLOQUET_TOL = 1e-4
+#: A non-trivial Floquet multiplier above 1 + max(this, 3 |trivial multiplier - 1|) marks an unstable cycle.
+FLOQUET_TOL = 1e-7
 
 
 def _expm_batch(X: NDArray) -> NDArray:
@@ -121,6 +122,7 @@ def continue_branch(
     amplitude_start: float = 0.05,
     n_floquet: int = 1024,
     max_amplitude: float = 1e3,
+    max_turn: float = 0.3,
 ) -> Branch:
     """Follow the limit cycles born at ``hopf`` by pseudo-arclength continuation.
 
@@ -144,6 +146,8 @@ def continue_branch(
         Sub-intervals of the monodromy product.
     max_amplitude : float
         Stop when an amplitude exceeds this many ``length_scale``.
+    max_turn : float
+        Largest angle [rad] between consecutive tangents (the step is halved otherwise).
 
     Returns
     -------
@@ -212,6 +216,9 @@ def continue_branch(
             continue
         r, J = prob.residual(z)
         t_new = tangent(J, ts[-1])
+        if (t_new * W * W) @ ts[-1] < math.cos(max_turn) and h > 1e-3:
+            h *= 0.5  # the branch turns sharply (a fold, contact loss setting in): smaller steps
+            continue
         p = z[-1]
         if p < lo or p > hi:
             # end exactly on the range's bound: a fixed-parameter solve from the interpolated guess
@@ -237,7 +244,10 @@ def continue_branch(
         cycles.append(c)
         mult.append(floquet_multipliers(system, c, n_floquet=n_floquet))
     mult_a = np.array(mult)
-    stable = np.abs(mult_a[:, :-1]).max(axis=1) <= 1 + FLOQUET_TOL
+    # the trivial multiplier's distance from 1 measures the error of the cycle and of the
+    # monodromy product: a non-trivial multiplier must exceed 1 by more than that to count
+    err = np.abs(mult_a[:, -1] - 1.0)
+    stable = np.abs(mult_a[:, :-1]).max(axis=1) <= 1 + np.maximum(FLOQUET_TOL, 3 * err)
     tp = np.array([t_i[-1] * W[-1] for t_i in ts])
     return Branch(tuple(cycles), mult_a, stable, tp, _fold_indices(tp, np.array([c.p for c in cycles])), hopf, reason)
 
@@ -425,8 +435,9 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
     kind, kind_from = _onset_kind(br.hopf, p, br.stable)
     fold_mu = [float(p[i]) for i in br.folds]
     # hysteresis: squealing cycles (stable) exist below the Hopf point
-    below = p[(p < br.hopf.p - 1e-9) & br.stable]
-    hyst = [float(below.min()), float(br.hopf.p)] if below.size else [math.nan, math.nan]
+    below = list(p[(p < br.hopf.p - 1e-9) & br.stable])
+    below += [float(p[i]) for i in br.folds if p[i] < br.hopf.p and i + 1 < p.size and br.stable[i + 1]]
+    hyst = [float(min(below)), float(br.hopf.p)] if below else [math.nan, math.nan]
     fold_flag = np.zeros(p.size, dtype=bool)
     fold_flag[list(br.folds)] = True
     ds = xr.Dataset(
@@ -444,6 +455,8 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
                                                          "circle)"}),
             "floquet_max": ("point", np.abs(br.multipliers[:, :-1]).max(axis=1),
                             {"units": "1", "long_name": "largest non-trivial Floquet multiplier modulus"}),
+            "floquet_error": ("point", np.abs(br.multipliers[:, -1] - 1.0),
+                              {"units": "1", "long_name": "distance of the trivial Floquet multiplier from 1 (error)"}),
             "fold": ("point", fold_flag, {"long_name": "point nearest to a fold (turning point in mu)"}),
             "fold_mu": ("fold", np.array(fold_mu, float), {"units": "1", "long_name": "friction at each fold"}),
             "coefficients": (("point", "harmonic_row", "dof"), np.array([c.coefficients for c in cyc]),
