@@ -170,6 +170,11 @@ def test_cli_limitcycle_json_plot_and_dataset(run, tmp_path):
     assert png.stat().st_size > 10_000
     ds = load_dataset(out)
     assert ds["amplitude"].attrs["units"] == "m" and ds.attrs["hopf_mu"] == pytest.approx(d["hopf"]["mu"])
+    from squealkit.plotting.limitcycle import limitcycle_signal_plot
+
+    ax = limitcycle_signal_plot(ds, -1).axes[0]
+    x1 = ax.lines[0].get_ydata() * 1e-6  # one period about the mean: half its range is the amplitude
+    assert 0.5 * np.ptp(x1) == pytest.approx(d["amplitude"]["x1"][-1], rel=1e-2)
 
 
 def test_cli_limitcycle_rejects_bad_input(run):
@@ -248,7 +253,7 @@ def test_stribeck_friction_gives_a_hard_onset_with_hysteresis_that_transients_co
     small = (ds.contact_loss_fraction.values == 0) & (ds.mu.values < hi - 5e-4)
     assert small.sum() >= 2 and not ds.stable.values[small].any()
     pred = hopf.amplitude(ds.mu.values[small])
-    assert np.allclose(ds.amplitude.values[small], pred, rtol=0.05)  # measured within 1.2 %
+    assert np.allclose(ds.amplitude.values[small], pred, rtol=0.05)  # measured 0.3 % to 1.6 % (farther)
     mu = 0.5 * (lo + hi)
     i = int(np.flatnonzero(ds.stable.values & (ds.mu.values < hi))[0])
     lc = harmonic_balance(sys, mu, omega=float(ds.omega_rad_s[i]), guess=ds.coefficients[i].values, harmonics=10,

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-__all__ = ["limitcycle_plot"]
+__all__ = ["limitcycle_plot", "limitcycle_signal_plot"]
 
 _COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink")
 
@@ -88,4 +88,50 @@ def limitcycle_plot(ds: xr.Dataset, *, fig=None):
     for ax in (ax_a, ax_f):
         ax.grid(color="0.9")
         ax.set_axisbelow(True)
+    return fig
+
+
+def limitcycle_signal_plot(ds: xr.Dataset, point: int = -1, *, n_samples: int = 512, fig=None):
+    """One period of a cycle of the branch: each DOF's vibration about its mean [um] against time [ms].
+
+    The signal is the Fourier series the result stores (``coefficients``), summed at
+    ``n_samples`` instants.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`squealkit.nonlinear.limit_cycle_branch`.
+    point : int
+        Which point of the branch (default the last).
+    n_samples : int
+        Instants per period.
+    fig : matplotlib Figure, optional
+        Figure to draw into (cleared); a new one otherwise.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.figure import Figure
+
+    c = ds["coefficients"].isel(point=point).values
+    omega = float(ds["omega_rad_s"].isel(point=point))
+    H = (c.shape[0] - 1) // 2
+    tau = 2 * np.pi * np.arange(n_samples + 1) / n_samples
+    k = np.arange(1, H + 1)
+    x = np.cos(np.outer(tau, k)) @ c[1:H + 1] + np.sin(np.outer(tau, k)) @ c[H + 1:]
+    t_ms = tau / omega * 1e3
+    fig = fig or Figure(figsize=(7.0, 3.8), layout="constrained")
+    fig.clf()
+    ax = fig.add_subplot()
+    for j, dof in enumerate(ds["dof"].values):
+        ax.plot(t_ms, x[:, j] * 1e6, color=_COLORS[j % len(_COLORS)], label=str(dof))
+    param = str(ds.attrs.get("param", "mu"))
+    p = float(ds[param].isel(point=point))
+    stable = "stable" if bool(ds["stable"].isel(point=point)) else "unstable"
+    ax.set_title(f"One period at {param} = {p:.4f}: {omega / (2 * np.pi):.2f} Hz, {stable}", fontsize=10)
+    ax.set_xlabel("time [ms]")
+    ax.set_ylabel("displacement about the mean [um]")
+    ax.legend(fontsize=8)
+    ax.grid(color="0.9")
     return fig
