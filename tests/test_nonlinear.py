@@ -290,3 +290,64 @@ def test_a_transient_from_rest_grows_onto_the_limit_cycle(paper_branch):
     for j, name in enumerate(sys.dof_names):
         x = fine[name].values
         assert 0.5 * (x.max() - x.min()) == pytest.approx(lc.amplitude[j], rel=2e-3), name
+
+
+class _Consistent:
+    """A pin-on-disc model that reports consistent contact kinematics (the option of newer models)."""
+
+    def __new__(cls):
+        from squealkit.models import get_preset
+
+        base = type(get_preset("lv2013"))
+        sub = type("ConsistentPinOnDisc", (base,), {"kinematics_option": property(lambda self: "consistent")})
+        return sub()
+
+
+@pytest.mark.parametrize("param", ["mu", "tan_theta"])
+@pytest.mark.parametrize("kinematics", ["paper", "consistent"])
+@pytest.mark.parametrize("stribeck", [None, 0.6])
+def test_contact_force_derivatives_match_finite_differences(param, kinematics, stribeck):
+    # The analytic derivatives the Newton solver, Floquet and l1 use, against central differences
+    # of the force itself, at states with contact closed and sliding in both directions.
+    from squealkit.models import get_preset
+    from squealkit.nonlinear import contact_system
+    from squealkit.transient import Contact
+
+    model = get_preset("lv2013") if kinematics == "paper" else _Consistent()
+    contact = Contact.nonlinear(mu_static=stribeck, v_stribeck=0.01, v_reg=5e-3)
+    sys = contact_system(model, contact, tan_theta=0.1, mu=0.5, param=param)
+    rng = np.random.default_rng(3)
+    x0 = sys.static_equilibrium(0.45 if param == "mu" else 0.05)
+    X = x0 + 0.3 * sys.length_scale * rng.standard_normal((6, 3))
+    V = 0.02 * rng.standard_normal((6, 3))
+    p = 0.45 if param == "mu" else 0.05
+    f, dfdx, dfdv, dfdp = sys.force(X, V, p)
+    closed = np.linalg.norm(f, axis=1) > 0  # contact closed: away from the kink of N_c >= 0
+    assert closed.sum() >= 3
+    hx, hv = 1e-6 * sys.length_scale, 1e-7
+    for j in range(3):
+        ex, ev = np.eye(3)[j] * hx, np.eye(3)[j] * hv
+        fd_x = (sys.force(X + ex, V, p)[0] - sys.force(X - ex, V, p)[0]) / (2 * hx)
+        fd_v = (sys.force(X, V + ev, p)[0] - sys.force(X, V - ev, p)[0]) / (2 * hv)
+        assert np.allclose(dfdx[closed, :, j], fd_x[closed], rtol=1e-5, atol=1e-7 * np.abs(dfdx).max())
+        assert np.allclose(dfdv[closed, :, j], fd_v[closed], rtol=1e-4, atol=1e-6 * np.abs(dfdv).max())
+    fd_p = (sys.force(X, V, p + 1e-7)[0] - sys.force(X, V, p - 1e-7)[0]) / 2e-7
+    assert np.allclose(dfdp, fd_p, rtol=1e-5, atol=1e-7 * np.abs(dfdp).max())
+
+
+def test_consistent_kinematics_hopf_point_matches_critical_friction():
+    # After the models gain the 'kinematics' option: the Hopf point of the nonlinear system with
+    # consistent kinematics at a slope is the damped critical friction of that model.
+    from squealkit.models import PinOnDisc3DOF
+    from squealkit.nonlinear import contact_system
+    from squealkit.stability import critical_friction
+
+    try:
+        model = PinOnDisc3DOF(kinematics="consistent")
+    except TypeError:
+        pytest.skip("this squealkit's models have no 'kinematics' option yet")
+    theta = math.radians(3.0)
+    crit = critical_friction(model, theta, damped=True)
+    hopf = hopf_point(contact_system(model, tan_theta=math.tan(theta)), crit.mu_critical)
+    assert hopf.p == pytest.approx(crit.mu_critical, rel=1e-5)
+    assert hopf.frequency_hz == pytest.approx(crit.frequency_hz, rel=1e-6)

@@ -63,7 +63,7 @@ class SecondOrderSystem:
     length_scale : float
         Typical displacement [m] (scales the unknowns of the Newton solve).
     contact_open : callable, optional
-        ``contact_open(x)`` -> boolean array ``(...)``: True where contact is lost.
+        ``contact_open(x, p)`` -> boolean array ``(...)``: True where contact is lost.
     equilibrium : callable, optional
         ``equilibrium(p)`` -> static equilibrium ``(n,)`` [m] (default: solve ``K x = F0 + f``).
     """
@@ -76,7 +76,7 @@ class SecondOrderSystem:
     dof_names: tuple[str, ...]
     param: str = "p"
     length_scale: float = 1.0
-    contact_open: Callable[[NDArray], NDArray] | None = None
+    contact_open: Callable[[NDArray, float], NDArray] | None = None
     equilibrium: Callable[[float], NDArray] | None = None
     description: str = ""
 
@@ -122,10 +122,12 @@ def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float
     Reproduces the contact force of :mod:`squealkit.transient._kernels` (``_rhs``,
     structured branch) on the mean surface ``q = 0`` with a frozen slope ``tan_theta``::
 
-        f_nl = N_c (g b + e f),  N_c = -kc (b.x)  (>= 0 if contact may open)
+        f_nl = N_c (g b + e f),  N_c = -kc (b_t.x)  (>= 0 if contact may open)
         mu_e = mu(w) phi(w),  w = v - s fhat.x',  g = 1 - mu_e t,  e = s (mu_e + t)
 
-    with ``K = K0`` (structure only) and ``F0`` from the model's ``load_parts``.
+    with ``K = K0`` (structure only) and ``F0`` from the model's ``load_parts``; ``b_t = b``
+    for the paper's kinematics and ``b + s t fhat`` for a model whose ``kinematics_option`` is
+    ``"consistent"`` (the transient kernel's gap; models without the option are the paper's).
 
     Parameters
     ----------
@@ -172,6 +174,9 @@ def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float
     F0 = np.asarray(model.load_parts()[0], float)
     s = float(model.sliding_direction)
     fhat = f / max(float(np.linalg.norm(f)), 1e-300)
+    # consistent contact kinematics (a model option on newer squealkit): the gap is b_t.x - q with
+    # b_t = b + s t fhat, as in the transient kernel; the paper's (and older models'): b_t = b
+    kin = 1.0 if getattr(model, "kinematics_option", "paper") == "consistent" else 0.0
     sep, sign, strib = contact.separation, contact.sign_friction, contact.mu_static is not None
     v_reg, mu_s, v_s = contact.v_reg, (contact.mu_static or 0.0), contact.v_stribeck
 
@@ -196,18 +201,20 @@ def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float
     def force_mu_t(x: NDArray, xd: NDArray, mu: float, t: float):
         d0 = b + s * t * f  # direction of N_c alone
         d1 = -t * b + s * f  # direction of N_c mu_e
-        nc = -kc * (x @ b)
+        bt = b + kin * s * t * fhat
+        nc = -kc * (x @ bt)
         closed = nc > 0.0 if sep else np.ones_like(nc, dtype=bool)
         nc = np.where(closed, nc, 0.0)
         w = speed - s * (xd @ fhat)
         me, dme_dw, dme_dmu = friction(w, mu)
         direction = d0 + me[..., None] * d1
         out = nc[..., None] * direction
-        dnc_dx = np.where(closed[..., None], -kc * b, 0.0)
+        dnc_dx = np.where(closed[..., None], -kc * bt, 0.0)
         dfdx = direction[..., :, None] * dnc_dx[..., None, :]
         dfdv = (nc * dme_dw)[..., None, None] * d1[:, None] * (-s * fhat)[None, :]
         dfdmu = (nc * dme_dmu)[..., None] * d1
-        dfdt = nc[..., None] * (s * f - me[..., None] * b)
+        dnc_dt = np.where(closed, -kc * kin * s * (x @ fhat), 0.0)
+        dfdt = nc[..., None] * (s * f - me[..., None] * b) + dnc_dt[..., None] * direction
         return out, dfdx, dfdv, dfdmu, dfdt
 
     if param == "mu":
@@ -225,8 +232,9 @@ def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float
         def equilibrium(p: float) -> NDArray:
             return model.static_equilibrium(contact.sliding_mu(mu_fixed, speed), p, 0.0)
 
-    def contact_open(x: NDArray) -> NDArray:
-        return (-kc * (x @ b)) <= 0.0
+    def contact_open(x: NDArray, p: float) -> NDArray:
+        bt = b + kin * s * (t_fixed if param == "mu" else p) * fhat
+        return (-kc * (x @ bt)) <= 0.0
 
     approach = float(model.static_equilibrium(0.0, 0.0, 0.0) @ b)  # the static approach of the contact (< 0: pressed)
     if not approach < 0.0:
@@ -383,11 +391,11 @@ class LimitCycle:
         return np.arange(n_samples) / n_samples * 2 * math.pi / self.omega, b.E @ self.coefficients
 
 
-def _amplitude(sys: SecondOrderSystem, Z: NDArray, H: int) -> tuple[NDArray, float]:
+def _amplitude(sys: SecondOrderSystem, Z: NDArray, H: int, p: float) -> tuple[NDArray, float]:
     b = _Basis.make(H, max(512, 16 * H))
     X = b.E @ Z
     amp = 0.5 * (X.max(axis=0) - X.min(axis=0))
-    loss = float(np.mean(sys.contact_open(X))) if sys.contact_open is not None else float("nan")
+    loss = float(np.mean(sys.contact_open(X, p))) if sys.contact_open is not None else float("nan")
     return amp, loss
 
 
@@ -455,7 +463,7 @@ class HBProblem:
     def cycle(self, y: NDArray, *, residual: float = float("nan"), iterations: int = 0,
               harmonics_change: float = float("nan")) -> LimitCycle:
         Z, omega, p = self.unpack(y)
-        amp, loss = _amplitude(self.sys, Z, self.H)
+        amp, loss = _amplitude(self.sys, Z, self.H, p)
         return LimitCycle(float(p), float(omega), Z, self.sys.dof_names, amp, loss, harmonics_change,
                           residual, iterations)
 
