@@ -346,8 +346,9 @@ def test_consistent_kinematics_hopf_point_matches_critical_friction():
         model = PinOnDisc3DOF(kinematics="consistent")
     except TypeError:
         pytest.skip("this squealkit's models have no 'kinematics' option yet")
-    theta = math.radians(3.0)
+    theta = math.radians(-3.0)  # with consistent kinematics +3 deg stabilises, -3 deg destabilises
     crit = critical_friction(model, theta, damped=True)
+    assert crit.status == "onset"
     hopf = hopf_point(contact_system(model, tan_theta=math.tan(theta)), crit.mu_critical)
     assert hopf.p == pytest.approx(crit.mu_critical, rel=1e-5)
     assert hopf.frequency_hz == pytest.approx(crit.frequency_hz, rel=1e-6)
