@@ -38,6 +38,7 @@ COMMANDS: dict[str, str] = {
     "montecarlo": "squealkit.cli.montecarlo:montecarlo",
     "synth": "squealkit.cli.synth:synth",
     "campaign": "squealkit.cli.campaign:campaign",
+    "limitcycle": "squealkit.cli.limitcycle:limitcycle",
 }
 
 

@@ -1,0 +1,524 @@
+"""Branches of limit cycles: pseudo-arclength continuation of harmonic balance from the Hopf point.
+
+The branch starts on the onset mode at a small amplitude (the mode shape and frequency of
+the Hopf point, :mod:`squealkit.nonlinear.hopf`), where the parameter is solved for at a
+fixed amplitude, and is followed by pseudo-arclength continuation (predictor along the
+tangent, Newton corrector orthogonal to it, step adapted to the corrector's effort). A
+fold is where the parameter's component of the tangent changes sign. Each cycle's
+stability comes from its Floquet multipliers: the monodromy matrix of the variational
+equations along the harmonic-balance solution (a product of matrix exponentials over
+``n_floquet`` sub-intervals of the period); the trivial multiplier (near 1, the phase
+shift) is set aside, and its distance from 1 (the error of the truncated cycle and of the
+product) is the margin a multiplier must clear to call the cycle unstable.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+from numpy.typing import NDArray
+
+from .. import __version__
+from .._validation import InputError, validate_finite, validate_positive
+from .harmonic_balance import HBProblem, LimitCycle, SecondOrderSystem, _Basis, _newton, contact_system, solve_fixed_p
+from .hopf import HopfPoint, hopf_point
+
+__all__ = [
+    "Branch",
+    "continue_branch",
+    "floquet_multipliers",
+    "limit_cycle_branch",
+    "limit_cycle_branch_slope",
+    "limit_cycle_summary",
+]
+
+#: A non-trivial Floquet multiplier above 1 + max(this, 3 |trivial multiplier - 1|) marks an unstable cycle.
+FLOQUET_TOL = 1e-7
+
+
+def _expm_batch(X: NDArray) -> NDArray:
+    """Matrix exponentials of a stack (..., m, m): scaling and squaring with a degree-12 Taylor
+    polynomial (norm scaled below 1/2: truncation below 1e-16 relative), all in batched matmuls."""
+    norm = float(np.abs(X).sum(axis=-2).max()) if X.size else 0.0
+    sq = max(0, math.ceil(math.log2(norm / 0.5))) if norm > 0.5 else 0
+    Y = X / 2.0**sq
+    eye = np.broadcast_to(np.eye(X.shape[-1]), X.shape)
+    out = eye.copy()
+    for k in range(12, 0, -1):  # Horner: I + Y/1 (I + Y/2 (I + ...))
+        out = eye + (Y @ out) / k
+    for _ in range(sq):
+        out = out @ out
+    return out
+
+
+def floquet_multipliers(system: SecondOrderSystem, cycle: LimitCycle, *, n_floquet: int = 1024) -> NDArray:
+    """Floquet multipliers (2n,) of a cycle, largest modulus first, trivial one removed last.
+
+    The monodromy matrix is the product over ``n_floquet`` sub-intervals of
+    ``expm(A(t_j + dt/2) dt)`` with ``A`` the variational matrix along the cycle
+    (exponential midpoint rule, second order in ``dt``). Returns all 2n multipliers sorted
+    with the one nearest 1 (the trivial multiplier) last.
+    """
+    n = system.n_dof
+    N = int(n_floquet)
+    b = _Basis.make(cycle.harmonics, 2 * N)
+    X = (b.E @ cycle.coefficients)[1::2]  # midpoints of the N sub-intervals
+    Xd = cycle.omega * (b.dE @ cycle.coefficients)[1::2]
+    _, dfdx, dfdv, _ = system.force(X, Xd, cycle.p)
+    Minv = np.linalg.inv(system.M)
+    A = np.zeros((N, 2 * n, 2 * n))
+    A[:, :n, n:] = np.eye(n)
+    A[:, n:, :n] = Minv @ (dfdx - system.K)
+    A[:, n:, n:] = Minv @ (dfdv - system.C)
+    Phi = _expm_batch(A * (2 * math.pi / cycle.omega / N))
+    while Phi.shape[0] > 1:  # ordered product Phi_{N-1} ... Phi_1 Phi_0, pairwise
+        if Phi.shape[0] % 2:
+            Phi = np.concatenate([Phi, np.eye(2 * n)[None]], axis=0)
+        Phi = Phi[1::2] @ Phi[0::2]
+    rho = np.linalg.eigvals(Phi[0])
+    i = int(np.argmin(np.abs(rho - 1.0)))
+    rest = np.delete(rho, i)
+    rest = rest[np.argsort(-np.abs(rest))]
+    return np.r_[rest, rho[i]]
+
+
+@dataclass(frozen=True)
+class Branch:
+    """A continued branch of limit cycles (see :func:`continue_branch`)."""
+
+    cycles: tuple[LimitCycle, ...]
+    multipliers: NDArray[np.complex128]  # (points, 2n)
+    stable: NDArray[np.bool_]
+    tangent_p: NDArray[np.float64]  # d p / d s at each point (sign change: fold)
+    folds: tuple[int, ...]  # indices of the points nearest to each fold
+    hopf: HopfPoint
+    stop_reason: str
+
+
+def _fold_indices(tp: NDArray, p: NDArray, thresh: float = 1e-3) -> tuple[int, ...]:
+    """Points of extreme ``p`` between consecutive tangents whose ``dp/ds`` changes sign
+    (tangents with ``abs(dp/ds)`` below ``thresh``, e.g. a vertical start, are skipped)."""
+    sig = [(i, np.sign(t)) for i, t in enumerate(tp) if abs(t) > thresh]
+    out = []
+    for (i, s0), (j, s1) in itertools.pairwise(sig):
+        if s0 != s1:
+            seg = p[i:j + 1]
+            out.append(i + int(np.argmax(seg) if s0 > 0 else np.argmin(seg)))
+    return tuple(out)
+
+
+def continue_branch(
+    system: SecondOrderSystem,
+    hopf: HopfPoint,
+    p_range: tuple[float, float],
+    *,
+    harmonics: int = 10,
+    step: float | None = None,
+    max_points: int = 400,
+    amplitude_start: float = 0.05,
+    n_floquet: int = 1024,
+    max_amplitude: float = 1e3,
+    max_turn: float = 0.3,
+) -> Branch:
+    """Follow the limit cycles born at ``hopf`` by pseudo-arclength continuation.
+
+    Parameters
+    ----------
+    system : SecondOrderSystem
+    hopf : HopfPoint
+        The onset (:func:`~squealkit.nonlinear.hopf.hopf_point`).
+    p_range : (float, float)
+        The branch is followed while the parameter stays in this range.
+    harmonics : int
+        Harmonics H of every cycle.
+    step : float, optional
+        Nominal parameter step (default 1/50 of the range); the arclength unit is this
+        step in ``p`` and ``system.length_scale`` in the Fourier coefficients.
+    max_points : int
+        Largest number of points.
+    amplitude_start : float
+        First cycle's amplitude, in ``length_scale`` units, on the onset mode.
+    n_floquet : int
+        Sub-intervals of the monodromy product.
+    max_amplitude : float
+        Stop when an amplitude exceeds this many ``length_scale``.
+    max_turn : float
+        Largest angle [rad] between consecutive tangents (the step is halved otherwise).
+
+    Returns
+    -------
+    Branch
+    """
+    lo, hi = (float(v) for v in p_range)
+    if not hi > lo:
+        raise InputError(f"Parameter range {p_range!r} must be increasing.")
+    H = int(harmonics)
+    n = system.n_dof
+    dp_nom = (hi - lo) / 50 if step is None else validate_positive("step", step)
+    j = int(np.argmax(np.abs(hopf.shape)))
+    prob = HBProblem(system, H, hopf.omega, j)
+    n_u = prob.n_u
+    W = np.r_[np.ones(n_u + 1), 1.0 / dp_nom]  # arclength weights on [u, w, p]
+    ia = 1 * n + j  # index of a_1 of the phase DOF in u
+
+    # first point: amplitude fixed on the onset mode, parameter and frequency solved for
+    Z = np.zeros((2 * H + 1, n))
+    Z[0] = hopf.x_eq
+    amp0 = amplitude_start * system.length_scale
+    Z[1] = amp0 * hopf.shape.real
+    Z[H + 1] = -amp0 * hopf.shape.imag
+    y = prob.pack(Z, hopf.omega, hopf.p)
+    a_fix = y[ia]
+
+    def fun_amp(z):
+        r, J = prob.residual(z)
+        row = np.zeros(n_u + 2)
+        row[ia] = 1.0
+        return np.r_[r, z[ia] - a_fix], np.vstack([J, row])
+
+    y, _, nr = _newton(fun_amp, y)
+    if not nr <= 1e-8:
+        raise InputError(f"No limit cycle found next to the Hopf point (residual {nr:.3g}).")
+
+    def tangent(J: NDArray, prev: NDArray | None) -> NDArray:
+        # null vector of J (n_u+1, n_u+2) in the weighted metric
+        Jw = J / W[None, :]
+        _, _, Vt = np.linalg.svd(Jw)
+        t = Vt[-1] / W
+        t = t / np.linalg.norm(t * W)
+        if prev is None:
+            return t if t[ia] > 0 else -t
+        return t if (t * W * W) @ prev >= 0 else -t
+
+    r, J = prob.residual(y)
+    t = tangent(J, None)
+    ys, ts = [y], [t]
+    h = 1.0
+    reason = "max_points"
+    while len(ys) < max_points:
+        y_pred = ys[-1] + h * ts[-1]
+        tw = ts[-1] * W * W
+
+        def fun(z, y_pred=y_pred, tw=tw):
+            r, J = prob.residual(z)
+            return np.r_[r, tw @ (z - y_pred)], np.vstack([J, tw])
+
+        z, it, nr = _newton(fun, y_pred, max_iter=12)
+        if not (nr <= 1e-8 and np.all(np.isfinite(z))):
+            h *= 0.5
+            if h < 1e-4:
+                reason = "corrector_failed"
+                break
+            continue
+        r, J = prob.residual(z)
+        t_new = tangent(J, ts[-1])
+        if (t_new * W * W) @ ts[-1] < math.cos(max_turn) and h > 1e-3:
+            h *= 0.5  # the branch turns sharply (a fold, contact loss setting in): smaller steps
+            continue
+        p = z[-1]
+        if p < lo or p > hi:
+            # end exactly on the range's bound: a fixed-parameter solve from the interpolated guess
+            edge = hi if p > hi else lo
+            frac = (edge - ys[-1][-1]) / (p - ys[-1][-1])
+            y_e, _, nr_e = solve_fixed_p(prob, ys[-1] + frac * (z - ys[-1]))
+            if nr_e <= 1e-8:
+                ys.append(y_e)
+                ts.append(t_new)
+            reason = "left_range"
+            break
+        ys.append(z)
+        ts.append(t_new)
+        h = min(h * (1.5 if it <= 4 else 1.0 if it <= 7 else 0.6), 1.0)
+        if np.abs(z[:n_u]).max() > max_amplitude:
+            reason = "max_amplitude"
+            break
+    cycles = []
+    mult = []
+    for y_i in ys:
+        r = float(np.linalg.norm(prob.residual(y_i)[0]))
+        c = prob.cycle(y_i, residual=r)
+        cycles.append(c)
+        mult.append(floquet_multipliers(system, c, n_floquet=n_floquet))
+    mult_a = np.array(mult)
+    # the trivial multiplier's distance from 1 measures the error of the cycle and of the
+    # monodromy product: a non-trivial multiplier must exceed 1 by more than that to count
+    err = np.abs(mult_a[:, -1] - 1.0)
+    stable = np.abs(mult_a[:, :-1]).max(axis=1) <= 1 + np.maximum(FLOQUET_TOL, 3 * err)
+    tp = np.array([t_i[-1] * W[-1] for t_i in ts])
+    return Branch(tuple(cycles), mult_a, stable, tp, _fold_indices(tp, np.array([c.p for c in cycles])), hopf, reason)
+
+
+def _onset_kind(hopf: HopfPoint, branch_p: NDArray, stable: NDArray) -> tuple[str, str]:
+    """Sub/supercritical from l1, or (degenerate l1: a non-smooth onset) from the branch."""
+    if hopf.kind != "degenerate":
+        return hopf.kind, "lyapunov_coefficient"
+    # the branch leaves the Hopf point towards larger p with stable cycles: soft onset
+    d = branch_p - hopf.p
+    far = np.flatnonzero(np.abs(d) > 1e-6 * max(1.0, abs(hopf.p)))
+    if far.size == 0:
+        return "degenerate", "branch"
+    k = far[0]
+    return ("supercritical" if d[k] > 0 and stable[k] else "subcritical"), "branch"
+
+
+def limit_cycle_branch(
+    model,
+    mu: tuple[float, float] | NDArray,
+    *,
+    theta: float = 0.0,
+    contact=None,
+    speed: float = 0.02,
+    harmonics: int = 10,
+    n_points: int = 50,
+    max_points: int | None = None,
+    n_floquet: int = 1024,
+    check_harmonics: bool = True,
+) -> xr.Dataset:
+    """Squeal limit cycles of a squealkit model over friction, from the Hopf point (harmonic balance).
+
+    The Hopf point is the critical friction of the damped model (the transient's nonlinear
+    contact linearised about steady sliding; :func:`squealkit.stability.critical_friction`)
+    refined on the nonlinear system; the branch is continued in ``mu`` by pseudo-arclength
+    within ``[mu_start, mu_stop]``.
+
+    Parameters
+    ----------
+    model : FrictionModel
+        E.g. ``get_preset("lv2013")``; it needs one point contact.
+    mu : (float, float) or array
+        Friction range ``(start, stop)`` (an array: its min and max).
+    theta : float
+        Run-out incline [rad] (frozen slope tan(theta), mean surface q = 0).
+    contact : Contact or str, optional
+        Contact law (default ``Contact.nonlinear()``).
+    speed : float
+        Sliding speed [m/s].
+    harmonics : int
+        Harmonics H per cycle.
+    n_points : int
+        Nominal number of points over the range (sets the arclength step).
+    max_points : int, optional
+        Largest number of points (default ``10 n_points``).
+    n_floquet : int
+        Sub-intervals of the monodromy product (stability).
+    check_harmonics : bool
+        Re-solve every 5th point with 2H harmonics; the largest relative amplitude change
+        is the attribute ``harmonics_change``.
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``point`` (and ``dof``): ``mu``, ``frequency_hz``, ``omega_rad_s``,
+        ``amplitude`` [m] (half peak-to-peak over one period), ``mean`` [m],
+        ``contact_loss_fraction``, ``stable``, ``floquet_max`` (largest non-trivial
+        multiplier modulus), ``fold``; over ``fold``: ``fold_mu`` (mu of each fold); attrs: ``hopf_mu``,
+        ``hopf_frequency_hz``, ``lyapunov_coefficient``, ``kind``, ``kind_from``,
+        ``hysteresis_mu`` (the range of mu where a quiet and a squealing state coexist,
+        NaN if none), ``harmonics``, ``harmonics_change``, ``stop_reason``, units.
+    """
+    from ..stability import critical_friction
+    from ..transient.contact import Contact, as_contact
+
+    contact = Contact.nonlinear() if contact is None else as_contact(contact)
+    theta = validate_finite("theta", theta)
+    mu_a = np.atleast_1d(np.asarray(mu, float))
+    lo, hi = float(mu_a.min()), float(mu_a.max())
+    if not hi > lo:
+        raise InputError(f"Parameter mu={mu!r} must span a range (start < stop).")
+    n_points = int(n_points)
+    if n_points < 2:
+        raise InputError(f"Parameter n_points={n_points!r} must be >= 2.")
+    t = math.tan(theta)
+    fr = {} if contact.mu_static is None else {"friction": contact.friction_law, "speed": speed}
+    crit = critical_friction(model, theta, damped=True, mu_max=max(2.0, 2 * hi), **fr)
+    if crit.status != "onset":
+        raise InputError(f"No squeal onset at theta = {math.degrees(theta):g} deg (status {crit.status}); "
+                         "there is no Hopf point to start a limit-cycle branch from.")
+    system = contact_system(model, contact, speed=speed, tan_theta=t)
+    if not lo <= crit.mu_critical <= hi:
+        raise InputError(f"The squeal onset mu_crit = {crit.mu_critical:.6g} (theta = {math.degrees(theta):g} deg) "
+                         f"lies outside the friction range [{lo:g}, {hi:g}]; the branch starts there: widen the range.")
+    hopf = hopf_point(system, crit.mu_critical)
+    br = continue_branch(system, hopf, (lo, hi), harmonics=harmonics, step=(hi - lo) / (n_points - 1),
+                         max_points=max_points or 10 * n_points, n_floquet=n_floquet)
+    return branch_dataset(system, br, harmonics=harmonics, check_harmonics=check_harmonics,
+                          attrs={"model": model.to_json(), "theta": theta, "theta_deg": math.degrees(theta),
+                                 "tan_theta": t, "speed": speed, "speed_units": "m/s",
+                                 "contact": contact.describe(), "mu_range": [lo, hi]})
+
+
+def limit_cycle_branch_slope(
+    model,
+    tan_theta: tuple[float, float] | NDArray,
+    *,
+    mu: float,
+    contact=None,
+    speed: float = 0.02,
+    harmonics: int = 10,
+    n_points: int = 50,
+    max_points: int | None = None,
+    n_floquet: int = 1024,
+    check_harmonics: bool = True,
+    scan: int = 81,
+) -> xr.Dataset:
+    """Squeal limit cycles over the run-out slope tan(theta) at a fixed friction ``mu``.
+
+    As :func:`limit_cycle_branch` with the roles swapped: the Hopf point is the first slope in
+    the range where the damped linearisation loses stability (a scan of ``scan`` slopes, then a
+    secant on the growth rate), and the branch is continued in ``tan_theta`` (variable
+    ``tan_theta`` over ``point`` instead of ``mu``; ``hopf_mu`` then holds the critical slope).
+
+    Parameters
+    ----------
+    model : FrictionModel
+    tan_theta : (float, float) or array
+        Slope range ``(start, stop)``.
+    mu : float
+        Friction coefficient.
+    contact, speed, harmonics, n_points, max_points, n_floquet, check_harmonics
+        As for :func:`limit_cycle_branch`.
+    scan : int
+        Slopes scanned for the onset.
+
+    Returns
+    -------
+    xarray.Dataset
+    """
+    from ..transient.contact import Contact, as_contact
+    from .hopf import _growth
+
+    contact = Contact.nonlinear() if contact is None else as_contact(contact)
+    t_a = np.atleast_1d(np.asarray(tan_theta, float))
+    lo, hi = float(t_a.min()), float(t_a.max())
+    if not hi > lo:
+        raise InputError(f"Parameter tan_theta={tan_theta!r} must span a range (start < stop).")
+    system = contact_system(model, contact, speed=speed, mu=validate_finite("mu", mu), param="tan_theta")
+    grid = np.linspace(lo, hi, int(scan))
+    g = np.array([_growth(system, t)[0] for t in grid])
+    up = np.flatnonzero((g[:-1] < 0) & (g[1:] >= 0))
+    if up.size == 0:
+        raise InputError(f"No squeal onset for tan(theta) in [{lo:g}, {hi:g}] at mu = {mu:g}: "
+                         "there is no Hopf point to start a limit-cycle branch from.")
+    k = up[0]
+    hopf = hopf_point(system, float(grid[k] - g[k] * (grid[k + 1] - grid[k]) / (g[k + 1] - g[k])))
+    br = continue_branch(system, hopf, (lo, hi), harmonics=harmonics, step=(hi - lo) / (n_points - 1),
+                         max_points=max_points or 10 * n_points, n_floquet=n_floquet)
+    return branch_dataset(system, br, harmonics=harmonics, check_harmonics=check_harmonics,
+                          attrs={"model": model.to_json(), "mu": float(mu), "speed": speed, "speed_units": "m/s",
+                                 "contact": contact.describe(), "tan_theta_range": [lo, hi]})
+
+
+def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, check_harmonics: bool = True,
+                   attrs: dict | None = None) -> xr.Dataset:
+    """Label a :class:`Branch` as an xarray Dataset (see :func:`limit_cycle_branch`)."""
+    from .harmonic_balance import harmonic_balance
+
+    cyc = br.cycles
+    p = np.array([c.p for c in cyc])
+    omega = np.array([c.omega for c in cyc])
+    amp = np.array([c.amplitude for c in cyc])
+    change = float("nan")
+    if check_harmonics:
+        changes = []
+        # at the Hopf point itself a piecewise-linear law has cycles of any small amplitude
+        # (a vertical start): the check is made where the parameter has moved off it
+        moved = [c for c in cyc if abs(c.p - br.hopf.p) > 1e-6 * max(1.0, abs(br.hopf.p))]
+        for c in moved[::5]:
+            c2 = harmonic_balance(system, c.p, omega=c.omega, guess=c.coefficients, harmonics=2 * harmonics,
+                                  check_harmonics=False)
+            changes.append(float(np.max(np.abs(c2.amplitude - c.amplitude)) / np.max(c2.amplitude)))
+        change = max(changes) if changes else float("nan")
+    kind, kind_from = _onset_kind(br.hopf, p, br.stable)
+    fold_mu = [float(p[i]) for i in br.folds]
+    # hysteresis: squealing cycles (stable) exist below the Hopf point
+    below = list(p[(p < br.hopf.p - 1e-9) & br.stable])
+    below += [float(p[i]) for i in br.folds if p[i] < br.hopf.p and i + 1 < p.size and br.stable[i + 1]]
+    hyst = [float(min(below)), float(br.hopf.p)] if below else [math.nan, math.nan]
+    fold_flag = np.zeros(p.size, dtype=bool)
+    fold_flag[list(br.folds)] = True
+    ds = xr.Dataset(
+        {
+            system.param: ("point", p, {"units": "1", "long_name": "friction coefficient"}),
+            "frequency_hz": ("point", omega / (2 * math.pi), {"units": "Hz", "long_name": "limit-cycle frequency"}),
+            "omega_rad_s": ("point", omega, {"units": "rad/s"}),
+            "amplitude": (("point", "dof"), amp,
+                          {"units": "m", "long_name": "displacement amplitude (half peak-to-peak over one period)"}),
+            "mean": (("point", "dof"), np.array([c.coefficients[0] for c in cyc]),
+                     {"units": "m", "long_name": "mean displacement over one period"}),
+            "contact_loss_fraction": ("point", np.array([c.contact_loss_fraction for c in cyc]),
+                                      {"units": "1", "long_name": "fraction of the period with contact open"}),
+            "stable": ("point", br.stable, {"long_name": "stable limit cycle (Floquet multipliers inside the unit "
+                                                         "circle)"}),
+            "floquet_max": ("point", np.abs(br.multipliers[:, :-1]).max(axis=1),
+                            {"units": "1", "long_name": "largest non-trivial Floquet multiplier modulus"}),
+            "floquet_error": ("point", np.abs(br.multipliers[:, -1] - 1.0),
+                              {"units": "1", "long_name": "distance of the trivial Floquet multiplier from 1 (error)"}),
+            "fold": ("point", fold_flag, {"long_name": "point nearest to a fold (turning point in mu)"}),
+            "fold_mu": ("fold", np.array(fold_mu, float), {"units": "1", "long_name": "friction at each fold"}),
+            "coefficients": (("point", "harmonic_row", "dof"), np.array([c.coefficients for c in cyc]),
+                             {"units": "m", "long_name": "Fourier coefficients [a0, a1..aH, b1..bH]"}),
+        },
+        coords={"point": np.arange(p.size), "dof": list(system.dof_names),
+                "harmonic_row": np.arange(2 * harmonics + 1)},
+        attrs={
+            "title": "Limit-cycle branch by harmonic balance",
+            "param": system.param,
+            "system": system.description,
+            "hopf_mu": br.hopf.p,
+            "hopf_frequency_hz": br.hopf.frequency_hz,
+            "lyapunov_coefficient": br.hopf.lyapunov_coefficient,
+            "lyapunov_units": f"per length_scale^2, length_scale = {system.length_scale:.6g} m",
+            "length_scale": system.length_scale,
+            "kind": kind,
+            "kind_from": kind_from,
+            "hysteresis_mu": hyst,
+            "harmonics": harmonics,
+            "harmonics_change": change,
+            "stop_reason": br.stop_reason,
+            "squealkit_version": __version__,
+            **(attrs or {}),
+        },
+    )
+    return ds.set_coords(system.param) if system.param in ds else ds
+
+
+def limit_cycle_summary(ds: xr.Dataset) -> dict[str, object]:
+    """A :func:`limit_cycle_branch` result as plain Python (what ``squealkit limitcycle --json`` prints).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`limit_cycle_branch`.
+
+    Returns
+    -------
+    dict
+        ``mu`` (list), ``frequency_hz`` (list), ``amplitude`` (DOF name -> list of
+        displacement amplitudes [m], half the peak-to-peak over one period), ``stable``
+        (list of booleans), ``contact_loss_fraction`` (list), ``hopf`` (``mu``,
+        ``frequency_hz``, ``lyapunov_coefficient``, ``kind``, ``kind_from``), ``folds``
+        (list of mu), ``hysteresis_mu`` ([start, end] or []), ``harmonics``,
+        ``harmonics_change``, ``stop_reason``, ``theta_deg``, ``contact``.
+    """
+    a = ds.attrs
+    return {
+        "mu": [float(v) for v in ds["mu"].values],
+        "frequency_hz": [float(v) for v in ds["frequency_hz"].values],
+        "amplitude": {str(d): [float(v) for v in ds["amplitude"].sel(dof=d).values] for d in ds["dof"].values},
+        "stable": [bool(v) for v in ds["stable"].values],
+        "contact_loss_fraction": [float(v) for v in ds["contact_loss_fraction"].values],
+        "hopf": {"mu": float(a["hopf_mu"]), "frequency_hz": float(a["hopf_frequency_hz"]),
+                 "lyapunov_coefficient": float(a["lyapunov_coefficient"]), "kind": str(a["kind"]),
+                 "kind_from": str(a["kind_from"])},
+        "folds": [float(v) for v in ds["fold_mu"].values],
+        "hysteresis_mu": [float(v) for v in np.atleast_1d(a["hysteresis_mu"]) if np.isfinite(v)],
+        "harmonics": int(a["harmonics"]),
+        "harmonics_change": float(a["harmonics_change"]),
+        "stop_reason": str(a["stop_reason"]),
+        "theta_deg": float(a.get("theta_deg", 0.0)),
+        "contact": str(a.get("contact", "")),
+    }

@@ -1,0 +1,137 @@
+"""Bifurcation diagram of a limit-cycle branch: amplitude and frequency against friction.
+
+Draws a result of :func:`squealkit.nonlinear.limit_cycle_branch` and computes nothing it
+does not hold. matplotlib is imported inside the function.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+__all__ = ["limitcycle_plot", "limitcycle_signal_plot"]
+
+_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink")
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Index ranges [i, j] (inclusive, overlapping by one point) of equal ``mask``."""
+    out, start = [], 0
+    for k in range(1, mask.size + 1):
+        if k == mask.size or mask[k] != mask[start]:
+            out.append((start, min(k, mask.size - 1)))
+            start = k
+    return out
+
+
+def limitcycle_plot(ds: xr.Dataset, *, fig=None):
+    """Bifurcation diagram: amplitude per DOF [um] and frequency [Hz] against mu (or tan(theta)).
+
+    Stable cycles are solid, unstable ones dashed; the quiet state (amplitude 0) is solid
+    below the Hopf point and dashed above it; the Hopf point is a black star, folds are
+    black crosses.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`squealkit.nonlinear.limit_cycle_branch` (or ``limit_cycle_branch_slope``).
+    fig : matplotlib Figure, optional
+        Figure to draw into (cleared); a new one otherwise.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+
+    fig = fig or Figure(figsize=(7.5, 6.5), layout="constrained")
+    fig.clf()
+    ax_a, ax_f = fig.subplots(2, 1, sharex=True, height_ratios=[2.0, 1.0])
+    param = str(ds.attrs.get("param", "mu"))
+    mu = ds[param].values
+    stable = ds["stable"].values.astype(bool)
+    amp = ds["amplitude"].values * 1e6
+    freq = ds["frequency_hz"].values
+    mu_h = float(ds.attrs["hopf_mu"])
+    pad = 0.05 * float(np.ptp(mu)) if mu.size > 1 else 0.0
+    lo, hi = (float(v) for v in ds.attrs.get(f"{param}_range", [mu.min() - pad, mu.max() + pad]))
+    runs = _runs(stable)
+    for j, dof in enumerate(ds["dof"].values):
+        c = _COLORS[j % len(_COLORS)]
+        for i0, i1 in runs:
+            ls = "-" if stable[i0] else "--"
+            ax_a.plot(mu[i0:i1 + 1], amp[i0:i1 + 1, j], ls, color=c, lw=1.8)
+        ax_a.plot([], [], "-", color=c, label=str(dof))
+    for i0, i1 in runs:
+        ax_f.plot(mu[i0:i1 + 1], freq[i0:i1 + 1], "-" if stable[i0] else "--", color="k", lw=1.5)
+    ax_a.plot([min(lo, mu_h), mu_h], [0, 0], "-", color="0.4", lw=1.5)
+    ax_a.plot([mu_h, max(hi, mu_h)], [0, 0], "--", color="0.4", lw=1.5)
+    ax_a.plot([mu_h], [0], "k*", ms=12, zorder=5)
+    ax_f.plot([mu_h], [float(ds.attrs["hopf_frequency_hz"])], "k*", ms=12, zorder=5)
+    for i in np.flatnonzero(ds["fold"].values):
+        ax_a.plot(np.full(amp.shape[1], mu[i]), amp[i], "kx", ms=9, mew=2, zorder=5)
+        ax_f.plot([mu[i]], [freq[i]], "kx", ms=9, mew=2, zorder=5)
+    kind = ds.attrs.get("kind", "")
+    ax_a.set_title(f"Limit cycles by harmonic balance (H = {ds.attrs.get('harmonics')}): "
+                   f"Hopf at {param} = {mu_h:.4f}, {ds.attrs['hopf_frequency_hz']:.1f} Hz, {kind}", fontsize=10)
+    ax_a.set_ylabel("amplitude (half peak-to-peak) [um]")
+    ax_f.set_ylabel("frequency [Hz]")
+    ax_f.set_xlabel({"mu": "friction coefficient mu", "tan_theta": "run-out slope tan(theta)"}.get(param, param))
+    ax_f.set_xlim(lo, hi)
+    handles = ax_a.get_legend_handles_labels()[0]
+    handles += [Line2D([], [], color="0.3", ls="-", label="stable"),
+                Line2D([], [], color="0.3", ls="--", label="unstable"),
+                Line2D([], [], color="k", marker="*", ls="", ms=10, label="Hopf point"),
+                Line2D([], [], color="k", marker="x", ls="", ms=8, mew=2, label="fold")]
+    ax_a.legend(handles=handles, loc="upper left", fontsize=8, ncol=2)
+    for ax in (ax_a, ax_f):
+        ax.grid(color="0.9")
+        ax.set_axisbelow(True)
+    return fig
+
+
+def limitcycle_signal_plot(ds: xr.Dataset, point: int = -1, *, n_samples: int = 512, fig=None):
+    """One period of a cycle of the branch: each DOF's vibration about its mean [um] against time [ms].
+
+    The signal is the Fourier series the result stores (``coefficients``), summed at
+    ``n_samples`` instants.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`squealkit.nonlinear.limit_cycle_branch`.
+    point : int
+        Which point of the branch (default the last).
+    n_samples : int
+        Instants per period.
+    fig : matplotlib Figure, optional
+        Figure to draw into (cleared); a new one otherwise.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.figure import Figure
+
+    c = ds["coefficients"].isel(point=point).values
+    omega = float(ds["omega_rad_s"].isel(point=point))
+    H = (c.shape[0] - 1) // 2
+    tau = 2 * np.pi * np.arange(n_samples + 1) / n_samples
+    k = np.arange(1, H + 1)
+    x = np.cos(np.outer(tau, k)) @ c[1:H + 1] + np.sin(np.outer(tau, k)) @ c[H + 1:]
+    t_ms = tau / omega * 1e3
+    fig = fig or Figure(figsize=(7.0, 3.8), layout="constrained")
+    fig.clf()
+    ax = fig.add_subplot()
+    for j, dof in enumerate(ds["dof"].values):
+        ax.plot(t_ms, x[:, j] * 1e6, color=_COLORS[j % len(_COLORS)], label=str(dof))
+    param = str(ds.attrs.get("param", "mu"))
+    p = float(ds[param].isel(point=point))
+    stable = "stable" if bool(ds["stable"].isel(point=point)) else "unstable"
+    ax.set_title(f"One period at {param} = {p:.4f}: {omega / (2 * np.pi):.2f} Hz, {stable}", fontsize=10)
+    ax.set_xlabel("time [ms]")
+    ax.set_ylabel("displacement about the mean [um]")
+    ax.legend(fontsize=8)
+    ax.grid(color="0.9")
+    return fig
