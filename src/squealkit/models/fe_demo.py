@@ -102,7 +102,7 @@ class FEDemoGeometry:
 
 
 def fe_demo_dofs(n_theta: int, n_r: int | None = None, n_z: int = 1) -> int:
-    """Number of unknowns of the disc alone (27-node hexahedra, 3 components per node).
+    """Unknowns of the disc alone before clamping (27-node hexahedra, 3 per node): a size guide.
 
     >>> fe_demo_dofs(128, 13, 2)
     103680
@@ -283,9 +283,9 @@ def build_fe_demo(
     Parameters
     ----------
     n_theta : int
-        Elements around the disc (>= 8, even); the refinement option. Unknowns grow about as
-        ``n_theta**2``: 16 -> ~2e3, 48 -> ~1.6e4, 96 -> ~6e4 (``n_z=1``), 128 with ``n_z=2``
-        -> ~1.1e5 (see :func:`fe_demo_dofs`).
+        Elements around the disc (>= 8, even); the refinement option. Unknowns (with the
+        pads, after clamping): 16 -> 1 422, 48 -> 8 802, 96 -> 33 966, 176 -> 115 326
+        (``n_z=1``); :func:`fe_demo_dofs` estimates them.
     n_r : int, optional
         Elements across the friction ring; default keeps them about square.
     n_z : int
