@@ -1,0 +1,116 @@
+"""Reduction of FE brake models: modal and POD bases, reduced eigenvalues and their residuals."""
+
+import math
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from squealkit import InputError
+from squealkit.stability.reduction import (
+    _as_model,
+    _backward_error,
+    _band_eigs,
+    modal_basis,
+    pod_basis,
+    reduce,
+    reduced_eigs,
+    reduced_sweep,
+)
+
+pytest.importorskip("skfem")
+
+BAND = (10e3, 14e3)  # a narrow band keeps the full reference solves fast on the small mesh
+
+
+@pytest.fixture(scope="module")
+def brake():
+    from squealkit.models.fe_demo import build_fe_demo
+
+    return build_fe_demo(n_theta=16, n_r=2)
+
+
+@pytest.fixture(scope="module")
+def pod(brake):
+    V = pod_basis(brake, [50.0], [0.3, 0.6], band=BAND, extra=modal_basis(brake, freq_max=20e3))
+    return reduce(brake, V)
+
+
+def full(brake, omega, mu, band=BAND):
+    return _band_eigs(_as_model(brake), omega, mu, band)
+
+
+def nearest_rel_error(lam, ref):
+    return np.array([np.min(np.abs(ref - x)) / abs(x) for x in lam])
+
+
+def test_band_solver_agrees_with_scipy_shift_invert(brake):
+    # independent reference: scipy's own shift-invert on the companion pencil (A - s B)
+    omega, mu = 50.0, 0.45
+    lam, X = full(brake, omega, mu)
+    n = brake["M"].shape[0]
+    eye = sp.identity(n, format="csr")
+    C = brake["D1"] + omega / brake["omega_ref"] * brake["DG"]
+    K = brake["K1"] + mu / brake["mu_ref"] * brake["KR"] + (omega / brake["omega_ref"]) ** 2 * brake["KGeo"]
+    A = sp.bmat([[None, eye], [-K, -C]], format="csc").astype(complex)
+    B = sp.bmat([[eye, None], [None, brake["M"]]], format="csc").astype(complex)
+    ref = spla.eigs(A, k=4, M=B, sigma=2j * math.pi * 12e3, return_eigenvectors=False)
+    assert np.max(nearest_rel_error(ref, lam)) < 1e-10
+    assert np.max(_backward_error(_as_model(brake), omega, mu, lam, X)) < 1e-12
+
+
+def test_modal_basis_is_mass_normalised_up_to_the_cut_off(brake):
+    V, freq = modal_basis(brake, freq_max=15e3, return_freq=True)
+    assert np.all(freq <= 15e3) and np.all(np.diff(freq) >= 0)
+    np.testing.assert_allclose(V.T @ (brake["M"] @ V), np.eye(V.shape[1]), atol=1e-9)
+    # k = m (2 pi f)^2 per mode: V^T K1 V = diag((2 pi f)^2)
+    np.testing.assert_allclose(np.diag(V.T @ (brake["K1"] @ V)), (2 * math.pi * freq) ** 2, rtol=1e-9)
+    ref = spla.eigsh(brake["K1"], k=len(freq) + 1, M=brake["M"], sigma=0.0, return_eigenvectors=False)
+    ref = np.sort(np.sqrt(ref)) / (2 * math.pi)
+    np.testing.assert_allclose(freq, ref[: len(freq)], rtol=1e-10)
+    assert ref[len(freq)] > 15e3
+
+
+def test_pod_reduction_agrees_with_full_solve_where_trusted(brake, pod):
+    # between the samples (mu = 0.3, 0.6) and away from their speed
+    for omega, mu in ((50.0, 0.45), (20.0, 0.52)):
+        red = reduced_eigs(pod, omega, mu, band=BAND)
+        lam, _ = full(brake, omega, mu)
+        assert len(red["eigenvalue"]) == len(lam)
+        err = nearest_rel_error(red["eigenvalue"], lam)
+        assert red["trusted"].all()
+        assert np.max(err[red["trusted"]]) < 1e-6
+        # the unstable (mode-coupling) pair is found by the reduced model too
+        assert np.any(red["growth_rate"] > 0) == np.any(lam.real > 0)
+
+
+def test_residual_flags_a_too_small_basis(brake):
+    # 12 real modes (up to ~4 kHz) cannot represent modes at 10-14 kHz: every reduced
+    # eigenvalue there is wrong, and the residual says so
+    small = reduce(brake, modal_basis(brake, n_modes=12))
+    red = reduced_eigs(small, 50.0, 0.45, band=(1e3, 16e3))
+    lam, _ = full(brake, 50.0, 0.45, band=(1e3, 16e3))
+    err = nearest_rel_error(red["eigenvalue"], lam)
+    assert (~red["trusted"]).any()
+    assert np.all(~red["trusted"][err > 1e-6])
+    assert np.all(red["residual"][err > 1e-3] > 1e-5)
+
+
+def test_reduced_sweep_dataset(pod):
+    ds = reduced_sweep(pod, [20.0, 50.0], [0.0, 0.3, 0.6], band=BAND)
+    assert ds.growth_rate.dims == ("omega", "mu", "mode")
+    assert ds.sizes["omega"] == 2 and ds.sizes["mu"] == 3
+    np.testing.assert_allclose(ds.rpm, np.array([20.0, 50.0]) * 60 / (2 * math.pi))
+    assert not ds.any_unstable.sel(mu=0.0).any()
+    assert ds.any_unstable.sel(mu=0.6).all()
+    assert ds.growth_rate.attrs["units"] == "1/s"
+
+
+def test_bad_input_is_rejected(brake):
+    with pytest.raises(InputError, match="freq_max"):
+        modal_basis(brake)
+    with pytest.raises(InputError, match="band"):
+        reduced_eigs(reduce(brake, modal_basis(brake, n_modes=4)), 1.0, 0.3, band=(5e3, 1e3))
+    with pytest.raises(InputError, match="K1"):
+        modal_basis({"M": brake["M"]}, n_modes=3)
