@@ -193,11 +193,15 @@ def _stability_fe(ctx, model, fe, mu_spec, theta_spec, stribeck_spec, scheduler,
                f"{summary['grid_points']} grid points (rpm x mu)")
     click.echo(f"unstable fraction: {summary['unstable_fraction']:.4f}")
     click.echo(f"max growth rate:   {summary['max_growth_rate']:.6g} 1/s")
+    undecided = summary.get("indeterminate_fraction") or 0.0
     if summary["unstable_frequency_hz"] is None:
-        click.echo("no unstable point on this grid")
+        click.echo("no point proven unstable on this grid" if undecided else "no unstable point on this grid")
     else:
         flo, fhi = summary["unstable_frequency_hz"]
         click.echo(f"unstable mode frequency: {flo:.6g}-{fhi:.6g} Hz")
+    if undecided:
+        click.echo(f"indeterminate: {undecided:.1%} of the grid points (an eigenpair that fails the residual "
+                   "check could be unstable: use --method sparse, or pod, or a larger --modes)")
     if summary["untrusted_fraction"]:
         click.echo(f"warning: {summary['untrusted_fraction']:.1%} of the eigenpairs fail the residual check")
     for label, path in (("dataset", out_path), ("figure", plot_path), ("map", map_path)):

@@ -98,7 +98,9 @@ class FESolver:
             self.method = "dense" if self.model.n_dof <= DENSE_MAX_DOF else "sparse"
         if self.band is not None:
             self.band = validate_band(self.band)
-        elif self.method == "sparse":
+        elif self.method in ("sparse", "modal", "pod"):
+            # a band solve, and a reduced basis (built for the band: outside it the reduced
+            # eigenvalues are not the brake's), look at the squeal band unless told otherwise
             self.band = BAND_HZ
         if self.n_modes is not None and (isinstance(self.n_modes, bool) or int(self.n_modes) != self.n_modes
                                          or self.n_modes < 1):
@@ -359,9 +361,13 @@ def _point_arrays(lam: NDArray, res: NDArray, valid: NDArray):
     thr = UNSTABLE_RTOL * np.max(mag, axis=-1, initial=0.0)
     err = _ERR_C * np.maximum(res, np.finfo(float).eps) * mag
     sigma = lam.real
+    # a reduced eigenpair whose backward error in the full model is above RESIDUAL_TOL is not an
+    # eigenpair of the brake: it can make a point indeterminate, never unstable
+    trusted = ~(res > RESIDUAL_TOL)
     with np.errstate(invalid="ignore"):
-        unstable = valid & (sigma - err > thr[..., None])
-        unsure = valid & ~unstable & (np.abs(sigma - thr[..., None]) <= err)
+        unstable = valid & trusted & (sigma - err > thr[..., None])
+        maybe = (np.abs(sigma - thr[..., None]) <= err) | (~trusted & (sigma + err > thr[..., None]))
+        unsure = valid & ~unstable & maybe
     real = np.abs(lam.imag) <= 1e-12 * mag
     flutter = np.any(unstable & ~real, axis=-1)
     diverge = np.any(unstable & real, axis=-1)
