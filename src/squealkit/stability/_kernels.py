@@ -316,11 +316,17 @@ def _vieta_ok(b, z, m, conj):
 
 
 @nb.njit(cache=True, nogil=True)
-def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, table, roots, start, stop):
+def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, table, Knx, Kfx, st, roots, start, stop):
     """Roots of points ``start:stop``; the polynomial from ``table`` (see
-    :func:`charpoly_table`) when it is not empty, else by the Leibniz formula per point."""
+    :func:`charpoly_table`) when it is not empty, else by the Leibniz formula per point.
+
+    With slope parts (``st`` not empty: consistent contact kinematics), point i has
+    ``K = K0 + g Kn + e Kf + st[i] (g Knx + e Kfx)`` (``st = s tan(theta)``), still warm-started
+    along the row.
+    """
     n = M.shape[0]
     use_table = table.shape[0] > 0
+    has_slope = st.shape[0] > 0
     gp = np.empty(n + 1)
     ep = np.empty(n + 1)
     deg = 2 * n
@@ -346,6 +352,11 @@ def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, table, roots, start, stop
             for r in range(n):
                 for c in range(n):
                     K[r, c] = K0[r, c] + gi * Kn[r, c] + ei * Kf[r, c]
+            if has_slope:
+                sti = st[idx]
+                for r in range(n):
+                    for c in range(n):
+                        K[r, c] += sti * (gi * Knx[r, c] + ei * Kfx[r, c])
             _charpoly(M, C, K, perms, signs, a, tmp_a, tmp_b)
         lead = a[deg]
         if not have_scale:
@@ -407,7 +418,7 @@ def _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, table, roots, start, stop
 
 
 @nb.njit(cache=True, parallel=True)
-def quadratic_eigvals(M, C, K0, Kn, Kf, g, e, perms, signs, table, roots, radii, even, chunk, row):
+def quadratic_eigvals(M, C, K0, Kn, Kf, g, e, perms, signs, table, Knx, Kfx, st, roots, radii, even, chunk, row):
     """All 2n eigenvalues of ``M s^2 + C s + K`` with ``K = K0 + g[i] Kn + e[i] Kf``.
 
     Fills ``roots`` (shape (len(g), 2n)), their error radii ``radii`` and the flag ``even``
@@ -427,8 +438,8 @@ def quadratic_eigvals(M, C, K0, Kn, Kf, g, e, perms, signs, table, roots, radii,
         start = r0 + (c % per_row) * chunk
         stop = min(npts, r0 + row, start + chunk)
         if start < stop:
-            counts[c] = _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, table, roots, start, stop)
-            _radii_range(M, C, K0, Kn, Kf, g, e, perms, signs, table, roots, radii, even, start, stop)
+            counts[c] = _solve_chunk(M, C, K0, Kn, Kf, g, e, perms, signs, table, Knx, Kfx, st, roots, start, stop)
+            _radii_range(M, C, K0, Kn, Kf, g, e, perms, signs, table, Knx, Kfx, st, roots, radii, even, start, stop)
     return counts.sum()
 
 
@@ -506,7 +517,7 @@ def inclusion_radii(z, lead, err_at, radius, member, pairs=False):
 
 
 @nb.njit(cache=True, nogil=True)
-def _radii_range(M, C, K0, Kn, Kf, g, e, perms, signs, table, roots, radii, even, start, stop):
+def _radii_range(M, C, K0, Kn, Kf, g, e, perms, signs, table, Knx, Kfx, st, roots, radii, even, start, stop):
     """Error radius of every root of points ``start:stop`` from the kernel's own rounding.
 
     Each coefficient of ``det(M s^2 + C s + K)`` is a signed sum of Leibniz terms; its
@@ -565,14 +576,19 @@ def _radii_range(M, C, K0, Kn, Kf, g, e, perms, signs, table, roots, radii, even
             for r in range(n):
                 rk[r] = ak0[r] + abs(gi) * akn[r] + abs(ei) * akf[r]
         check_sym = c_skew and not c_zero
+        sti = st[i] if st.shape[0] > 0 else 0.0
         if check_sym or not use_table:
             for r in range(n):
                 acc = 0.0
                 for c in range(n):
                     kij = K0[r, c] + gi * Kn[r, c] + ei * Kf[r, c]
+                    if sti != 0.0:
+                        kij += sti * (gi * Knx[r, c] + ei * Kfx[r, c])
                     acc += abs(kij)
                     if check_sym and c > r:
                         kji = K0[c, r] + gi * Kn[c, r] + ei * Kf[c, r]
+                        if sti != 0.0:
+                            kji += sti * (gi * Knx[c, r] + ei * Kfx[c, r])
                         if kij != kji:
                             k_sym = False
                 if not use_table:
@@ -776,7 +792,10 @@ def quadratic_eigvals_stack(M, C, K0, Kn, Kf, g, e, perms, signs, roots, radii, 
     start = npts - npts
     # one point per model, mostly: the Leibniz formula per point beats a table per model
     no_table = np.empty((0, 0, 0))
+    no_slope = np.empty((0, 0))
+    no_st = np.empty(0)
     for s in nb.prange(nmod):
-        _solve_chunk(M[s], C[s], K0[s], Kn[s], Kf[s], g[s], e[s], perms, signs, no_table, roots[s], start, npts)
-        _radii_range(M[s], C[s], K0[s], Kn[s], Kf[s], g[s], e[s], perms, signs, no_table, roots[s], radii[s],
-                     even[s], start, npts)
+        _solve_chunk(M[s], C[s], K0[s], Kn[s], Kf[s], g[s], e[s], perms, signs, no_table, no_slope, no_slope, no_st,
+                     roots[s], start, npts)
+        _radii_range(M[s], C[s], K0[s], Kn[s], Kf[s], g[s], e[s], perms, signs, no_table, no_slope, no_slope, no_st,
+                     roots[s], radii[s], even[s], start, npts)

@@ -131,12 +131,15 @@ def check_magnitudes(M: NDArray, C: NDArray, K0: NDArray, Kn: NDArray, Kf: NDArr
 
 
 def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int, high_precision: bool = True,
-                 out: tuple[NDArray, ...] | None = None, work: dict | None = None):
+                 out: tuple[NDArray, ...] | None = None, work: dict | None = None,
+                 slope: tuple[NDArray, NDArray, NDArray] | None = None):
     """Modes, error radii, verdicts and thresholds of flat arrays of contact factors g, e.
 
     ``out`` receives the results (see :func:`~squealkit.stability._solve.solve_points`);
     ``work`` is a dict that keeps the kernel's root buffers from one block to the next of a
     grid (fresh buffers of this size cost more in page faults than the roots themselves).
+    ``slope = (Knx, Kfx, st)``: consistent contact kinematics, point i with
+    ``K = K0 + g Kn + e Kf + st[i] (g Knx + e Kfx)`` (``st = s tan(theta)``).
     """
     M, C, K0, Kn, Kf = mats
     if M.shape[0] > 1:
@@ -148,9 +151,18 @@ def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int, hi
     n = M.shape[-1]
     P = g.shape[0]
     which = np.zeros(P, dtype=np.int64)
+    if slope is not None:
+        # the refinement stages take each point's own contact parts
+        Knx, Kfx, st = slope
+        Kn_p = Kn[0] + st[:, None, None] * Knx
+        Kf_p = Kf[0] + st[:, None, None] * Kfx
+        check = (*(np.broadcast_to(a[0], Kn_p.shape) for a in (M, C, K0)), Kn_p, Kf_p)
+        which_check = np.arange(P, dtype=np.int64)
+    else:
+        check, which_check = mats, which
     if n > _KERNEL_MAX_DOF:
-        K = K0[0] + g[:, None, None] * Kn[0] + e[:, None, None] * Kf[0]
-        roots, radii = lapack_roots(np.broadcast_to(M[0], K.shape), np.broadcast_to(C[0], K.shape), K)
+        Kc = check[2][which_check] + g[:, None, None] * check[3][which_check] + e[:, None, None] * check[4][which_check]
+        roots, radii = lapack_roots(np.broadcast_to(M[0], Kc.shape), np.broadcast_to(C[0], Kc.shape), Kc)
         roots = np.ascontiguousarray(roots)
         radii = np.ascontiguousarray(radii)
         even = None
@@ -161,9 +173,17 @@ def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int, hi
                         even=np.empty(P, dtype=np.bool_))
         roots, radii, even = work["roots"][:P], work["radii"][:P], work["even"][:P]
         perms, signs = _perms(n)
-        table = charpoly_table(M[0], C[0], K0[0], Kn[0], Kf[0], perms, signs)
-        quadratic_eigvals(M[0], C[0], K0[0], Kn[0], Kf[0], g, e, perms, signs, table, roots, radii, even, _CHUNK, row)
-    return solve_points(M, C, K0, Kn, Kf, which, g, e, roots, radii, even, UNSTABLE_RTOL,
+        if slope is None:
+            table = charpoly_table(M[0], C[0], K0[0], Kn[0], Kf[0], perms, signs)
+            Knx = Kfx = np.empty((0, 0))
+            st = np.empty(0)
+        else:
+            table = np.empty((0, 0, 0))  # the per-point Leibniz expansion takes the slope terms
+            Knx, Kfx = np.ascontiguousarray(slope[0], dtype=float), np.ascontiguousarray(slope[1], dtype=float)
+            st = np.ascontiguousarray(slope[2], dtype=float)
+        quadratic_eigvals(M[0], C[0], K0[0], Kn[0], Kf[0], g, e, perms, signs, table, Knx, Kfx, st, roots, radii,
+                          even, _CHUNK, row)
+    return solve_points(*check, which_check, g, e, roots, radii, even, UNSTABLE_RTOL,
                         high_precision=high_precision, out=out)
 
 
@@ -252,10 +272,15 @@ def _solve_grid(model, mu, tan_theta, damped, progress=None, friction=None, spee
     for start in range(0, total, block):
         stop = min(total, start + block)
         sl = slice(start, stop)
-        if friction is not None or model.slope_coupled:
+        slope = None
+        if friction is not None:
             mats = _matrices(model, damped, friction, speed, mu_b.ravel()[sl], t_b.ravel()[sl])
+        elif model.slope_coupled:
+            # consistent kinematics: one model, the slope terms per point, warm starts along rows
+            slope = (*model.slope_parts(), model.sliding_direction * t_b.ravel()[sl])
         with limit_threads(threads_for(stop - start)):  # small blocks: no parallel start-up
-            _solve_block(mats, g[sl], e[sl], row, high_precision, (lam[sl], err[sl], verdict[sl], thr[sl]), work)
+            _solve_block(mats, g[sl], e[sl], row, high_precision, (lam[sl], err[sl], verdict[sl], thr[sl]), work,
+                         slope)
         if progress is not None:
             progress(stop, total)
     return (lam.reshape((*shape, n)), err.reshape((*shape, n)), verdict.reshape(shape), thr.reshape(shape))
