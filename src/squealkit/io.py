@@ -190,32 +190,38 @@ def atomic_path(path: str | Path, *, directory: bool = False) -> Iterator[Path]:
         raise InputError(f"Output folder {str(parent)!r} does not exist.")
     if directory and final.is_dir() and not _owned_folder(final)[0]:
         raise InputError(f"Output folder {str(final)!r} holds files squealkit did not write; it is not replaced.")
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".part", dir=parent)
-    os.close(fd)
-    tmp = Path(tmp_name)
-    if directory:
-        tmp.unlink()
+    tmp: Path | None = None
     try:
+        # an interrupt while the stage is set up, or while it is moved into place, is held
+        # until that step is whole (then raised here, and the stage removed below)
+        with deferred_interrupts():
+            fd, tmp_name = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".part", dir=parent)
+            tmp = Path(tmp_name)
+            os.close(fd)
+            if directory:
+                tmp.unlink()
         yield tmp
         _check_not_interrupted()
-        mode = _final_mode(final, directory)
-        if directory:
-            tmp.chmod(mode)
-            backup = None
-            if final.exists():
-                backup = final.with_name(f".{final.name}.old-{os.getpid()}")
-                final.rename(backup)
-            tmp.rename(final)
-            if backup is not None:
-                shutil.rmtree(backup, ignore_errors=True)
-        else:
-            tmp.chmod(mode)
-            os.replace(tmp, final)
+        with deferred_interrupts():
+            mode = _final_mode(final, directory)
+            if directory:
+                tmp.chmod(mode)
+                backup = None
+                if final.exists():
+                    backup = final.with_name(f".{final.name}.old-{os.getpid()}")
+                    final.rename(backup)
+                tmp.rename(final)
+                if backup is not None:
+                    shutil.rmtree(backup, ignore_errors=True)
+            else:
+                tmp.chmod(mode)
+                os.replace(tmp, final)
     except BaseException:
-        if tmp.is_dir():
-            shutil.rmtree(tmp, ignore_errors=True)
-        else:
-            tmp.unlink(missing_ok=True)
+        if tmp is not None:
+            if tmp.is_dir():
+                shutil.rmtree(tmp, ignore_errors=True)
+            else:
+                tmp.unlink(missing_ok=True)
         raise
 
 
@@ -245,17 +251,21 @@ def output_folder(path: str | Path, *, force: bool = False) -> Iterator[Path]:
     final = Path(path)
     check_output(final, directory=True, force=force)
     if final.is_dir() and not _owned_folder(final)[0]:
-        stage = Path(tempfile.mkdtemp(prefix=".squealkit-stage.", dir=final))
+        stage: Path | None = None
         try:
+            with deferred_interrupts():
+                stage = Path(tempfile.mkdtemp(prefix=".squealkit-stage.", dir=final))
             yield stage
             _check_not_interrupted()
             files = sorted(p.relative_to(stage).as_posix() for p in stage.rglob("*") if not p.is_dir())
-            _write_manifest(stage, files)
-            for name in [*files, MANIFEST]:
-                (final / name).parent.mkdir(parents=True, exist_ok=True)
-                os.replace(stage / name, final / name)
+            with deferred_interrupts():  # every file moved whole, the manifest last
+                _write_manifest(stage, files)
+                for name in [*files, MANIFEST]:
+                    (final / name).parent.mkdir(parents=True, exist_ok=True)
+                    os.replace(stage / name, final / name)
         finally:
-            shutil.rmtree(stage, ignore_errors=True)
+            if stage is not None:
+                shutil.rmtree(stage, ignore_errors=True)
         return
     with atomic_path(final, directory=True) as stage:
         stage.mkdir()
