@@ -35,6 +35,15 @@ def test_json_summary_fig4_case(tmp_path):
     assert png.stat().st_size > 1000
 
 
+def test_rosenbrock_method(tmp_path):
+    # issue 12: the stiff integrator from the CLI, with the nonlinear contact
+    r = _run(["--mu", "0.4", "--sro", "sine", "--contact", "nonlinear", "--duration", "0.005", "--fs", "20000",
+              "--method", "rosenbrock", "--json"])
+    assert r.exit_code == 0, r.output + r.stderr
+    s = json.loads(r.stdout)
+    assert s["status"] == "completed" and s["method"] == "rosenbrock" and s["steps"] > 0
+
+
 def test_text_output_smooth_with_preset_and_set(tmp_path):
     r = _run(["--preset", "lv2013", "--set", "c1=100", "--sro", "none", "--perturbation", "1e-9",
               "--duration", "0.005", "--plot", str(tmp_path / "fig3.png")])

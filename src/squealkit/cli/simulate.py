@@ -44,10 +44,12 @@ from ._options import (
 @friction_options
 @click.option("--duration", type=float, default=0.15, show_default=True, help="Simulated time [s].")
 @click.option("--fs", type=float, default=40_000.0, show_default=True, help="Output sample rate [Hz].")
-@click.option("--method", type=click.Choice(["dopri5", "rk4"]), default="dopri5", show_default=True,
+@click.option("--method", type=click.Choice(["dopri5", "rosenbrock", "rk4"]), default="dopri5", show_default=True,
               help="dopri5: Dormand-Prince 5(4) with error control, located contact and stick/slip events; "
-              "rk4: fixed-step classical RK4.")
-@click.option("--rtol", type=float, default=1e-8, show_default=True, help="Relative tolerance of dopri5.")
+              "rosenbrock: Rodas4 (linearly implicit, analytic Jacobian) for stiff friction (small v_reg), "
+              "same events; rk4: fixed-step classical RK4.")
+@click.option("--rtol", type=float, default=1e-8, show_default=True,
+              help="Relative tolerance of dopri5 and rosenbrock.")
 @scheduler_option
 @output_options()
 def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, sro_file, seed, perturbation, contact,

@@ -1,8 +1,9 @@
 """Compiled integration of M x'' + C x' + f(x, x', q, tan_theta) = F0, and the monodromy matrix.
 
-Three kernels: ``integrate_chunk`` (fixed-step classical RK4), ``integrate_adaptive``
-(Dormand-Prince 5(4) with error control, dense output and event location) and ``monodromy``
-(Floquet: the periodic linear system over one period).
+Four kernels: ``integrate_chunk`` (fixed-step classical RK4), ``integrate_adaptive``
+(Dormand-Prince 5(4) with error control, dense output and event location),
+``integrate_rosenbrock`` (Rodas4, linearly implicit with the analytic Jacobian, for stiff
+friction laws) and ``monodromy`` (Floquet: the periodic linear system over one period).
 
 All matrices and load vectors arrive premultiplied by M^-1 (``K0 = M^-1 K0`` and so on; ``bM``
 and ``fM`` are M^-1 b and M^-1 f), so the right-hand side is the acceleration directly.
@@ -431,6 +432,363 @@ def integrate_adaptive(
                 h = h * min(10.0, max(0.2, fac))
             else:
                 h = h_saved  # after the event, the step the controller had before it
+            retake = False
+            if h < h_min:
+                status[r] = 2
+        for i in range(n):
+            X[r, i] = z[i]
+            V[r, i] = z[n + i]
+        H[r] = h
+
+
+# -- stiff integration: Rodas4 (linearly implicit Rosenbrock 4(3)) with the analytic Jacobian -----
+#
+# Hairer & Wanner, Solving ODEs II (2nd ed. 1996), sec. IV.7, Table 7.2 and code RODAS (method 1,
+# "RODAS4"): 6 stages, order 4, embedded order 3, stiffly accurate, L-stable, with a 3rd-order
+# dense output. In the transformed variables u_i of eq. (7.25):
+#   (I / (h gamma) - J) u_i = f(t + alpha_i h, z + sum_j a_ij u_j) + sum_j (c_ij / h) u_j + h d_i f_t
+#   z1 = z + sum_j m_j u_j,   error estimate u_6
+# dense output  z(t + s h) = (1 - s) z + s (z1 + (1 - s) (D2.u + s D3.u)).
+# simulate.py passes the coefficients (ROS_A, ROS_C, ROS_ALPHA, ROS_D, ROS_M, ROS_DENSE, gamma).
+
+
+@njit(cache=True, inline="always")
+def _jacobian(x, xd, q, t, mu, v, C, K0, Kn, Kf, Knx, Kfx, kin, bM, fM, b, fhat, kc, s, opts, Jx, Jv):
+    """Analytic d(acc)/dx into Jx and d(acc)/dx' into Jv (the force law of :func:`_rhs`).
+
+    Linear law: -K0 - g (Kn + kin s t Knx) - e (Kf + kin s t Kfx), and -C. Structured law with
+    Nc = -kc (b_t.x - q) (0 and flat when the contact is open), mu_e(w) = mu(w) tanh(w / v_reg),
+    w = v - s fhat.x': d/dx adds (g bM + e fM) dNc/dx, d/dx' adds Nc (s fM - t bM) mu_e'(w) (-s fhat).
+    """
+    n = x.shape[0]
+    for i in range(n):
+        for j in range(n):
+            Jx[i, j] = -K0[i, j]
+            Jv[i, j] = -C[i, j]
+    if opts[0] == 0.0:
+        g = 1.0 - mu * t
+        e = s * (mu + t)
+        for i in range(n):
+            for j in range(n):
+                Jx[i, j] -= g * Kn[i, j] + e * Kf[i, j]
+                if kin != 0.0:
+                    Jx[i, j] -= s * t * (g * Knx[i, j] + e * Kfx[i, j])
+        return
+    d = -q
+    for j in range(n):
+        d += (b[j] + kin * s * t * fhat[j]) * x[j]
+    nc = -kc * d
+    closed = True
+    if opts[1] != 0.0 and nc < 0.0:
+        nc = 0.0
+        closed = False
+    w = v
+    for j in range(n):
+        w -= s * fhat[j] * xd[j]
+    mw = mu
+    dmw = 0.0
+    if opts[3] != 0.0:
+        ex = math.exp(-abs(w) / opts[6])
+        mw = mu + (opts[5] - mu) * ex
+        sg = 1.0 if w > 0.0 else (-1.0 if w < 0.0 else 0.0)
+        dmw = -(opts[5] - mu) * ex * sg / opts[6]
+    phi = 1.0
+    dphi = 0.0
+    if opts[2] != 0.0:
+        phi = math.tanh(w / opts[4])
+        dphi = (1.0 - phi * phi) / opts[4]
+    me = mw * phi
+    dme = dmw * phi + mw * dphi
+    g = 1.0 - me * t
+    e = s * (me + t)
+    for i in range(n):
+        if closed:
+            gi = g * bM[i] + e * fM[i]
+            for j in range(n):
+                Jx[i, j] += gi * (-kc * (b[j] + kin * s * t * fhat[j]))
+        hi = nc * (s * fM[i] - t * bM[i]) * dme
+        for j in range(n):
+            Jv[i, j] += hi * (-s * fhat[j])
+
+
+@njit(cache=True, inline="always")
+def _lu(A, piv):
+    """In-place LU factorisation with partial pivoting; returns False if singular."""
+    m = A.shape[0]
+    for k in range(m):
+        p = k
+        big = abs(A[k, k])
+        for i in range(k + 1, m):
+            if abs(A[i, k]) > big:
+                big = abs(A[i, k])
+                p = i
+        piv[k] = p
+        if big == 0.0 or not (big < 1e300):
+            return False
+        if p != k:
+            for j in range(m):
+                tmp = A[k, j]
+                A[k, j] = A[p, j]
+                A[p, j] = tmp
+        for i in range(k + 1, m):
+            A[i, k] /= A[k, k]
+            lik = A[i, k]
+            for j in range(k + 1, m):
+                A[i, j] -= lik * A[k, j]
+    return True
+
+
+@njit(cache=True, inline="always")
+def _lu_solve(A, piv, x):
+    """Solve in place with the factors of :func:`_lu`."""
+    m = A.shape[0]
+    for k in range(m):
+        p = piv[k]
+        if p != k:
+            tmp = x[k]
+            x[k] = x[p]
+            x[p] = tmp
+    for i in range(m):
+        acc = x[i]
+        for j in range(i):
+            acc -= A[i, j] * x[j]
+        x[i] = acc
+    for i in range(m - 1, -1, -1):
+        acc = x[i]
+        for j in range(i + 1, m):
+            acc -= A[i, j] * x[j]
+        x[i] = acc / A[i, i]
+
+
+@njit(cache=True, inline="always")
+def _dense_ros(z, z1, U, Dd, th, out):
+    """Rodas4's 3rd-order continuous extension at t + th h."""
+    m = z.shape[0]
+    for i in range(m):
+        d2 = 0.0
+        d3 = 0.0
+        for j in range(Dd.shape[1]):
+            d2 += Dd[0, j] * U[j, i]
+            d3 += Dd[1, j] * U[j, i]
+        out[i] = (1.0 - th) * z[i] + th * (z1[i] + (1.0 - th) * (d2 + th * d3))
+
+
+@njit(cache=True, parallel=True)
+def integrate_rosenbrock(
+    X, V, H, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+    qg, tgr, tg0, hg, t_a, t_b, fs, o_first, o_last, RA, RC, RAL, RD, RM, RDD, gam, rtol, atol, h_max,
+    out_x, out_v, out_a, out_nc, out_me, limit, status, n_valid, counts, ev_t, ev_k, n_ev,
+):
+    """Advance each run from ``t_a`` to ``t_b`` by Rodas4 (see the notes above) with error control.
+
+    Same conventions as :func:`integrate_adaptive` (output by the method's dense output, contact
+    sign changes located by bisection on it and the step retaken to end there, stick/slip events,
+    ``counts``, ``status``); the Jacobian is analytic (:func:`_jacobian`) and evaluated every step,
+    f_t by a central difference in time of the forcing.
+    """
+    R = X.shape[0]
+    n = X.shape[1]
+    m = 2 * n
+    S = RA.shape[0]
+    for r in prange(R):
+        if status[r] != 0:
+            continue
+        z = np.empty(m)
+        for i in range(n):
+            z[i] = X[r, i]
+            z[n + i] = V[r, i]
+        U = np.empty((S, m))
+        F = np.empty(m)
+        f0 = np.empty(m)
+        ft = np.empty(m)
+        fa = np.empty(m)
+        zt = np.empty(m)
+        znew = np.empty(m)
+        zd = np.empty(m)
+        dzd = np.empty(m)
+        W = np.empty((m, m))
+        piv = np.empty(m, dtype=np.int64)
+        Jx = np.empty((n, n))
+        Jv = np.empty((n, n))
+        work = np.empty(n)
+        acc = np.empty(n)
+        mu_r, v_r, kc_r, s_r, kin_r = mu[r], v[r], kc[r], s[r], kin[r]
+        bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r = bM[r], fM[r], C[r], K0[r], Kn[r], Kf[r]
+        Knx_r, Kfx_r = Knx[r], Kfx[r]
+        F0_r, fn_r, ff_r, b_r, f_r, fhat_r = F0[r], fn[r], ff[r], b[r], f[r], fhat[r]
+        qg_r, tg_r = qg[r], tgr[r]
+        t = t_a
+        h = H[r]
+        o = o_first
+        nc, me, q, tt_ = _f(t, z, f0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+                            Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+        counts[r, 2] += 1
+        if o <= o_last and o / fs <= t + 1e-12 / fs:
+            for i in range(n):
+                out_x[r, o, i] = z[i]
+                out_v[r, o, i] = z[n + i]
+                out_a[r, o, i] = f0[n + i]
+            out_nc[r, o] = nc
+            out_me[r, o] = me
+            n_valid[r] = o + 1
+            o += 1
+        g_old, w_old = _gap_and_slip(z[:n], z[n:], q, tt_, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
+        retake = False
+        h_saved = h
+        dtf = 1e-4 * hg
+        while t < t_b and status[r] == 0:
+            h_min = 1e-14 * max(1.0, abs(t)) + 1e-300
+            if h > h_max[r]:
+                h = h_max[r]
+            last = False
+            if t + h >= t_b:
+                h = t_b - t
+                last = True
+            # f(t, z) (f0), f_t and the Jacobian at the start of the step
+            nc, me, q, tt_ = _f(t, z, f0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+                                Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+            _f(t + dtf, z, ft, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+               Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+            _f(t - dtf, z, fa, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+               Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+            for i in range(m):
+                ft[i] = (ft[i] - fa[i]) / (2.0 * dtf)
+            counts[r, 2] += 3
+            _jacobian(z[:n], z[n:], q, tt_, mu_r, v_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, bM_r, fM_r,
+                      b_r, fhat_r, kc_r, s_r, opts, Jx, Jv)
+            ihg = 1.0 / (h * gam)
+            for i in range(m):
+                for j in range(m):
+                    W[i, j] = 0.0
+            for i in range(n):
+                W[i, i] = ihg
+                W[i, n + i] = -1.0
+                for j in range(n):
+                    W[n + i, j] = -Jx[i, j]
+                    W[n + i, n + j] = -Jv[i, j]
+                W[n + i, n + i] += ihg
+            if not _lu(W, piv):
+                counts[r, 1] += 1
+                h *= 0.5
+                if h < h_min:
+                    status[r] = 2
+                continue
+            # stages
+            for k in range(S):
+                if k == 0:
+                    for i in range(m):
+                        F[i] = f0[i]
+                else:
+                    for i in range(m):
+                        a = 0.0
+                        for j in range(k):
+                            a += RA[k, j] * U[j, i]
+                        zt[i] = z[i] + a
+                    _f(t + RAL[k] * h, zt, F, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r,
+                       Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+                    counts[r, 2] += 1
+                for i in range(m):
+                    a = F[i] + h * RD[k] * ft[i]
+                    for j in range(k):
+                        a += RC[k, j] / h * U[j, i]
+                    U[k, i] = a
+                _lu_solve(W, piv, U[k])
+            for i in range(m):
+                a = 0.0
+                for j in range(S):
+                    a += RM[j] * U[j, i]
+                znew[i] = z[i] + a
+            t_new = t + h if not last else t_b
+            err = 0.0
+            for i in range(m):
+                sc = atol[r, i] + rtol * max(abs(z[i]), abs(znew[i]))
+                e = U[S - 1, i] / sc
+                err += e * e
+            err = math.sqrt(err / m)
+            if not (err <= 1.0):
+                counts[r, 1] += 1
+                fac = 0.9 * err ** -0.25 if err == err and err < 1e300 else 0.2
+                h *= max(0.2, fac)
+                if h < h_min:
+                    status[r] = 2
+                continue
+            qn, tn = _forcing(t_new, tg0, hg, qg_r, tg_r, v_r)
+            g_new, w_new = _gap_and_slip(znew[:n], znew[n:], qn, tn, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
+            if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0) and not retake:
+                lo, hi = 0.0, 1.0
+                for _ in range(50):
+                    mid = 0.5 * (lo + hi)
+                    _dense_ros(z, znew, U, RDD, mid, zd)
+                    qm, tm = _forcing(t + mid * h, tg0, hg, qg_r, tg_r, v_r)
+                    gm, _w = _gap_and_slip(zd[:n], zd[n:], qm, tm, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
+                    if (gm > 0.0) == (g_old > 0.0):
+                        lo = mid
+                    else:
+                        hi = mid
+                if hi < 1.0 - 1e-9 and hi * h > h_min:
+                    h_saved = h
+                    h = hi * h
+                    retake = True
+                    continue
+            counts[r, 0] += 1
+            if h < counts[r, 3] or counts[r, 3] == 0.0:
+                counts[r, 3] = h
+            if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0):
+                k_ev = n_ev[r]
+                if k_ev < ev_t.shape[1]:
+                    ev_t[r, k_ev] = t_new
+                    ev_k[r, k_ev] = EVENT_CONTACT_OPENS if g_new <= 0.0 else EVENT_CONTACT_CLOSES
+                n_ev[r] = k_ev + 1
+            if opts[2] != 0.0 and (w_old < opts[4]) != (w_new < opts[4]):
+                lo, hi = 0.0, 1.0
+                for _ in range(40):
+                    mid = 0.5 * (lo + hi)
+                    _dense_ros(z, znew, U, RDD, mid, zd)
+                    qm, tm = _forcing(t + mid * h, tg0, hg, qg_r, tg_r, v_r)
+                    _g, wm = _gap_and_slip(zd[:n], zd[n:], qm, tm, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
+                    if (wm < opts[4]) == (w_old < opts[4]):
+                        lo = mid
+                    else:
+                        hi = mid
+                k_ev = n_ev[r]
+                if k_ev < ev_t.shape[1]:
+                    ev_t[r, k_ev] = t + hi * h
+                    ev_k[r, k_ev] = EVENT_STICK if w_new < opts[4] else EVENT_SLIP
+                n_ev[r] = k_ev + 1
+            while o <= o_last and o / fs <= t_new * (1.0 + 1e-15):
+                th = (o / fs - t) / h
+                if th > 1.0:
+                    th = 1.0
+                _dense_ros(z, znew, U, RDD, th, zd)
+                ncs, mes, _q, _t = _f(o / fs, zd, dzd, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r,
+                                      Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r,
+                                      s_r, opts, work, acc)
+                bad = False
+                for i in range(n):
+                    if not (abs(zd[i]) <= limit):
+                        bad = True
+                if bad:
+                    status[r] = 1
+                    break
+                for i in range(n):
+                    out_x[r, o, i] = zd[i]
+                    out_v[r, o, i] = zd[n + i]
+                    out_a[r, o, i] = dzd[n + i]
+                out_nc[r, o] = ncs
+                out_me[r, o] = mes
+                n_valid[r] = o + 1
+                o += 1
+            if status[r] != 0:
+                break
+            t = t_new
+            for i in range(m):
+                z[i] = znew[i]
+            g_old, w_old = g_new, w_new
+            if not retake:
+                fac = 0.9 * err ** -0.25 if err > 0.0 else 6.0
+                h = h * min(6.0, max(0.2, fac))
+            else:
+                h = h_saved
             retake = False
             if h < h_min:
                 status[r] = 2

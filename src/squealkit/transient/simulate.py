@@ -8,9 +8,14 @@ tan(theta(t)) = dq/dx at x = x_start + v t (eqs. 9-11) in compiled code, and ret
   per run, output by its 4th-order dense interpolant at ``fs``; contact loss and closure are
   located inside a step (bisection on the interpolant) and the step is retaken to end there;
   stick/slip transitions of the regularised friction law are located and recorded.
+- ``"rosenbrock"``: Rodas4 (Hairer & Wanner, Solving ODEs II, sec. IV.7, code RODAS), a
+  linearly implicit, L-stable Rosenbrock 4(3) pair with the analytic Jacobian of the force law,
+  for stiff friction laws (small ``v_reg``): its step is bounded by the error control only (and
+  by ``3 / omega_max``), not by the friction law's stability bound. Output by its own 3rd-order
+  dense output; contact and stick/slip events as for ``"dopri5"``.
 - ``"rk4"``: classical RK4 with a fixed step (the earlier integrator, for order studies).
 
-Both respect a step bound from the fastest mode and from the friction law's own stiffness:
+The explicit ones respect a step bound from the fastest mode and from the friction law's own stiffness:
 regularised friction ``mu N tanh(w / v_reg)`` acts like a damper ``mu N / v_reg`` on the sliding
 direction (and a Stribeck law adds ``(mu_static - mu) N / v_stribeck``), whose explicit
 stability limit ``~2.5 / (c fhat.M^-1.fhat)`` can be far below the modes' (see
@@ -57,7 +62,7 @@ _FORCING_PER_SAMPLE = 4
 _CHUNK_SAMPLES = 1 << 14
 #: Events recorded per run (contact loss/closure, stick/slip); later ones are counted only.
 _MAX_EVENTS = 4096
-METHODS = ("dopri5", "rk4")
+METHODS = ("dopri5", "rosenbrock", "rk4")
 _EVENT_NAMES = {1: "contact_opens", 2: "contact_closes", 3: "stick", 4: "slip"}
 _STATUS = {0: "completed", 1: "diverged", 2: "failed"}
 
@@ -73,6 +78,31 @@ def _dopri_tableau():
     A[:, : RK45.A.shape[1]] = RK45.A
     return (np.ascontiguousarray(A), np.ascontiguousarray(RK45.B), np.ascontiguousarray(RK45.C),
             np.ascontiguousarray(RK45.E), np.ascontiguousarray(RK45.P))
+def _rodas4_tableau():
+    """Rodas4 in the transformed form of Hairer & Wanner II, eq. (IV.7.25), coefficients of their
+    code RODAS (method 1): a_ij, c_ij, alpha_i, d_i (f_t), m_j, dense output D2, D3 and gamma."""
+    A = np.zeros((6, 6))
+    A[1, 0] = 1.544
+    A[2, :2] = [0.9466785280815826, 0.2557011698983284]
+    A[3, :3] = [3.314825187068521, 2.896124015972201, 0.9986419139977817]
+    A[4, :4] = [1.221224509226641, 6.019134481288629, 12.53708332932087, -0.687886036105895]
+    A[5, :4] = A[4, :4]
+    A[5, 4] = 1.0
+    Cm = np.zeros((6, 6))
+    Cm[1, 0] = -5.6688
+    Cm[2, :2] = [-2.430093356833875, -0.2063599157091915]
+    Cm[3, :3] = [-0.1073529058151375, -9.594562251023355, -20.47028614809616]
+    Cm[4, :4] = [7.496443313967647, -10.24680431464352, -33.99990352819905, 11.7089089320616]
+    Cm[5, :5] = [8.083246795921522, -7.981132988064893, -31.52159432874371, 16.31930543123136, -6.058818238834054]
+    alpha = np.array([0.0, 0.386, 0.21, 0.63, 1.0, 1.0])
+    d = np.array([0.25, -0.1043, 0.1035, -0.0362, 0.0, 0.0])
+    m = np.array([*A[4, :4], 1.0, 1.0])
+    dense = np.zeros((2, 6))
+    dense[0, :5] = [10.12623508344586, -7.487995877610167, -34.80091861555747, -7.992771707568823, 1.025137723295662]
+    dense[1, :5] = [-0.6762803392801253, 6.087714651680015, 16.43084320892478, 24.76722511418386, -6.594389125716872]
+    return A, Cm, alpha, d, m, dense, 0.25
+
+
 #: Steps per compiled call (progress and divergence are checked between calls).
 _CHUNK_STEPS = 1 << 17
 
@@ -168,6 +198,9 @@ def _step_size(runs: Sequence[_Run], fs: float, dt: float | None, contact: Conta
     1/fs = stride * dt) and the bounds. A given ``dt`` beyond the friction law's stability
     bound is an error for RK4 (it would integrate noise) and is cut to it for Dormand-Prince."""
     bounds = _bounds(runs, contact or Contact.linear(), method)
+    if method == "rosenbrock":  # L-stable: only the modes' bound (accuracy of the forcing) caps the step
+        mode = bounds["mode_bound"] if math.isfinite(bounds["mode_bound"]) else 1.0 / fs
+        return (mode if dt is None else min(validate_positive("dt", dt), mode)), 1, bounds
     if dt is None:
         dt_max = bounds["bound"] if math.isfinite(bounds["bound"]) else 1.0 / fs
     else:
@@ -314,7 +347,7 @@ def _integrate(
         _run_rk4(runs, X, V, arrays, outs, dt, stride, n_steps, x_start, limit, status, n_valid, progress)
     else:
         extra.update(_run_dopri5(runs, X, V, arrays, outs, dt_user, contact, fs, n_out, x_start, limit, status,
-                                 n_valid, progress, rtol, atol))
+                                 n_valid, progress, rtol, atol, method))
     time = np.arange(n_out) / fs
     return dict(
         time=time, x=out_x, v=out_v, a=out_a, nc=out_nc, me=out_me, status=status, n_valid=n_valid,
@@ -356,12 +389,12 @@ def _run_rk4(runs, X, V, arrays, outs, dt, stride, n_steps, x_start, limit, stat
 
 
 def _run_dopri5(runs, X, V, arrays, outs, dt_user, contact, fs, n_out, x_start, limit, status, n_valid, progress,
-                rtol, atol) -> dict[str, Any]:
-    """Dormand-Prince 5(4) with error control, chunk by chunk of output samples. Each run has its
-    own step bound and tolerances (from its own model and friction), so that a run's numbers do not
-    depend on the batch it is in."""
+                rtol, atol, method="dopri5") -> dict[str, Any]:
+    """Dormand-Prince 5(4) (or Rodas4, ``method="rosenbrock"``) with error control, chunk by chunk
+    of output samples. Each run has its own step bound and tolerances (from its own model and
+    friction), so that a run's numbers do not depend on the batch it is in."""
     R, n = X.shape
-    per_run = [_step_size([run], fs, dt_user, contact, "dopri5") for run in runs]
+    per_run = [_step_size([run], fs, dt_user, contact, method) for run in runs]
     h_max = np.array([p[0] for p in per_run])
     w = np.array([max(p[2]["omega_max"], 1.0) for p in per_run])
     if atol is None:
@@ -372,7 +405,8 @@ def _run_dopri5(runs, X, V, arrays, outs, dt_user, contact, fs, n_out, x_start, 
         atol_x = np.full(R, atol)
     atol_a = np.ascontiguousarray(np.concatenate([np.repeat(atol_x[:, None], n, axis=1),
                                                   np.repeat((atol_x * w)[:, None], n, axis=1)], axis=1))
-    A, B, Cn, E, P = _dopri_tableau()
+    tableau = _dopri_tableau() if method == "dopri5" else _rodas4_tableau()
+    kernel = _kernels.integrate_adaptive if method == "dopri5" else _kernels.integrate_rosenbrock
     H = np.minimum(h_max, 0.1 / w)
     counts = np.zeros((R, 4))
     ev_t = np.full((R, _MAX_EVENTS), np.nan)
@@ -387,8 +421,8 @@ def _run_dopri5(runs, X, V, arrays, outs, dt_user, contact, fs, n_out, x_start, 
         g = np.arange(k_a * per, o_last * per + 1) / (fs * per)
         qg, tg = _profile_samples(runs, x_start, g)
         with limit_threads(threads_for(R, serial_below=2)):  # parallel over runs: one run is serial
-            _kernels.integrate_adaptive(
-                X, V, H, *arrays, qg, tg, g[0], 1.0 / (fs * per), t_a, t_b, fs, o_first, o_last, A, B, Cn, E, P,
+            kernel(
+                X, V, H, *arrays, qg, tg, g[0], 1.0 / (fs * per), t_a, t_b, fs, o_first, o_last, *tableau,
                 rtol, atol_a, h_max, *outs, limit, status, n_valid, counts, ev_t, ev_k, n_ev,
             )
         if progress is not None:
@@ -479,7 +513,9 @@ def _integrator_attrs(raw: dict, i: int) -> dict:
         out.update(integrator="classical RK4, fixed step (numba)", steps_per_sample=raw["stride"])
     else:
         steps, rejected, calls, hmin = raw["counts"][i]
-        out.update(integrator="Dormand-Prince 5(4), error control, dense output, event location (numba)",
+        name = ("Dormand-Prince 5(4)" if raw["method"] == "dopri5" else
+                "Rodas4 Rosenbrock 4(3), analytic Jacobian")
+        out.update(integrator=f"{name}, error control, dense output, event location (numba)",
                    rtol=raw["rtol"], atol=float(raw["atol"][i, 0]), steps=int(steps), rejected_steps=int(rejected),
                    rhs_calls=int(calls), min_step=float(hmin))
     return out
@@ -574,10 +610,14 @@ def simulate(
         A run whose displacement exceeds ``limit`` [m] stops with status ``"diverged"``.
     progress : callable, optional
         Called as ``progress(done, total)``.
-    method : {"dopri5", "rk4"}
-        Integrator: Dormand-Prince 5(4) with error control and event location, or fixed-step RK4.
+    method : {"dopri5", "rosenbrock", "rk4"}
+        Integrator: Dormand-Prince 5(4) with error control and event location; Rodas4, a
+        linearly implicit Rosenbrock 4(3) pair with the analytic Jacobian, error control, its own
+        dense output and the same event location, for stiff friction laws (small ``v_reg``: its
+        step is not held at the friction law's stability bound; ``dt`` caps it, default
+        ``3 / omega_max``); or fixed-step RK4.
     rtol : float
-        Relative tolerance of the error control (Dormand-Prince).
+        Relative tolerance of the error control (Dormand-Prince, Rodas4).
     atol : float, optional
         Absolute displacement tolerance [m]; velocities get ``atol * omega_max``. Default
         ``1e-3 rtol`` times the largest initial displacement (at least 1 nm).
@@ -594,7 +634,7 @@ def simulate(
         in the static equilibrium of steady sliding (friction ``mu(speed)`` for a Stribeck
         contact) unless ``x0`` is given. Attribute ``status`` is ``"completed"``,
         ``"diverged"`` or ``"failed"`` (the error control could not meet ``rtol`` above the
-        smallest step); such a run is cut at its last sample (``t_stop``). Dormand-Prince runs
+        smallest step); such a run is cut at its last sample (``t_stop``). Dormand-Prince and Rodas4 runs
         carry ``steps``, ``rejected_steps``, ``rhs_calls``, ``min_step`` and the located events
         (``event_time``, ``event_kind`` over ``event``: contact_opens / contact_closes / stick /
         slip). A linear contact whose normal force pulls has ``tensile_fraction`` > 0 and
