@@ -87,7 +87,7 @@ def parameters_step(model: FrictionModel, rig: PinOnDiscRig | None, figures: Pat
                                               abs(got / value - 1) < 5e-3, "within 0.5 %"))
             else:  # another rig: the paper's value is a reference, not a target
                 comparisons.append(Comparison(f"{name} from the rig", value, got, unit, None,
-                                              "published: the paper's rig, for reference; yours differs by design"))
+                                              "published: the paper's rig, for reference (yours is another rig)"))
         d, L, E, rho, nu = (rig.pin_diameter, rig.pin_length, rig.pin_youngs_modulus, rig.pin_density,
                             rig.pin_poisson)
         eb = cantilever_bending_frequency(d, L, E, rho, theory="euler_bernoulli")
