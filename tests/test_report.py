@@ -227,6 +227,19 @@ def test_report_for_a_matrix_model(tmp_path):
     assert "not derived from a rig" in text and "2x2 matrix" in text
     assert "The model has no pin x1" in text
     assert "pin-bending and disc modes lock in" not in text
+    assert "Model parameters (no rig)" in text and "model parameters from the rig" not in text
+
+
+def test_run_out_tolerance_text_follows_the_numbers():
+    # issue 15: Hoffmann's model is unstable on a flat disc at mu = 0.3: no tolerance, not "0.0000 ... beyond it"
+    from squealkit.models import get_preset
+    from squealkit.report.steps_stability import _tolerance_text
+    from squealkit.stability import runout_tolerance
+
+    text = _tolerance_text(runout_tolerance(get_preset("hoffmann2002"), 0.3, wavelength=1e-3), 0.3, 1e-3)
+    assert "already unstable on a flat disc" in text and "0.0000" not in text
+    text = _tolerance_text(runout_tolerance(get_preset("lv2013"), 0.3, wavelength=1e-3), 0.3, 1e-3)
+    assert "slopes up to tan(theta) = 0." in text and "beyond it" in text
 
 
 def test_transient_section_for_the_hoffmann_model(tmp_path):

@@ -126,7 +126,8 @@ def parameters_step(model: FrictionModel, rig: PinOnDiscRig | None, figures: Pat
         tuple((k, _cell(v), info.get(k, {}).get("unit", ""), docs.get(k, ""))
               for k, v in model.parameters().items()),
     ))
-    return Section("parameters", "Table 1 and §3: model parameters from the rig", tuple(paragraphs),
+    title = "Table 1 and §3: model parameters from the rig" if rig is not None else "Model parameters (no rig)"
+    return Section("parameters", title, tuple(paragraphs),
                    tuple(comparisons), tuple(tables))
 
 
@@ -259,8 +260,12 @@ def _onset_text(model: FrictionModel, c0, cd) -> str:
 def _tolerance_text(tol, mu_design: float, wavelength: float) -> str:
     """The run-out tolerance at the design friction, and how the paper's Fig. 4 SRO compares with it."""
     fig4_slope = 2 * math.pi * 0.08e-3 / 1e-3
-    if not math.isfinite(tol.tan_theta_max):
-        return f"Run-out tolerance at mu = {mu_design}: none found (the flat disc is not stable there)."
+    if tol.limiting_side == "flat" or tol.tan_theta_max <= 0:
+        return (f"Run-out tolerance at mu = {mu_design}: none; the model is already unstable on a flat disc there, "
+                "so no run-out slope is tolerated.")
+    if math.isinf(tol.tan_theta_max):
+        return (f"Run-out tolerance at mu = {mu_design}: every slope searched stays stable, so the run-out does not "
+                "limit this model there.")
     text = (f"Run-out tolerance at mu = {mu_design}: slopes up to tan(theta) = {tol.tan_theta_max:.4f} "
             f"({tol.theta_max_deg:.2f} deg) stay stable, limited by the {tol.limiting_side} run-out")
     if tol.q0_max is not None and math.isfinite(tol.q0_max):
