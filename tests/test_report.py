@@ -169,6 +169,7 @@ def test_cli_report_for_own_rig(tmp_path):
     sigma = numbers["transient"]["sigma_mu04"]
     if sigma <= 0:
         assert "marginally unstable" not in text
+    assert "0.0 times" not in text and "0 times more" not in text  # ratios as they are
     if numbers["beyond"]["paper_mu_e_spread"] >= 0.01:  # eq. (6) is claimed to hold only where it does
         assert "holds in its model" not in text
     # Table 1: the paper's parameters are a reference for another rig, never a failed check

@@ -39,6 +39,20 @@ def _curves(models: dict[str, FrictionModel]) -> xr.Dataset:
     return ds
 
 
+def _ratio_text(q_paper: float | None, q_cons: float | None) -> str:
+    """How much more or less run-out the consistent kinematics tolerates, in words true to the numbers."""
+    qp, qc = (math.nan if q is None else float(q) for q in (q_paper, q_cons))
+    if not (math.isfinite(qp) and math.isfinite(qc)) or qp <= 0 or qc <= 0:
+        if math.isinf(qc) and math.isfinite(qp):
+            return "with consistent kinematics every slope searched is tolerated."
+        return "the two tolerances cannot be compared as a ratio."
+    if qc < qp:
+        return f"{qp / qc:.1f} times less run-out is tolerated."
+    if qc > qp:
+        return f"{qc / qp:.1f} times more run-out is tolerated."
+    return "the same run-out is tolerated."
+
+
 def _side(mu_c: NDArray[np.float64]) -> str:
     """Which sign of the incline lowers the critical friction (ends of the grid), in words."""
     lo, hi = (float(x) if math.isfinite(x) else math.inf for x in (mu_c[0], mu_c[-1]))
@@ -124,8 +138,7 @@ def beyond_step(model: FrictionModel, figures: Path, data: Path, *, mu_design: f
         f"q0 <= {tol['paper'].q0_max * 1e6:.2f} um), limited by the {tol['paper'].limiting_side} run-out; the "
         f"consistent one {tol['consistent'].tan_theta_max:.4f} ({tol['consistent'].theta_max_deg:.2f} deg, "
         f"q0 <= {tol['consistent'].q0_max * 1e6:.2f} um), limited by the {tol['consistent'].limiting_side} "
-        f"run-out: {tol['paper'].q0_max / tol['consistent'].q0_max:.1f} times "
-        + ("less" if tol["consistent"].q0_max < tol["paper"].q0_max else "more") + " run-out is tolerated.",
+        "run-out: " + _ratio_text(tol["paper"].q0_max, tol["consistent"].q0_max),
         _meaning(pc, cc, i0, tol["paper"].q0_max, tol["consistent"].q0_max, getattr(model, "sliding", 1)),
     ]
     rows = tuple((float(t), float(a), float(b), float(c), float(d)) for t, a, b, c, d in zip(
