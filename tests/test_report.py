@@ -140,13 +140,45 @@ def test_cli_reproduce_quick_json(tmp_path):
     assert out["numbers"]["fig2"]["band_low"] == pytest.approx(14997.0, abs=30)
 
 
+def _text(html: str) -> str:
+    """The report's words: tags, styles and inline figures left out."""
+    html = re.sub(r"<(style|svg|script)\b.*?</\1>", " ", html, flags=re.S)
+    return re.sub(r"\s+", " ", re.sub(r"<[^>]+>", " ", html)).replace("&#x27;", "'").replace("&#39;", "'")
+
+
 def test_cli_report_for_own_rig(tmp_path):
+    # issue 15: examples/myrig.toml is not the paper's rig (L/d = 1.61, undamped, pin bending 2722 Hz):
+    # every sentence, verdict and caption comes from its own numbers, and the header names the file
+    from pathlib import Path
+
     cfg = tmp_path / "myrig.toml"
-    cfg.write_text("[rig]\npin_diameter = 0.028\npin_length = 0.045\n[parameters]\nalpha_deg = 2.5\n")
-    r = CliRunner().invoke(cli, ["report", "--config", str(cfg), "--quick", "--out", str(tmp_path / "mine")])
+    cfg.write_text((Path(__file__).parents[1] / "examples" / "myrig.toml").read_text())
+    r = CliRunner().invoke(cli, ["report", "--config", str(cfg), "--quick", "--out", str(tmp_path / "mine"),
+                                 "--json"])
     assert r.exit_code == 0, r.output
+    numbers = json.loads(r.stdout)["numbers"]
     html = (tmp_path / "mine" / "report.html").read_text()
+    text = _text(html)
     assert "squealkit report" in html and "m1 from the rig" in html
+    assert "from myrig.toml" in text  # the config file is named in the header
+    # prose: nothing written from the paper's case
+    assert "paper's damping" not in text and "220 N s/m" not in text
+    crit = numbers["critical"]
+    if crit["mu_crit_damped"] > crit["mu_crit"]:
+        assert "onset comes earlier" not in text and "onset comes later" in text
+    sigma = numbers["transient"]["sigma_mu04"]
+    if sigma <= 0:
+        assert "marginally unstable" not in text
+    assert "0.0 times" not in text and "0 times more" not in text  # ratios as they are
+    if numbers["beyond"]["paper_mu_e_spread"] >= 0.01:  # eq. (6) is claimed to hold only where it does
+        assert "holds in its model" not in text
+    # Table 1: the paper's parameters are a reference for another rig, never a failed check
+    rows = re.findall(r"<tr[^>]*>(?:(?!</tr>).)*from the rig(?:(?!</tr>).)*</tr>", html, flags=re.S)
+    assert len(rows) == 6 and not [row for row in rows if "differs" in row or "class=\"off\"" in row]
+    assert "within 0.5 %" not in text
+    # captions from the rig's values: L/d = 0.045 / 0.028, the rig's own bending frequency, not Table 1's
+    assert "L/d = 1.5:" not in text and "L/d = 1.61" in text
+    assert "2561" not in text and "2722" in text
 
 
 def test_cli_report_bad_input(tmp_path):
@@ -182,3 +214,45 @@ def test_cli_report_with_own_recording(tmp_path):
     assert "model onset (published column) against measured" in html  # the model's frequency beside the squeal
     r = CliRunner().invoke(cli, ["report", "--recording", str(rec)])
     assert r.exit_code == 2 and "needs --rpm and --radius" in r.stderr
+
+
+def test_report_for_a_matrix_model(tmp_path):
+    # issue 15: a valid 2x2 matrix model (no rig, no pin-on-disc DOF names) gets a report, which says so
+    cfg = tmp_path / "mat.toml"
+    cfg.write_text('model = "matrix"\n[matrices]\nM = [[1.0, 0.0], [0.0, 1.0]]\nK0 = [[1e6, 0.0], [0.0, 1.2e6]]\n'
+                   'Kn = [[0.0, 0.0], [0.0, 0.0]]\nKf = [[0.0, 2e5], [-2e5, 0.0]]\n')
+    r = CliRunner().invoke(cli, ["report", "--config", str(cfg), "--quick", "--out", str(tmp_path / "m")])
+    assert r.exit_code == 0, r.output
+    text = _text((tmp_path / "m" / "report.html").read_text())
+    assert "model: matrix, from mat.toml" in text
+    assert "not derived from a rig" in text and "2x2 matrix" in text
+    assert "The model has no pin x1" in text
+    assert "pin-bending and disc modes lock in" not in text
+    assert "Model parameters (no rig)" in text and "model parameters from the rig" not in text
+
+
+def test_run_out_tolerance_text_follows_the_numbers():
+    # issue 15: Hoffmann's model is unstable on a flat disc at mu = 0.3: no tolerance, not "0.0000 ... beyond it"
+    from squealkit.models import get_preset
+    from squealkit.report.steps_stability import _tolerance_text
+    from squealkit.stability import runout_tolerance
+
+    text = _tolerance_text(runout_tolerance(get_preset("hoffmann2002"), 0.3, wavelength=1e-3), 0.3, 1e-3)
+    assert "already unstable on a flat disc" in text and "0.0000" not in text
+    text = _tolerance_text(runout_tolerance(get_preset("lv2013"), 0.3, wavelength=1e-3), 0.3, 1e-3)
+    assert "slopes up to tan(theta) = 0." in text and "beyond it" in text
+
+
+def test_transient_section_for_the_hoffmann_model(tmp_path):
+    # issue 15: Hoffmann's model has x, y (no x1_ddot) and vibrates near 175 Hz, below the paper's 1000 Hz
+    # high-pass: the section uses the model's own acceleration and band, and its words follow its numbers
+    from squealkit.models import get_preset
+    from squealkit.report.steps_transient import transient_step
+
+    s = transient_step(get_preset("hoffmann2002"), tmp_path, tmp_path, quick=True)
+    text = " ".join(s.paragraphs)
+    assert "its x_ddot is shown" in text
+    assert s.numbers["f_smooth_hz"] == pytest.approx(s.numbers["f_eigen_hz"], rel=0.01)
+    assert "pin would lift off" not in text
+    grows = s.numbers["rise_rate"] > 0 > s.numbers["fall_rate"]
+    assert ("swings through the stability boundary" in text) == grows

@@ -10,7 +10,7 @@ from ._options import emit_json, model_options
 
 
 def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = False, as_json: bool,
-         force: bool = False) -> None:
+         force: bool = False, config: Path | None = None) -> None:
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -30,7 +30,7 @@ def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = F
             progress.update(task, completed=done, total=total, description=name)
 
         result = reproduce(out_dir, model=model, rig=rig, recording=recording, quick=quick, progress=update,
-                           force=force)
+                           force=force, config=config)
     if as_json:
         emit_json({"out_dir": str(result.out_dir), "report": str(result.report), "seconds": result.seconds,
                    "numbers": result.numbers()})
@@ -115,4 +115,4 @@ def report(preset, config, sets, out_dir: Path, force: bool, recording, mic, dis
         if not recording.is_file():
             raise InputError(f"Recording {str(recording)!r} does not exist.")
         spec = RecordingSpec(recording, mic, displacement, rpm, radius, fs)
-    _run(out_dir, model=model, rig=rig, recording=spec, quick=quick, as_json=as_json, force=force)
+    _run(out_dir, model=model, rig=rig, recording=spec, quick=quick, as_json=as_json, force=force, config=config)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -37,12 +38,26 @@ def _save_fig(fig, figures: Path, stem: str) -> None:
     save_figure(fig, figures / f"{stem}.svg")
 
 
+def _cell(value):
+    """A parameter's value as a table cell: numbers as they are, matrices and lists as short text."""
+    if isinstance(value, int | float | str) or value is None:
+        return value
+    arr = np.asarray(value)
+    if arr.dtype.kind in "fiuc" and arr.ndim >= 1:
+        return f"{arr.shape[0]}x{arr.shape[1]} matrix" if arr.ndim == 2 else f"{arr.size} values"
+    return ", ".join(map(str, value)) if isinstance(value, list | tuple) else str(value)
+
+
 def parameters_step(model: FrictionModel, rig: PinOnDiscRig | None, figures: Path, data: Path) -> Section:
     """Table 1 and §3: every parameter derived from the rig beside the paper's value."""
     paragraphs = [
         "The paper derives each modal stiffness from a modal frequency, k = m (2 pi f)^2, the contact "
-        "stiffness from the pin's axial stiffness E A / L, and weighs the masses (§3, Table 1). squealkit "
-        "derives them again from the rig's geometry, materials and the FEA frequencies of Table 1.",
+        "stiffness from the pin's axial stiffness E A / L, and weighs the masses (§3, Table 1)."
+        + (" squealkit derives them again from the rig's geometry, materials and the FEA frequencies of Table 1."
+           if rig is not None and rig == PinOnDiscRig.paper() else
+           " squealkit derives them the same way from your rig's geometry, materials and frequencies; the "
+           "paper's values are shown for reference only." if rig is not None else
+           f" This report's model ({model.kind}) is not derived from a rig: its parameters are used as given."),
     ]
     comparisons: list[Comparison] = []
     tables: list[Table] = []
@@ -64,19 +79,34 @@ def parameters_step(model: FrictionModel, rig: PinOnDiscRig | None, figures: Pat
                f"applied to the pin while k2 is grounded, so the static contact force is {n_static:.2f} N "
                "(preload = \"contact_force\" makes P the contact force).")
         )
+        paper_rig = rig == PinOnDiscRig.paper()
         for name, (value, unit) in PAPER_PARAMETERS.items():
             got = float(getattr(derived, name))
-            comparisons.append(Comparison(f"{name} from the rig", value, got, unit,
-                                          abs(got / value - 1) < 5e-3, "within 0.5 %"))
+            if paper_rig:
+                comparisons.append(Comparison(f"{name} from the rig", value, got, unit,
+                                              abs(got / value - 1) < 5e-3, "within 0.5 %"))
+            else:  # another rig: the paper's value is a reference, not a target
+                comparisons.append(Comparison(f"{name} from the rig", value, got, unit, None,
+                                              "published: the paper's rig, for reference (yours is another rig)"))
         d, L, E, rho, nu = (rig.pin_diameter, rig.pin_length, rig.pin_youngs_modulus, rig.pin_density,
                             rig.pin_poisson)
         eb = cantilever_bending_frequency(d, L, E, rho, theory="euler_bernoulli")
         ti = cantilever_bending_frequency(d, L, E, rho, poisson=nu, theory="timoshenko")
         ax = rod_axial_frequency(L, E, rho)
-        fea_b, fea_t = TABLE1_FEA_HZ["pin bending"], TABLE1_FEA_HZ["pin tensile"]
+        src = rig.frequency_sources()
+        if paper_rig:
+            fea_b, fea_t = TABLE1_FEA_HZ["pin bending"], TABLE1_FEA_HZ["pin tensile"]
+            ref_head = "Table 1 FEA [Hz]"
+        else:  # the rig's own frequencies (given, or from beam theory), not the paper's
+            fea_b, fea_t = src["pin_bending"]["frequency_hz"], src["pin_axial"]["frequency_hz"]
+            ref_head = "your rig [Hz]"
+        slender = L / d
+        ref_text = "the FEA of Table 1" if paper_rig else (
+            f"your rig's values (bending: {src['pin_bending']['source']}; tensile: {src['pin_axial']['source']})")
         tables.append(Table(
-            "Pin frequencies from beam theory against the FEA of Table 1 (L/d = 1.5: a stubby pin)",
-            ("mode", "Table 1 FEA [Hz]", "theory", "squealkit [Hz]", "difference [%]"),
+            f"Pin frequencies from beam theory against {ref_text} (L/d = {slender:.3g}"
+            + (": a stubby pin)" if slender < 3 else ")"),
+            ("mode", ref_head, "theory", "squealkit [Hz]", "difference [%]"),
             (
                 ("bending", fea_b, "Euler-Bernoulli", eb, 100 * (eb / fea_b - 1)),
                 ("bending", fea_b, "Timoshenko (shear, rotary inertia)", ti, 100 * (ti / fea_b - 1)),
@@ -84,12 +114,20 @@ def parameters_step(model: FrictionModel, rig: PinOnDiscRig | None, figures: Pat
             ),
         ))
     info = model.parameter_info()
+    docs = {k: v.get("doc", "") for k, v in info.items()}
+    if rig is not None and rig != PinOnDiscRig.paper():  # the docs quote the paper's frequencies; use the rig's
+        f = {k: v["frequency_hz"] for k, v in rig.frequency_sources().items()}
+        for k, mode in (("k1", "pin_bending"), ("k2", "pin_axial"), ("k3", "disc")):
+            if k in docs:
+                docs[k] = re.sub(r"\(2 pi [\d.]+ Hz\)", f"(2 pi {f[mode]:.0f} Hz)", docs[k])
     tables.append(Table(
         "Model used for this report",
         ("parameter", "value", "unit", "meaning"),
-        tuple((k, v, info[k]["unit"], info[k]["doc"]) for k, v in model.parameters().items()),
+        tuple((k, _cell(v), info.get(k, {}).get("unit", ""), docs.get(k, ""))
+              for k, v in model.parameters().items()),
     ))
-    return Section("parameters", "Table 1 and §3: model parameters from the rig", tuple(paragraphs),
+    title = "Table 1 and §3: model parameters from the rig" if rig is not None else "Model parameters (no rig)"
+    return Section("parameters", title, tuple(paragraphs),
                    tuple(comparisons), tuple(tables))
 
 
@@ -110,17 +148,26 @@ def fig2_step(model: FrictionModel, figures: Path, data: Path, *, n_mu: int = 16
     s = stability_summary(ds)
     band = tuple(s["unstable_omega_rad_s"]) if s["unstable_omega_rad_s"] else None
     comps = []
+    ok = band is not None and abs(band[0] - FIG2_BAND_RAD_S[0]) < 10 and abs(band[1] - FIG2_BAND_RAD_S[1]) < 10
+    # for a model that is not the paper's, the published band is shown for reference, without a verdict
+    note = "over mu 0-0.8, theta -8..8 deg; within 10 rad/s" if published else "the paper's rig, for reference"
+    comps.append(Comparison("coupled (lock-in) frequency band", FIG2_BAND_RAD_S, band, "rad/s",
+                            ok if published else None, note))
+    hz = (band[0] / (2 * math.pi), band[1] / (2 * math.pi)) if band else None
+    comps.append(Comparison("coupled frequency band", (2387.0, 2438.0), hz, "Hz", ok if published else None,
+                            "" if published else "the paper's rig, for reference"))
+    first = "Complex eigenvalues of M x'' + K(mu, tan theta) x = 0 (eq. 7) over the paper's grid."
     if published:
-        ok = band is not None and abs(band[0] - FIG2_BAND_RAD_S[0]) < 10 and abs(band[1] - FIG2_BAND_RAD_S[1]) < 10
-        comps.append(Comparison("coupled (lock-in) frequency band", FIG2_BAND_RAD_S, band, "rad/s", ok,
-                                "over mu 0-0.8, theta -8..8 deg; within 10 rad/s"))
-        hz = (band[0] / (2 * math.pi), band[1] / (2 * math.pi)) if band else None
-        comps.append(Comparison("coupled frequency band", (2387.0, 2438.0), hz, "Hz", ok, ""))
+        first += (" As mu and theta grow the pin-bending and disc modes lock in: their frequencies coalesce and the "
+                  "real parts split into a growing and a decaying branch (Fig. 2). The stability boundary is a line "
+                  "of nearly constant mu + tan(theta).")
+    elif band is None:
+        first += " No mode loses stability anywhere on the grid."
+    else:
+        first += (f" Unstable modes appear between {band[0]:.0f} and {band[1]:.0f} rad/s "
+                  f"({band[0] / (2 * math.pi):.0f}-{band[1] / (2 * math.pi):.0f} Hz).")
     paragraphs = (
-        "Complex eigenvalues of M x'' + K(mu, tan theta) x = 0 (eq. 7) over the paper's grid. As mu and "
-        "theta grow the pin-bending and disc modes lock in: their frequencies coalesce and the real parts "
-        "split into a growing and a decaying branch (Fig. 2). The stability boundary is a line of "
-        "nearly constant mu + tan(theta).",
+        first,
         f"Grid {n_mu} x {n_theta}; unstable at {100 * s['unstable_fraction']:.1f} % of the points; largest "
         f"growth rate {s['max_growth_rate']:.1f} 1/s.",
     )
@@ -152,17 +199,7 @@ def critical_step(model: FrictionModel, figures: Path, data: Path, *, wavelength
         Comparison("spread of critical mu + tan(theta) over theta = -8..8 deg", None, 100 * spread, "%", spread < 0.01,
                    "eqs. 5-6 predict the SRO incline acts exactly like friction (0 % spread)"),
     )
-    paragraphs = (
-        f"On a flat disc the undamped model loses stability at mu_crit = {c0.mu_critical:.5f} "
-        f"({c0.frequency_hz:.1f} Hz). With the paper's damping (c = 220 N s/m) onset comes earlier, at "
-        f"mu_crit = {cd.mu_critical:.5f}: damping that differs between the coupled modes destabilises, a known "
-        "effect of mode-coupling instability.",
-        f"Run-out tolerance at mu = {mu_design}: slopes up to tan(theta) = {tol.tan_theta_max:.4f} "
-        f"({tol.theta_max_deg:.2f} deg) stay stable, limited by the {tol.limiting_side} run-out; for a "
-        f"run-out wavelength of {wavelength * 1e3:g} mm this allows an amplitude of "
-        f"q0 = {tol.q0_max * 1e6:.2f} um (eq. 11). The paper's Fig. 4 SRO (q0 = 80 um, lambda = 1 mm) has "
-        f"slopes up to 0.503: far beyond it.",
-    )
+    paragraphs = (_onset_text(model, c0, cd), _tolerance_text(tol, mu_design, wavelength))
     tables = (
         Table("Critical friction over the SRO incline", ("theta [deg]", "mu_crit", "mu_crit + tan(theta)",
                                                            "onset frequency [Hz]"), rows),
@@ -184,6 +221,62 @@ def critical_step(model: FrictionModel, figures: Path, data: Path, *, wavelength
         files = ("onset_modes.nc",)
     return Section("critical", "§3: critical friction and the run-out tolerance", paragraphs, comps, tables,
                    refs, files, numbers=numbers)
+
+
+def damping_text(model: FrictionModel) -> str:
+    """The model's own dampers as text, e.g. 'c1 = c2 = c3 = 220 N s/m' ('' if it has none by name)."""
+    p = model.parameters()
+    cs = {k: p[k] for k in ("c1", "c2", "c3", "c") if isinstance(p.get(k), int | float)}
+    if not cs:
+        return ""
+    vals = set(cs.values())
+    if len(vals) == 1:
+        return " = ".join(cs) + f" = {next(iter(vals)):g} N s/m"
+    return ", ".join(f"{k} = {v:g}" for k, v in cs.items()) + " N s/m"
+
+
+def _onset_text(model: FrictionModel, c0, cd) -> str:
+    """The flat-disc onset, undamped and damped, in words that follow the computed numbers."""
+    if not math.isfinite(c0.mu_critical):
+        first = "On a flat disc the undamped model stays stable over the friction range searched."
+    else:
+        first = (f"On a flat disc the undamped model loses stability at mu_crit = {c0.mu_critical:.5f} "
+                 f"({c0.frequency_hz:.1f} Hz).")
+    damp = damping_text(model)
+    with_damping = f"With the model's damping ({damp})" if damp else "With the model's damping"
+    if not math.isfinite(cd.mu_critical):
+        return first + f" {with_damping} it stays stable over the friction range searched."
+    if not math.isfinite(c0.mu_critical):
+        return first + f" {with_damping} it loses stability at mu_crit = {cd.mu_critical:.5f}."
+    rel = cd.mu_critical / c0.mu_critical - 1
+    if abs(rel) < 1e-4:
+        return first + f" {with_damping} onset is the same, mu_crit = {cd.mu_critical:.5f}."
+    if rel < 0:
+        return first + (f" {with_damping} onset comes earlier, at mu_crit = {cd.mu_critical:.5f}: damping that "
+                        "differs between the coupled modes destabilises, a known effect of mode-coupling instability.")
+    return first + f" {with_damping} onset comes later, at mu_crit = {cd.mu_critical:.5f}."
+
+
+def _tolerance_text(tol, mu_design: float, wavelength: float) -> str:
+    """The run-out tolerance at the design friction, and how the paper's Fig. 4 SRO compares with it."""
+    fig4_slope = 2 * math.pi * 0.08e-3 / 1e-3
+    if tol.limiting_side == "flat" or tol.tan_theta_max <= 0:
+        return (f"Run-out tolerance at mu = {mu_design}: none; the model is already unstable on a flat disc there, "
+                "so no run-out slope is tolerated.")
+    if math.isinf(tol.tan_theta_max):
+        return (f"Run-out tolerance at mu = {mu_design}: every slope searched stays stable, so the run-out does not "
+                "limit this model there.")
+    text = (f"Run-out tolerance at mu = {mu_design}: slopes up to tan(theta) = {tol.tan_theta_max:.4f} "
+            f"({tol.theta_max_deg:.2f} deg) stay stable, limited by the {tol.limiting_side} run-out")
+    if tol.q0_max is not None and math.isfinite(tol.q0_max):
+        text += (f"; for a run-out wavelength of {wavelength * 1e3:g} mm this allows an amplitude of "
+                 f"q0 = {tol.q0_max * 1e6:.2f} um (eq. 11)")
+    text += "."
+    if tol.tan_theta_max < fig4_slope:
+        text += f" The paper's Fig. 4 SRO (q0 = 80 um, lambda = 1 mm) has slopes up to {fig4_slope:.3f}: beyond it."
+    else:
+        text += f" The paper's Fig. 4 SRO (q0 = 80 um, lambda = 1 mm, slopes up to {fig4_slope:.3f}) is within it."
+    return text
 
 
 def _onset_mode(model: FrictionModel, figures: Path, data: Path) -> tuple[str, dict[str, float]]:

@@ -858,7 +858,7 @@ def _stages(tan_theta: np.ndarray) -> list[tuple[int, int, str]]:
     return [(int(a), int(b), names[int(label[a])]) for a, b in itertools.pairwise(bounds)]
 
 
-def transient_summary(ds: xr.Dataset, *, max_stages: int = 50) -> dict[str, object]:
+def transient_summary(ds: xr.Dataset, *, max_stages: int = 50, freq_lower: float = 1000.0) -> dict[str, object]:
     """Peak amplitudes, and growth or decay rate of the vibration per run-out stage.
 
     The growth rate of a stage [1/s] is the least-squares slope of the log of the envelope
@@ -896,7 +896,7 @@ def transient_summary(ds: xr.Dataset, *, max_stages: int = 50) -> dict[str, obje
     out["growth_rate_max"] = float(ds.growth_rate.max())
     stages = []
     if time.size > 32 and fs > 2500.0:
-        env = response_envelope(ds, f"{model_dofs[0]}_ddot").values
+        env = response_envelope(ds, f"{model_dofs[0]}_ddot", freq_lower=freq_lower).values
         # The zero-phase filter and the Hilbert transform ring for a few ms at both ends of
         # the record: those samples take no part in the rate fits.
         edge = np.zeros(time.size, dtype=bool)
