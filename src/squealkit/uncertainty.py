@@ -518,15 +518,15 @@ def squeal_propensity(
     d = len(unc)
 
     # before drawing: the samples and their results, and one batch's eigenvalues over the grid
-    n_rows = samples + (d * (1 << ((samples // 2).bit_length() - 1)) if sensitivity else 0)
+    # Saltelli's base matrices A and B: the first 2 n_base samples (scipy needs n_base = 2^k)
+    n_base = 1 << ((samples // 2).bit_length() - 1) if sensitivity else 0
+    n_rows = samples + d * n_base
     check_memory(n_rows * (d + 4) * 24.0 + min(batch_size, n_rows) * mu_a.size * (48.0 * model.n_dof + 40.0),
                  f"Monte Carlo of {samples} samples over {mu_a.size} mu points",
                  "Use fewer samples or mu points (or a smaller batch_size).")
     sample_seq, boot_seq = np.random.SeedSequence(seed).spawn(2)
     X = sample_parameters(unc, samples, np.random.default_rng(sample_seq))
     _check_samples(unc, X, model)
-    # Saltelli's base matrices A and B: the first 2 n_base samples (scipy needs n_base = 2^k)
-    n_base = 1 << ((samples // 2).bit_length() - 1) if sensitivity else 0
     rows = X
     if n_base:
         A, B = X[:n_base], X[n_base:2 * n_base]

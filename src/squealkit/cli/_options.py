@@ -50,8 +50,6 @@ def writable_folder(ctx: click.Context, param: click.Parameter, value: Path | No
     if value is not None and not ctx.resilient_parsing:
         from ..io import check_output
 
-        if value.exists() and not value.is_dir():
-            raise InputError(f"Output {str(value)!r} is a file; give a folder name.")
         check_output(value, directory=True, force=True)
     return value
 

@@ -14,12 +14,9 @@ def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = F
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from .._validation import InputError
     from ..io import check_output
     from ..report import reproduce
 
-    if out_dir.exists() and not out_dir.is_dir():
-        raise InputError(f"Output {str(out_dir)!r} is a file; give a folder name.")
     check_output(out_dir, directory=True, force=force)  # before the progress bar: the error stays one line
     progress = Progress(TextColumn("{task.description:<28}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
                         TimeElapsedColumn(), console=Console(stderr=True), disable=as_json)

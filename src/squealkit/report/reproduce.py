@@ -12,7 +12,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from .._validation import InputError
 from ..io import check_output, output_folder
 from ..models import FrictionModel, PinOnDiscRig, get_preset
 from .document import Section
@@ -135,8 +134,6 @@ def reproduce(
     ReproduceResult
     """
     out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"Output {str(out)!r} exists and is not a folder.")
     check_output(out, directory=True, force=force)  # before the work, not after
     default = model is None
     model = get_preset("lv2013") if model is None else model
