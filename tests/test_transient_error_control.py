@@ -11,37 +11,16 @@ rtol = 1e-8, with margin.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
+from _reference import nonlinear_rhs
 from squealkit import InputError
 from squealkit.models import get_preset
 from squealkit.transient import Contact, SineRunOut, TensileContactWarning, simulate, step_bound
 
 LV = get_preset("lv2013")
-
-
-def _nonlinear_rhs(model, mu, v_reg, speed=0.0):
-    """Independent first-order form of the nonlinear contact on a flat disc: N cos(theta) =
-    max(0, -kc b.x), friction mu tanh(w / v_reg) N along s f, w = v - s f.x' (paper eqs. 1-3)."""
-    Minv = np.linalg.inv(model.mass_matrix())
-    C = model.damping_matrix()
-    K0 = model.stiffness_parts()[0]
-    F0 = model.load_parts()[0]
-    b, f = np.array([0.0, 1.0, -1.0]), np.array([-1.0, 0.0, 0.0])
-    s, kc = model.sliding, model.kc
-
-    def rhs(t, z):
-        x, v = z[:3], z[3:]
-        nc = max(0.0, -kc * (b @ x))
-        w = speed - s * (f @ v)
-        force = F0 - K0 @ x - C @ v + nc * (b + s * mu * math.tanh(w / v_reg) * f)
-        return np.concatenate([v, Minv @ force])
-
-    return rhs
 
 
 def test_regularised_friction_at_zero_speed_matches_radau():
@@ -54,7 +33,7 @@ def test_regularised_friction_at_zero_speed_matches_radau():
     ds = simulate(LV, mu=0.4, speed=0.0, contact=contact, duration=0.005, fs=40_000, x0=x0)
     assert ds.attrs["status"] == "completed"
     assert ds.attrs["dt"] <= bound["friction_bound"]
-    ref = solve_ivp(_nonlinear_rhs(LV, 0.4, 1e-5), (0, 0.005), np.concatenate([x0, np.zeros(3)]), method="Radau",
+    ref = solve_ivp(nonlinear_rhs(LV, 0.4, 1e-5), (0, 0.005), np.concatenate([x0, np.zeros(3)]), method="Radau",
                     rtol=1e-9, atol=1e-15, t_eval=ds.time.values)
     assert ref.success
     assert ds.x1.values[-1] == pytest.approx(ref.y[0, -1], rel=1e-6)   # 7.0031e-08 m
@@ -109,7 +88,7 @@ def test_contact_loss_is_located_and_keeps_the_energy():
     kinds = ds.event_kind.values
     assert set(kinds[:2]) == {1, 2} and np.all(kinds[1:] != kinds[:-1])  # closes, opens, closes, ...
     # the first closure against DOP853 with an event function
-    rhs = _nonlinear_rhs(model, 0.0, 1.0)
+    rhs = nonlinear_rhs(model, 0.0, 1.0)
 
     def closes(t, z):
         return z[1] - z[2]

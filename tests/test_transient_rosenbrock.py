@@ -13,30 +13,11 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
+from _reference import nonlinear_rhs
 from squealkit.models import get_preset
 from squealkit.transient import Contact, simulate
 
 LV = get_preset("lv2013")
-
-
-def _nonlinear_rhs(model, mu, v_reg, speed=0.0):
-    """Independent first-order form of the nonlinear contact on a flat disc (as in
-    test_transient_error_control): N cos(theta) = max(0, -kc b.x), friction mu tanh(w / v_reg) N."""
-    Minv = np.linalg.inv(model.mass_matrix())
-    C = model.damping_matrix()
-    K0 = model.stiffness_parts()[0]
-    F0 = model.load_parts()[0]
-    b, f = np.array([0.0, 1.0, -1.0]), np.array([-1.0, 0.0, 0.0])
-    s, kc = model.sliding, model.kc
-
-    def rhs(t, z):
-        x, v = z[:3], z[3:]
-        nc = max(0.0, -kc * (b @ x))
-        w = speed - s * (f @ v)
-        force = F0 - K0 @ x - C @ v + nc * (b + s * mu * np.tanh(w / v_reg) * f)
-        return np.concatenate([v, Minv @ force])
-
-    return rhs
 
 
 def test_stiff_friction_matches_radau_in_far_fewer_steps():
@@ -46,7 +27,7 @@ def test_stiff_friction_matches_radau_in_far_fewer_steps():
     ds = simulate(LV, method="rosenbrock", **kw)
     assert ds.attrs["status"] == "completed" and ds.attrs["method"] == "rosenbrock"
     assert "Rodas4" in ds.attrs["integrator"]
-    ref = solve_ivp(_nonlinear_rhs(LV, 0.4, 1e-5), (0, 0.005), np.concatenate([x0, np.zeros(3)]), method="Radau",
+    ref = solve_ivp(nonlinear_rhs(LV, 0.4, 1e-5), (0, 0.005), np.concatenate([x0, np.zeros(3)]), method="Radau",
                     rtol=1e-9, atol=1e-15, t_eval=ds.time.values)
     assert ref.success
     # the tolerances of the Dormand-Prince test (measured here: 4e-10 and <= 1.4e-8)
@@ -118,7 +99,7 @@ def test_rosenbrock_locates_contact_events():
     def gap(t, z):
         return z[1] - z[2]
 
-    ref = solve_ivp(_nonlinear_rhs(model, 0.0, 1.0), (0, 0.01), np.concatenate([x0, np.zeros(3)]),
+    ref = solve_ivp(nonlinear_rhs(model, 0.0, 1.0), (0, 0.01), np.concatenate([x0, np.zeros(3)]),
                     method="DOP853", rtol=1e-13, atol=1e-20, events=gap)
     t_ref = ref.t_events[0]
     kinds = ros.event_kind.values

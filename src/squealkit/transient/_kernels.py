@@ -248,6 +248,75 @@ def _dense(z, K, P, h, th, out):
         out[i] = z[i] + h * acc
 
 
+@njit(cache=True, inline="always")
+def _dense_ros(z, z1, U, Dd, th, out):
+    """Rodas4's 3rd-order continuous extension at t + th h."""
+    m = z.shape[0]
+    for i in range(m):
+        d2 = 0.0
+        d3 = 0.0
+        for j in range(Dd.shape[1]):
+            d2 += Dd[0, j] * U[j, i]
+            d3 += Dd[1, j] * U[j, i]
+        out[i] = (1.0 - th) * z[i] + th * (z1[i] + (1.0 - th) * (d2 + th * d3))
+
+@njit(cache=True, inline="always")
+def _interp(z, z1, St, Co, h, th, rosenbrock, out):
+    """State at t + th h by the step's continuous extension: Dormand-Prince's (stages ``St`` = K,
+    coefficients ``Co`` = P) or Rodas4's (``St`` = U, ``Co`` = its dense-output matrix)."""
+    if rosenbrock:
+        _dense_ros(z, z1, St, Co, th, out)
+    else:
+        _dense(z, St, Co, h, th, out)
+
+
+@njit(cache=True, inline="always")
+def _locate(slip, side_old, n_iter, z, z1, St, Co, h, rosenbrock, t, tg0, hg, qg, tgr, v, b, fhat, kc, s, kin,
+            v_reg, zd):
+    """Fraction of the step at which the contact force changes sign (``slip`` False) or the sliding
+    speed crosses the stick band ``|w| < v_reg`` (``slip`` True), by bisection on the dense output."""
+    n = zd.shape[0] // 2
+    lo, hi = 0.0, 1.0
+    for _ in range(n_iter):
+        mid = 0.5 * (lo + hi)
+        _interp(z, z1, St, Co, h, mid, rosenbrock, zd)
+        qm, tm = _forcing(t + mid * h, tg0, hg, qg, tgr, v)
+        gm, wm = _gap_and_slip(zd[:n], zd[n:], qm, tm, v, b, fhat, kc, s, kin)
+        side = (wm < v_reg) if slip else (gm > 0.0)
+        if side == side_old:
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
+@njit(cache=True, inline="always")
+def _log_event(r, t_ev, kind, ev_t, ev_k, n_ev):
+    """Record event ``kind`` at ``t_ev`` for run ``r`` (counted even when the buffer is full)."""
+    k_ev = n_ev[r]
+    if k_ev < ev_t.shape[1]:
+        ev_t[r, k_ev] = t_ev
+        ev_k[r, k_ev] = kind
+    n_ev[r] = k_ev + 1
+
+
+@njit(cache=True, inline="always")
+def _store(r, o, z, dz, nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
+    """Write output sample ``o`` of run ``r``; False (nothing written) if some |x_i| > ``limit``."""
+    n = out_x.shape[2]
+    for i in range(n):
+        if not (abs(z[i]) <= limit):
+            return False
+    for i in range(n):
+        out_x[r, o, i] = z[i]
+        out_v[r, o, i] = z[n + i]
+        out_a[r, o, i] = dz[n + i]
+    out_nc[r, o] = nc
+    out_me[r, o] = me
+    n_valid[r] = o + 1
+    return True
+
+
 @njit(cache=True, parallel=True)
 def integrate_adaptive(
     X, V, H, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
@@ -295,13 +364,8 @@ def integrate_adaptive(
                             Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
         counts[r, 2] += 1
         if o <= o_last and o / fs <= t + 1e-12 / fs:
-            for i in range(n):
-                out_x[r, o, i] = z[i]
-                out_v[r, o, i] = z[n + i]
-                out_a[r, o, i] = K[0, n + i]
-            out_nc[r, o] = nc
-            out_me[r, o] = me
-            n_valid[r] = o + 1
+            if not _store(r, o, z, K[0], nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
+                status[r] = 1
             o += 1
         g_old, w_old = _gap_and_slip(z[:n], z[n:], q, tt_, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
         retake = False
@@ -352,16 +416,8 @@ def integrate_adaptive(
             # accepted: is there a contact event inside the step?
             g_new, w_new = _gap_and_slip(znew[:n], znew[n:], q, tt_, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
             if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0) and not retake:
-                lo, hi = 0.0, 1.0
-                for _ in range(50):
-                    mid = 0.5 * (lo + hi)
-                    _dense(z, K, P, h, mid, zd)
-                    qm, tm = _forcing(t + mid * h, tg0, hg, qg_r, tg_r, v_r)
-                    gm, _w = _gap_and_slip(zd[:n], zd[n:], qm, tm, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
-                    if (gm > 0.0) == (g_old > 0.0):
-                        lo = mid
-                    else:
-                        hi = mid
+                hi = _locate(False, g_old > 0.0, 50, z, znew, K, P, h, False, t, tg0, hg, qg_r, tg_r, v_r,
+                             b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
                 if hi < 1.0 - 1e-9 and hi * h > h_min:
                     # retake the step to end just past the crossing: no step straddles the kink
                     # (K[0] = f(t, z) is still valid: the stages only overwrote K[1:])
@@ -374,50 +430,20 @@ def integrate_adaptive(
                 counts[r, 3] = h
             # events: contact (located above) and stick/slip band crossings (located here)
             if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0):
-                k_ev = n_ev[r]
-                if k_ev < ev_t.shape[1]:
-                    ev_t[r, k_ev] = t_new
-                    ev_k[r, k_ev] = EVENT_CONTACT_OPENS if g_new <= 0.0 else EVENT_CONTACT_CLOSES
-                n_ev[r] = k_ev + 1
+                _log_event(r, t_new, EVENT_CONTACT_OPENS if g_new <= 0.0 else EVENT_CONTACT_CLOSES, ev_t, ev_k, n_ev)
             if opts[2] != 0.0 and (w_old < opts[4]) != (w_new < opts[4]):
-                lo, hi = 0.0, 1.0
-                for _ in range(40):
-                    mid = 0.5 * (lo + hi)
-                    _dense(z, K, P, h, mid, zd)
-                    qm, tm = _forcing(t + mid * h, tg0, hg, qg_r, tg_r, v_r)
-                    _g, wm = _gap_and_slip(zd[:n], zd[n:], qm, tm, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
-                    if (wm < opts[4]) == (w_old < opts[4]):
-                        lo = mid
-                    else:
-                        hi = mid
-                k_ev = n_ev[r]
-                if k_ev < ev_t.shape[1]:
-                    ev_t[r, k_ev] = t + hi * h
-                    ev_k[r, k_ev] = EVENT_STICK if w_new < opts[4] else EVENT_SLIP
-                n_ev[r] = k_ev + 1
+                hi = _locate(True, w_old < opts[4], 40, z, znew, K, P, h, False, t, tg0, hg, qg_r, tg_r, v_r,
+                             b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
+                _log_event(r, t + hi * h, EVENT_STICK if w_new < opts[4] else EVENT_SLIP, ev_t, ev_k, n_ev)
             # output samples inside (t, t_new] by dense output
             while o <= o_last and o / fs <= t_new * (1.0 + 1e-15):
-                th = (o / fs - t) / h
-                if th > 1.0:
-                    th = 1.0
-                _dense(z, K, P, h, th, zd)
+                _interp(z, znew, K, P, h, min((o / fs - t) / h, 1.0), False, zd)
                 ncs, mes, _q, _t = _f(o / fs, zd, dzd, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r,
                                       Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r,
                                       s_r, opts, work, acc)
-                bad = False
-                for i in range(n):
-                    if not (abs(zd[i]) <= limit):
-                        bad = True
-                if bad:
+                if not _store(r, o, zd, dzd, ncs, mes, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
                     status[r] = 1
                     break
-                for i in range(n):
-                    out_x[r, o, i] = zd[i]
-                    out_v[r, o, i] = zd[n + i]
-                    out_a[r, o, i] = dzd[n + i]
-                out_nc[r, o] = ncs
-                out_me[r, o] = mes
-                n_valid[r] = o + 1
                 o += 1
             if status[r] != 0:
                 break
@@ -560,19 +586,6 @@ def _lu_solve(A, piv, x):
         x[i] = acc / A[i, i]
 
 
-@njit(cache=True, inline="always")
-def _dense_ros(z, z1, U, Dd, th, out):
-    """Rodas4's 3rd-order continuous extension at t + th h."""
-    m = z.shape[0]
-    for i in range(m):
-        d2 = 0.0
-        d3 = 0.0
-        for j in range(Dd.shape[1]):
-            d2 += Dd[0, j] * U[j, i]
-            d3 += Dd[1, j] * U[j, i]
-        out[i] = (1.0 - th) * z[i] + th * (z1[i] + (1.0 - th) * (d2 + th * d3))
-
-
 @njit(cache=True, parallel=True)
 def integrate_rosenbrock(
     X, V, H, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
@@ -624,13 +637,8 @@ def integrate_rosenbrock(
                             Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
         counts[r, 2] += 1
         if o <= o_last and o / fs <= t + 1e-12 / fs:
-            for i in range(n):
-                out_x[r, o, i] = z[i]
-                out_v[r, o, i] = z[n + i]
-                out_a[r, o, i] = f0[n + i]
-            out_nc[r, o] = nc
-            out_me[r, o] = me
-            n_valid[r] = o + 1
+            if not _store(r, o, z, f0, nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
+                status[r] = 1
             o += 1
         g_old, w_old = _gap_and_slip(z[:n], z[n:], q, tt_, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
         retake = False
@@ -715,16 +723,8 @@ def integrate_rosenbrock(
             qn, tn = _forcing(t_new, tg0, hg, qg_r, tg_r, v_r)
             g_new, w_new = _gap_and_slip(znew[:n], znew[n:], qn, tn, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
             if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0) and not retake:
-                lo, hi = 0.0, 1.0
-                for _ in range(50):
-                    mid = 0.5 * (lo + hi)
-                    _dense_ros(z, znew, U, RDD, mid, zd)
-                    qm, tm = _forcing(t + mid * h, tg0, hg, qg_r, tg_r, v_r)
-                    gm, _w = _gap_and_slip(zd[:n], zd[n:], qm, tm, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
-                    if (gm > 0.0) == (g_old > 0.0):
-                        lo = mid
-                    else:
-                        hi = mid
+                hi = _locate(False, g_old > 0.0, 50, z, znew, U, RDD, h, True, t, tg0, hg, qg_r, tg_r, v_r,
+                             b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
                 if hi < 1.0 - 1e-9 and hi * h > h_min:
                     h_saved = h
                     h = hi * h
@@ -734,49 +734,19 @@ def integrate_rosenbrock(
             if h < counts[r, 3] or counts[r, 3] == 0.0:
                 counts[r, 3] = h
             if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0):
-                k_ev = n_ev[r]
-                if k_ev < ev_t.shape[1]:
-                    ev_t[r, k_ev] = t_new
-                    ev_k[r, k_ev] = EVENT_CONTACT_OPENS if g_new <= 0.0 else EVENT_CONTACT_CLOSES
-                n_ev[r] = k_ev + 1
+                _log_event(r, t_new, EVENT_CONTACT_OPENS if g_new <= 0.0 else EVENT_CONTACT_CLOSES, ev_t, ev_k, n_ev)
             if opts[2] != 0.0 and (w_old < opts[4]) != (w_new < opts[4]):
-                lo, hi = 0.0, 1.0
-                for _ in range(40):
-                    mid = 0.5 * (lo + hi)
-                    _dense_ros(z, znew, U, RDD, mid, zd)
-                    qm, tm = _forcing(t + mid * h, tg0, hg, qg_r, tg_r, v_r)
-                    _g, wm = _gap_and_slip(zd[:n], zd[n:], qm, tm, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
-                    if (wm < opts[4]) == (w_old < opts[4]):
-                        lo = mid
-                    else:
-                        hi = mid
-                k_ev = n_ev[r]
-                if k_ev < ev_t.shape[1]:
-                    ev_t[r, k_ev] = t + hi * h
-                    ev_k[r, k_ev] = EVENT_STICK if w_new < opts[4] else EVENT_SLIP
-                n_ev[r] = k_ev + 1
+                hi = _locate(True, w_old < opts[4], 40, z, znew, U, RDD, h, True, t, tg0, hg, qg_r, tg_r, v_r,
+                             b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
+                _log_event(r, t + hi * h, EVENT_STICK if w_new < opts[4] else EVENT_SLIP, ev_t, ev_k, n_ev)
             while o <= o_last and o / fs <= t_new * (1.0 + 1e-15):
-                th = (o / fs - t) / h
-                if th > 1.0:
-                    th = 1.0
-                _dense_ros(z, znew, U, RDD, th, zd)
+                _interp(z, znew, U, RDD, h, min((o / fs - t) / h, 1.0), True, zd)
                 ncs, mes, _q, _t = _f(o / fs, zd, dzd, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r,
                                       Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r,
                                       s_r, opts, work, acc)
-                bad = False
-                for i in range(n):
-                    if not (abs(zd[i]) <= limit):
-                        bad = True
-                if bad:
+                if not _store(r, o, zd, dzd, ncs, mes, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
                     status[r] = 1
                     break
-                for i in range(n):
-                    out_x[r, o, i] = zd[i]
-                    out_v[r, o, i] = zd[n + i]
-                    out_a[r, o, i] = dzd[n + i]
-                out_nc[r, o] = ncs
-                out_me[r, o] = mes
-                n_valid[r] = o + 1
                 o += 1
             if status[r] != 0:
                 break
