@@ -182,11 +182,16 @@ def angular_resample(
     Parameters
     ----------
     x : array_like, shape (n,)
-        Signal sampled at ``fs`` [Hz]; ``x[0]`` at time ``t0`` [s].
+        Signal sampled at ``fs``; ``x[0]`` at time ``t0``.
+    fs : float
+        Sample rate [Hz] of ``x``.
     angle : DiscAngle
+        Disc position against time (from :func:`tacho_angle`, or a :class:`ConstantSpeed`).
     samples_per_rev : int
-        Angular samples per revolution; orders up to ``samples_per_rev / 2`` are kept (low-pass
+        Angular samples per revolution, >= 4; orders up to ``samples_per_rev / 2`` are kept (low-pass
         ``x`` below ``samples_per_rev / 2`` times the lowest speed first, or they fold).
+    t0 : float, default 0.0
+        Time [s] of ``x[0]`` on the clock of ``angle``.
 
     Returns
     -------
@@ -208,8 +213,21 @@ def angular_resample(
 
 def synchronous_average(
     x: ArrayLike, fs: float, angle: DiscAngle, *, samples_per_rev: int = 1024, t0: float = 0.0
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
     """Time-synchronous average of ``x`` over whole revolutions (run-out per revolution).
+
+    Parameters
+    ----------
+    x : array_like, shape (n,)
+        Signal sampled at ``fs`` (e.g. the displacement [m]).
+    fs : float
+        Sample rate [Hz].
+    angle : DiscAngle
+        Disc position against time (from :func:`tacho_angle`, or a :class:`ConstantSpeed`).
+    samples_per_rev : int, default 1024
+        Angular samples per revolution (see :func:`angular_resample`).
+    t0 : float, default 0.0
+        Time [s] of ``x[0]`` on the clock of ``angle``.
 
     Returns
     -------
@@ -219,7 +237,14 @@ def synchronous_average(
         The average over revolutions (what is locked to the disc: its run-out).
     per_rev : ndarray, shape (n_revolutions, samples_per_rev)
         Each whole revolution in the angle domain (``per_rev.ptp(axis=1)``: run-out
-        peak-to-peak per revolution), with the revolution numbers in the third return value.
+        peak-to-peak per revolution).
+    revolutions : ndarray of int64, shape (n_revolutions,)
+        The revolution number of each row of ``per_rev`` (counted from the reference mark).
+
+    Raises
+    ------
+    InputError
+        If the recording holds no whole revolution.
 
     Examples
     --------
@@ -245,7 +270,13 @@ def synchronous_average(
 
 @dataclass(frozen=True)
 class ConstantSpeed:
-    """A disc turning at constant speed (no tacho): same interface as :class:`DiscAngle`."""
+    """A disc turning at constant speed (no tacho): same interface as :class:`DiscAngle`.
+
+    Attributes
+    ----------
+    rpm : float
+        Disc speed [rev/min].
+    """
 
     rpm: float
 
