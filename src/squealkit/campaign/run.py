@@ -102,6 +102,8 @@ def run_campaign(
         Analyse the applications on a Dask cluster (the files must be readable there).
     progress : callable, optional
         ``progress(done, total)`` in applications still to analyse.
+    report : bool, default True
+        Also write ``out/report.html`` and its figures.
     pressure_channel, temperature_channel : str, optional
         Channels [bar], [C] whose mean over an application gives its condition where the
         matrix leaves ``pressure_bar`` or ``temperature_c`` empty.

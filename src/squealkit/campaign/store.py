@@ -42,7 +42,20 @@ EVENT_COLUMNS = {
 
 
 class CampaignStore:
-    """A DuckDB file holding a campaign's applications and events (see the module docstring)."""
+    """A DuckDB file holding a campaign's applications and events (see the module docstring).
+
+    Use it as a context manager, which closes the connection.
+
+    Parameters
+    ----------
+    path : str or Path
+        The DuckDB file; created with empty ``applications`` and ``events`` tables when new.
+
+    Raises
+    ------
+    InputError
+        If DuckDB is not installed (the ``campaign`` extra).
+    """
 
     def __init__(self, path: str | Path):
         try:
