@@ -66,6 +66,8 @@ class SecondOrderSystem:
         ``contact_open(x, p)`` -> boolean array ``(...)``: True where contact is lost.
     equilibrium : callable, optional
         ``equilibrium(p)`` -> static equilibrium ``(n,)`` [m] (default: solve ``K x = F0 + f``).
+    description : str, optional
+        One line saying what the system is (stored with the results).
     """
 
     M: NDArray[np.float64]
