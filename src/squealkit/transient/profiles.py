@@ -132,6 +132,8 @@ class SampledProfile(SurfaceProfile):
         Whether the profile repeats with period ``position[-1] - position[0]`` (a disc
         turn); then ``height[-1]`` must equal ``height[0]``. Otherwise positions outside
         the sampled range are an error.
+    source : str, default "array"
+        Where the samples came from (the file, for :meth:`from_file`), shown by ``describe()``.
     """
 
     position: Array

@@ -158,11 +158,27 @@ def step_bound(model: FrictionModel, *, mu: float, contact: Contact | str = "lin
                method: str = "dopri5") -> dict[str, float]:
     """The largest stable explicit step [s] for a model, and what sets it.
 
-    Returns ``{"omega_max": ..., "friction_rate": ..., "mode_bound": ..., "friction_bound": ...,
-    "bound": ...}``: the fastest mode omega_max [rad/s] gives ``0.25 / omega_max`` (RK4, for
-    accuracy) or ``3 / omega_max`` (Dormand-Prince, stability); a regularised or Stribeck
-    friction law a rate ``c fhat.M^-1.fhat`` [1/s] (``c = mu N / v_reg``: see the module notes)
-    and ``2.5 / rate``. ``bound`` is the smaller.
+    Parameters
+    ----------
+    model : FrictionModel
+        The system, e.g. ``get_preset("lv2013")``.
+    mu : float
+        Friction coefficient (kinetic value for the Stribeck law).
+    contact : Contact or {"linear", "nonlinear"}, default "linear"
+        Contact law (see :class:`Contact`).
+    speed : float, default 0.02
+        Sliding speed [m/s], >= 0.
+    method : {"dopri5", "rosenbrock", "rk4"}, default "dopri5"
+        Integrator whose mode bound is wanted (see :func:`simulate`).
+
+    Returns
+    -------
+    dict of str to float
+        ``{"omega_max": ..., "friction_rate": ..., "mode_bound": ..., "friction_bound": ...,
+        "bound": ...}``: the fastest mode omega_max [rad/s] gives ``0.25 / omega_max`` (RK4, for
+        accuracy) or ``3 / omega_max`` (Dormand-Prince, stability); a regularised or Stribeck
+        friction law a rate ``c fhat.M^-1.fhat`` [1/s] (``c = mu N / v_reg``: see the module notes)
+        and ``2.5 / rate``. ``bound`` is the smaller [s].
 
     Examples
     --------
@@ -729,6 +745,55 @@ def simulate_batch(
     and the perturbations are fixed for the whole batch up front, so the numbers are
     identical to the in-memory run.
 
+    Parameters
+    ----------
+    models : FrictionModel or sequence of FrictionModel
+        One model for all runs, or one per run (same DOFs).
+    mu : float or array_like
+        Friction coefficient(s), one or one per run.
+    profiles : SurfaceProfile or sequence of SurfaceProfile or None, optional
+        Disc surface(s), one or one per run (None: :class:`~squealkit.transient.profiles.Smooth`).
+    speed : float or array_like, default 0.02
+        Sliding speed(s) [m/s], one or one per run.
+    duration : float
+        Simulated time [s].
+    fs : float, default 40000.0
+        Output sample rate [Hz].
+    contact : Contact or {"linear", "nonlinear"}, default "linear"
+        Contact law, the same for all runs.
+    x0 : array_like, shape (n,), optional
+        Initial displacements [m] of every run (default: the static equilibrium of each).
+    perturbation : float, default 0.0
+        Standard deviation [m] of a random initial displacement, drawn per run (needs ``rng``).
+    rng : numpy.random.Generator, optional
+        Source of the perturbations.
+    x_start : float, default 0.0
+        Position on the profile at t = 0 [m].
+    dt : float, optional
+        Step [s] as for :func:`simulate`.
+    limit : float, default 1.0
+        A run whose displacement exceeds ``limit`` [m] stops with status ``"diverged"``.
+    progress : callable, optional
+        Called as ``progress(done, total)``.
+    store : str or Path, optional
+        A ``.zarr`` path to stream the runs into (returned opened lazily).
+    client : distributed.Client, optional
+        Run the pieces on this Dask cluster (needs ``store``).
+    runs_per_task : int, default 16
+        Runs per piece written to ``store`` (and per Dask task).
+    method : {"dopri5", "rosenbrock", "rk4"}, default "dopri5"
+        Integrator (see :func:`simulate`).
+    rtol : float, default 1e-8
+        Relative tolerance of the error control.
+    atol : float, optional
+        Absolute displacement tolerance [m] (see :func:`simulate`).
+
+    Returns
+    -------
+    xarray.Dataset
+        The variables of :func:`simulate` with a leading ``run`` dimension, and per run
+        ``status``, ``mu``, ``speed`` and the contact and step statistics described above.
+
     Examples
     --------
     >>> from squealkit.models import get_preset
@@ -828,6 +893,20 @@ def response_envelope(ds: xr.Dataset, var: str, *, freq_lower: float = 1000.0) -
     The high-pass (4th-order Butterworth, zero phase) removes the quasi-static response to the
     run-out so that what remains is the self-excited vibration (paper section 5 does the same
     with the rig's displacement).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`simulate` (or :func:`simulate_batch`), with attribute ``fs`` [Hz].
+    var : str
+        The variable, e.g. ``"x1_ddot"``; time is its last dimension.
+    freq_lower : float, default 1000.0
+        High-pass corner [Hz], in ``(0, fs / 2)``.
+
+    Returns
+    -------
+    xarray.DataArray
+        The envelope, the shape, coordinates and units of ``ds[var]``, named ``{var}_envelope``.
     """
     from scipy.signal import butter, hilbert, sosfiltfilt
 
@@ -865,6 +944,24 @@ def transient_summary(ds: xr.Dataset, *, max_stages: int = 50, freq_lower: float
     (see :func:`response_envelope`, first DOF's acceleration) over the stage, leaving out the
     first and last 5 ms of the record (filter end effects); it is positive
     where the vibration grows (paper Fig. 4: rising SRO) and negative where it decays.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One run of :func:`simulate`.
+    max_stages : int, default 50
+        At most this many stages are listed (``stages_truncated`` says whether more were cut).
+    freq_lower : float, default 1000.0
+        High-pass corner [Hz] of the envelope (:func:`response_envelope`).
+
+    Returns
+    -------
+    dict
+        JSON-ready: the run's ``status``, ``t_stop``, ``duration`` [s], ``fs`` [Hz], ``mu``,
+        ``speed``, ``profile``, ``contact``, step statistics, ``peak`` per DOF (displacement
+        change [m], velocity [m/s], acceleration [m/s^2]), ``growth_rate_max`` [1/s] and
+        ``stages`` (``stage``, ``t_start``, ``t_end``, ``rate_per_s``, ``sigma_mean_per_s``,
+        ``partial``).
     """
     model_dofs = [v[: -len("_ddot")] for v in ds.data_vars if str(v).endswith("_ddot")]
     fs = float(ds.attrs["fs"])
