@@ -175,6 +175,12 @@ def atomic_path(path: str | Path, *, directory: bool = False) -> Iterator[Path]:
     directory : bool
         Whether the output is a directory tree.
 
+    Yields
+    ------
+    Path
+        The staging path to write to (in ``path``'s folder); it replaces ``path`` when the
+        block ends without an exception and is removed otherwise.
+
     Examples
     --------
     >>> import tempfile, pathlib
