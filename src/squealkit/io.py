@@ -22,6 +22,7 @@ from typing import Any
 
 import xarray as xr
 
+from . import _accessor  # noqa: F401  (registers ds.squeal.plot(), also on loaded results)
 from ._validation import InputError
 
 __all__ = ["atomic_path", "check_output", "load_dataset", "output_folder", "save_dataset", "save_figure",

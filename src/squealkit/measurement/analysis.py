@@ -197,6 +197,31 @@ class MeasurementResult:
         """Whether any event met the criteria."""
         return bool(self.events)
 
+    def plot(self, ax: Any = None, *, kind: str = "level", **kwargs: Any) -> Any:
+        """Draw the result with :mod:`squealkit.plotting.measurement` (imported now, not before).
+
+        Parameters
+        ----------
+        ax : matplotlib Axes, optional
+            Where to draw (polar axes for ``kind="polar"``); a new figure if omitted.
+        kind : {"level", "polar"}, default "level"
+            :func:`~squealkit.plotting.measurement.level_plot` (level against time with the
+            threshold and the events) or :func:`~squealkit.plotting.measurement.polar_plot`
+            (level and run-out against disc angle).
+        **kwargs
+            Passed on to the plotting function.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from ..plotting import measurement as plots
+
+        funcs = {"level": plots.level_plot, "polar": plots.polar_plot}
+        if kind not in funcs:
+            raise InputError(f"Parameter kind={kind!r} must be 'level' or 'polar'.")
+        return funcs[kind](self, ax=ax, **kwargs)
+
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready summary (stable keys; see the CLI's ``--json``)."""
         rev = self.revolutions

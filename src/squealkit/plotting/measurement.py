@@ -118,10 +118,25 @@ def band_vs_pressure_plot(rec: xr.Dataset, *, mic: str = "mic", displacement: st
     return fig
 
 
-def level_plot(result: Any):
-    """A-weighted level against time with the threshold and the events."""
-    fig = _figure(figsize=(8, 3.5))
-    ax = fig.subplots()
+def level_plot(result: Any, ax: Any = None):
+    """A-weighted level against time with the threshold and the events.
+
+    Parameters
+    ----------
+    result : MeasurementResult
+        A result of :func:`squealkit.measurement.analyze_recording`.
+    ax : matplotlib Axes, optional
+        Where to draw; a new figure if omitted.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    if ax is None:
+        fig = _figure(figsize=(8, 3.5))
+        ax = fig.subplots()
+    else:
+        fig = ax.figure
     fr = result.frames
     ax.plot(fr["time"], fr["level_dba"], lw=0.6)
     c = result.settings.criteria
@@ -136,10 +151,27 @@ def level_plot(result: Any):
     return fig
 
 
-def polar_plot(result: Any):
-    """Squeal level and run-out against disc angle over all revolutions (polar)."""
-    fig = _figure(figsize=(5.5, 5.5))
-    ax = fig.add_subplot(projection="polar")
+def polar_plot(result: Any, ax: Any = None):
+    """Squeal level and run-out against disc angle over all revolutions (polar).
+
+    Parameters
+    ----------
+    result : MeasurementResult
+        A result of :func:`squealkit.measurement.analyze_recording`.
+    ax : matplotlib Axes, optional
+        Polar axes to draw into (``projection="polar"``); a new figure if omitted.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    if ax is None:
+        fig = _figure(figsize=(5.5, 5.5))
+        ax = fig.add_subplot(projection="polar")
+    elif ax.name != "polar":
+        raise ValueError(f"polar_plot needs polar axes (projection='polar'), not {ax.name!r} axes.")
+    else:
+        fig = ax.figure
     pol = result.polar
     ang = np.append(pol["angle"].values, pol["angle"].values[0])
     lev = np.append(pol["angle_level_db"].values, pol["angle_level_db"].values[0])
