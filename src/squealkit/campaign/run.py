@@ -97,7 +97,7 @@ def run_campaign(
         As for :func:`squealkit.measurement.analyze_recording`; a matrix column ``rpm``
         gives each application's speed where there is no tacho.
     setup, band, threshold_dba, time_weighting, min_duration
-        The squeal criteria (:func:`squealkit.measurement.squeal_criteria`).
+        The squeal criteria (:func:`squealkit.measurement.squeal_criteria`; ``band`` in [Hz]).
     client : distributed.Client, optional
         Analyse the applications on a Dask cluster (the files must be readable there).
     progress : callable, optional

@@ -37,6 +37,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike
 
+from .._deprecation import renamed_kwargs
 from .._threads import limit_threads, threads_for
 from .._validation import InputError, validate_finite, validate_fs, validate_positive
 from ..models import FrictionModel
@@ -887,8 +888,9 @@ def _batch_dataset(runs: Sequence[_Run], *, duration, fs, contact, x0, perturbat
     return ds
 
 
-def response_envelope(ds: xr.Dataset, var: str, *, freq_lower: float = 1000.0) -> xr.DataArray:
-    """Envelope of the vibration of ``var``: high-pass above ``freq_lower`` [Hz], then ``|Hilbert|``.
+@renamed_kwargs(freq_lower="highpass_freq")
+def response_envelope(ds: xr.Dataset, var: str, *, highpass_freq: float = 1000.0) -> xr.DataArray:
+    """Envelope of the vibration of ``var``: high-pass above ``highpass_freq`` [Hz], then ``|Hilbert|``.
 
     The high-pass (4th-order Butterworth, zero phase) removes the quasi-static response to the
     run-out so that what remains is the self-excited vibration (paper section 5 does the same
@@ -900,8 +902,9 @@ def response_envelope(ds: xr.Dataset, var: str, *, freq_lower: float = 1000.0) -
         A result of :func:`simulate` (or :func:`simulate_batch`), with attribute ``fs`` [Hz].
     var : str
         The variable, e.g. ``"x1_ddot"``; time is its last dimension.
-    freq_lower : float, default 1000.0
-        High-pass corner [Hz], in ``(0, fs / 2)``.
+    highpass_freq : float, default 1000.0
+        High-pass corner [Hz], in ``(0, fs / 2)`` (formerly ``freq_lower``, still accepted
+        with a DeprecationWarning).
 
     Returns
     -------
@@ -914,16 +917,16 @@ def response_envelope(ds: xr.Dataset, var: str, *, freq_lower: float = 1000.0) -
         raise InputError(f"Variable {var!r} is not in the dataset; have {sorted(ds.data_vars)}.")
     fs = float(ds.attrs["fs"])
     y = np.asarray(ds[var].values, dtype=float)
-    if not 0 < freq_lower < fs / 2:
-        raise InputError(f"Parameter freq_lower={freq_lower!r} Hz must lie between 0 and fs/2 = {fs / 2:g} Hz.")
+    if not 0 < highpass_freq < fs / 2:
+        raise InputError(f"Parameter highpass_freq={highpass_freq!r} Hz must lie between 0 and fs/2 = {fs / 2:g} Hz.")
     if y.shape[-1] > 27:
-        sos = butter(4, freq_lower, btype="highpass", fs=fs, output="sos")
+        sos = butter(4, highpass_freq, btype="highpass", fs=fs, output="sos")
         y = sosfiltfilt(sos, y - y[..., :1], axis=-1)
     env = np.abs(hilbert(y, axis=-1))
     out = xr.DataArray(env, dims=ds[var].dims, coords=ds[var].coords, name=f"{var}_envelope")
     out.attrs = {
         "units": ds[var].attrs.get("units", ""),
-        "long_name": f"vibration envelope of {var} (> {freq_lower:g} Hz)",
+        "long_name": f"vibration envelope of {var} (> {highpass_freq:g} Hz)",
     }
     return out
 
@@ -937,7 +940,8 @@ def _stages(tan_theta: np.ndarray) -> list[tuple[int, int, str]]:
     return [(int(a), int(b), names[int(label[a])]) for a, b in itertools.pairwise(bounds)]
 
 
-def transient_summary(ds: xr.Dataset, *, max_stages: int = 50, freq_lower: float = 1000.0) -> dict[str, object]:
+@renamed_kwargs(freq_lower="highpass_freq")
+def transient_summary(ds: xr.Dataset, *, max_stages: int = 50, highpass_freq: float = 1000.0) -> dict[str, object]:
     """Peak amplitudes, and growth or decay rate of the vibration per run-out stage.
 
     The growth rate of a stage [1/s] is the least-squares slope of the log of the envelope
@@ -951,8 +955,9 @@ def transient_summary(ds: xr.Dataset, *, max_stages: int = 50, freq_lower: float
         One run of :func:`simulate`.
     max_stages : int, default 50
         At most this many stages are listed (``stages_truncated`` says whether more were cut).
-    freq_lower : float, default 1000.0
-        High-pass corner [Hz] of the envelope (:func:`response_envelope`).
+    highpass_freq : float, default 1000.0
+        High-pass corner [Hz] of the envelope (:func:`response_envelope`; formerly
+        ``freq_lower``, still accepted with a DeprecationWarning).
 
     Returns
     -------
@@ -993,7 +998,7 @@ def transient_summary(ds: xr.Dataset, *, max_stages: int = 50, freq_lower: float
     out["growth_rate_max"] = float(ds.growth_rate.max())
     stages = []
     if time.size > 32 and fs > 2500.0:
-        env = response_envelope(ds, f"{model_dofs[0]}_ddot", freq_lower=freq_lower).values
+        env = response_envelope(ds, f"{model_dofs[0]}_ddot", highpass_freq=highpass_freq).values
         # The zero-phase filter and the Hilbert transform ring for a few ms at both ends of
         # the record: those samples take no part in the rate fits.
         edge = np.zeros(time.size, dtype=bool)
