@@ -2,7 +2,8 @@
 
 "Public" is what a user reaches from ``import squealkit``: the names in the ``__all__`` of squealkit, of
 each public subpackage and of each public top-level module (``squealkit.io``, ``squealkit.scale``,
-``squealkit.uncertainty``), recursively through subpackages. A function or class that takes parameters
+``squealkit.uncertainty``), recursively through subpackages, and of the modules of ``squealkit.plotting``
+(which has no package ``__all__``: its modules are what users import). A function or class that takes parameters
 needs a Parameters section naming each of them (``*args``/``**kwargs`` may be left out); a function
 needs a Returns (or Yields) section; a dataclass documents each public field, in its Parameters or
 Attributes section. Pure introspection: well under a second.
@@ -29,7 +30,9 @@ def _public_modules():
         parts = info.name.split(".")[1:]
         if any(p.startswith("_") for p in parts) or parts[0] == "cli":
             continue  # private; the CLI is documented from its commands (docs/cli.md)
-        if len(parts) == 1 or info.ispkg:  # a module inside a subpackage is public through its package
+        # a module inside a subpackage is public through its package's __all__; squealkit.plotting
+        # has none: its modules are the public interface (``from squealkit.plotting.stability import ...``)
+        if len(parts) == 1 or info.ispkg or parts[0] == "plotting":
             yield importlib.import_module(info.name)
 
 

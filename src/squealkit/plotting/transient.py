@@ -150,7 +150,18 @@ def floquet_plot(ds: xr.Dataset, ax: Any = None):
     """Floquet exponent over friction and run-out amplitude (a :func:`~squealkit.transient.floquet.floquet_map`).
 
     Colour: the exponent [1/s] (red grows); black line: exponent 0; dashed: where the period
-    average of the frozen-time sigma is 0. Returns the Figure.
+    average of the frozen-time sigma is 0.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`~squealkit.transient.floquet.floquet_map` (dims ``mu``, ``amplitude``).
+    ax : matplotlib Axes, optional
+        Where to draw; a new figure if omitted.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     import numpy as np
 
