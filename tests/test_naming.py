@@ -51,17 +51,42 @@ def _inputs(obj) -> list[str]:
     return [p for p in params if p not in outputs]
 
 
-def test_inputs_use_the_conventional_names_and_state_their_units():
+def naming_problems(name: str, obj) -> list[str]:
+    """How the inputs of ``obj`` break the conventions (empty when they follow them)."""
     problems = []
-    for name, obj in sorted(public_objects().items()):
-        docs = _documented(obj, "Parameters", "Other Parameters", "Attributes")
-        for p in _inputs(obj):
-            if p in FORBIDDEN:
-                problems.append(f"{name}({p}=): name it {FORBIDDEN[p]}")
-            for pattern, unit in UNIT_OF:
-                if pattern.search(p) and p in docs and unit not in docs[p]:
-                    problems.append(f"{name}({p}=): the description must state {unit!r}: {docs[p][:80]!r}")
+    docs = _documented(obj, "Parameters", "Other Parameters", "Attributes")
+    for p in _inputs(obj):
+        if p in FORBIDDEN:
+            problems.append(f"{name}({p}=): name it {FORBIDDEN[p]}")
+        for pattern, unit in UNIT_OF:
+            if pattern.search(p) and p in docs and unit not in docs[p]:
+                problems.append(f"{name}({p}=): the description must state {unit!r}: {docs[p][:80]!r}")
+    return problems
+
+
+def test_inputs_use_the_conventional_names_and_state_their_units():
+    problems = [msg for name, obj in sorted(public_objects().items()) for msg in naming_problems(name, obj)]
     assert not problems, "\n".join(problems)
+
+
+def test_the_naming_check_catches_a_breach():
+    def f(x, theta=0.0, frequency=1.0, lowpass_freq=1.0):
+        """Sketch.
+
+        Parameters
+        ----------
+        x : float
+            Anything.
+        theta : float
+            Incline in degrees.
+        frequency : float
+            A frequency [Hz].
+        lowpass_freq : float
+            Corner [Hz].
+        """
+
+    assert naming_problems("f", f) == ["f(theta=): the description must state '[rad]': 'float Incline in degrees.'",
+                                       "f(frequency=): name it freq"]
 
 
 def test_cli_angles_are_in_degrees_and_say_so():
