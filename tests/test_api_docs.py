@@ -95,6 +95,28 @@ def test_every_public_callable_documents_its_parameters():
     assert not problems, "\n".join(f"{name}: {'; '.join(p)}" for name, p in problems.items())
 
 
+def public_methods() -> dict[str, object]:
+    """Qualified name -> function, for the public methods (and class/static methods) of public classes."""
+    out: dict[str, object] = {}
+    for name, cls in public_objects().items():
+        if not inspect.isclass(cls):
+            continue
+        for mname, m in vars(cls).items():
+            f = m.__func__ if isinstance(m, classmethod | staticmethod) else m
+            if not mname.startswith("_") and inspect.isfunction(f):
+                out[f"{name}.{mname}"] = getattr(cls, mname)  # bound for classmethods: no cls
+    return out
+
+
+def test_every_public_method_documents_its_parameters():
+    """Methods need a Parameters section when they take parameters (a one-line summary saying what
+    they return is enough for a Returns)."""
+    problems = {name: [p for p in docstring_problems(m) if not p.startswith("no Returns")]
+                for name, m in sorted(public_methods().items())}
+    problems = {k: v for k, v in problems.items() if v}
+    assert not problems, "\n".join(f"{name}: {'; '.join(p)}" for name, p in problems.items())
+
+
 def test_the_checker_catches_a_missing_section():
     def undocumented(x, *, fs=1.0):
         """One line only."""
