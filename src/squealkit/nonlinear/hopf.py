@@ -87,6 +87,16 @@ class HopfPoint:
 
         ``r^2 = -sigma'(p_c) (p - p_c) / (omega_0 l1)``, amplitude ``2 |q_x| r L``; NaN where
         ``r^2 < 0`` (no small cycle on that side).
+
+        Parameters
+        ----------
+        p : float or ndarray
+            Parameter value(s) near the Hopf point.
+
+        Returns
+        -------
+        ndarray, shape ``p.shape + (n,)``
+            Peak-to-peak half amplitude [m] per DOF.
         """
         p = np.asarray(p, float)
         r2 = -self.growth_slope * (p - self.p) / (self.omega * self.lyapunov_coefficient)
