@@ -96,23 +96,78 @@ class DiscAngle:
         object.__setattr__(self, "_inverse", CubicSpline(us, ts, bc_type="not-a-knot"))
 
     def turns(self, t: ArrayLike) -> NDArray[np.float64]:
-        """Disc position [revolutions] at times ``t`` [s] (extrapolated by one spline piece at the ends)."""
+        """Disc position [revolutions] at times ``t`` [s] (extrapolated by one spline piece at the ends).
+
+        Parameters
+        ----------
+        t : array_like
+            Times [s] (on the recording's clock).
+
+        Returns
+        -------
+        ndarray, the shape of ``t``
+            Revolutions from the reference mark.
+        """
         return self._spline(np.asarray(t, dtype=np.float64))
 
     def rev_per_s(self, t: ArrayLike) -> NDArray[np.float64]:
-        """Disc speed [rev/s] at times ``t`` [s]."""
+        """Disc speed [rev/s] at times ``t`` [s].
+
+        Parameters
+        ----------
+        t : array_like
+            Times [s] (on the recording's clock).
+
+        Returns
+        -------
+        ndarray, the shape of ``t``
+            Speed [rev/s].
+        """
         return self._spline(np.asarray(t, dtype=np.float64), 1)
 
     def rpm(self, t: ArrayLike) -> NDArray[np.float64]:
-        """Disc speed [rpm] at times ``t`` [s]."""
+        """Disc speed [rpm] at times ``t`` [s].
+
+        Parameters
+        ----------
+        t : array_like
+            Times [s] (on the recording's clock).
+
+        Returns
+        -------
+        ndarray, the shape of ``t``
+            Speed [rev/min].
+        """
         return 60.0 * self.rev_per_s(t)
 
     def rpm_at(self, t: ArrayLike) -> NDArray[np.float64]:
-        """Disc speed [rpm] at times ``t`` [s] (as :meth:`rpm`)."""
+        """Disc speed [rpm] at times ``t`` [s] (as :meth:`rpm`).
+
+        Parameters
+        ----------
+        t : array_like
+            Times [s] (on the recording's clock).
+
+        Returns
+        -------
+        ndarray, the shape of ``t``
+            Speed [rev/min].
+        """
         return self.rpm(t)
 
     def time_at(self, turns: ArrayLike) -> NDArray[np.float64]:
-        """Times [s] at which the disc reaches positions ``turns`` [rev] (a spline through the marks reversed)."""
+        """Times [s] at which the disc reaches positions ``turns`` [rev] (a spline through the marks reversed).
+
+        Parameters
+        ----------
+        turns : array_like
+            Disc positions [rev] from the reference mark.
+
+        Returns
+        -------
+        ndarray, the shape of ``turns``
+            Times [s].
+        """
         return self._inverse(np.asarray(turns, dtype=np.float64))
 
 
