@@ -115,6 +115,23 @@ class AnalysisSettings:
         return self.criteria.min_duration
 
     def validated(self, fs: float) -> AnalysisSettings:
+        """These settings, checked against each other and the sample rate.
+
+        Parameters
+        ----------
+        fs : float
+            Sample rate [Hz] of the recording (the band must lie below ``fs / 2``).
+
+        Returns
+        -------
+        AnalysisSettings
+            ``self``, unchanged.
+
+        Raises
+        ------
+        InputError
+            If a setting is out of range.
+        """
         validate_positive("rpm", self.rpm)
         validate_positive("radius", self.radius)
         validate_positive("chunk_s", self.chunk_s)

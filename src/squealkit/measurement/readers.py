@@ -85,7 +85,24 @@ class RecordingSource:
         return self.n_samples / self.fs
 
     def resolve(self, channel: str | int) -> str:
-        """Channel name for a name or a 0-based index (also given as a digit string)."""
+        """Channel name for a name or a 0-based index (also given as a digit string).
+
+        Parameters
+        ----------
+        channel : str or int
+            A channel name (for TDMS also the channel part of ``group/channel`` when unique) or
+            a 0-based index.
+
+        Returns
+        -------
+        str
+            The channel's name in the file.
+
+        Raises
+        ------
+        InputError
+            If there is no such channel (the message lists the available ones).
+        """
         if isinstance(channel, str) and channel in self.channels:
             return channel
         if isinstance(channel, str) and self.fmt == "tdms":
@@ -107,7 +124,22 @@ class RecordingSource:
     def iter_blocks(
         self, channels: Sequence[str | int], *, block: int = DEFAULT_BLOCK
     ) -> Iterator[tuple[int, dict[str, NDArray[np.float64]]]]:
-        """Yield ``(start_sample, {name: samples})`` in order, in physical units, checked finite."""
+        """Yield ``(start_sample, {name: samples})`` in order, in physical units, checked finite.
+
+        Parameters
+        ----------
+        channels : sequence of str or int
+            The channels to read (names or indices, see :meth:`resolve`).
+        block : int, optional
+            Samples per block (default 2**18, about 6.5 s at 40 kHz); the last block is shorter.
+
+        Yields
+        ------
+        start_sample : int
+            Index of the block's first sample.
+        data : dict of str to ndarray
+            Channel name -> samples (float64, physical units).
+        """
         names = [self.resolve(c) for c in channels]
         reader = getattr(self, f"_blocks_{self.fmt}")
         for start, data in reader(names, block):

@@ -106,7 +106,17 @@ class SyntheticSource:
         return self.n_samples / self.fs
 
     def turns(self, t: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Disc position [rev] at times ``t`` [s]: 0 at t = 0, constant speed or a linear deceleration."""
+        """Disc position [rev] at times ``t`` [s]: 0 at t = 0, constant speed or a linear deceleration.
+
+        Parameters
+        ----------
+        t : ndarray
+            Times [s].
+
+        Returns
+        -------
+        ndarray, the shape of ``t``
+        """
         f0 = self.rpm / 60.0
         if self.rpm_end is None:
             return t * f0
@@ -114,20 +124,52 @@ class SyntheticSource:
         return f0 * t + 0.5 * (f1 - f0) / self.duration * t * t
 
     def surface(self, turns: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """True run-out [m] and its slope tan(theta) at disc positions ``turns`` (revolutions)."""
+        """True run-out [m] and its slope tan(theta) at disc positions ``turns`` (revolutions).
+
+        Parameters
+        ----------
+        turns : ndarray
+            Disc positions [rev] from angle 0.
+
+        Returns
+        -------
+        q, tan_theta : ndarray, the shape of ``turns``
+            Run-out [m] and slope [1] at the probe radius.
+        """
         ph = 2 * np.pi * np.multiply.outer(turns, self.sro_orders) + self.sro_phases
         q = np.sin(ph) @ self.sro_amps
         dq_dturn = np.cos(ph) @ (self.sro_amps * 2 * np.pi * self.sro_orders)
         return q, dq_dturn / (2 * np.pi * self.radius)
 
     def envelope(self, turns: NDArray[np.float64]) -> NDArray[np.float64]:
-        """True squeal pressure amplitude [Pa] of the fundamental at ``turns``."""
+        """True squeal pressure amplitude [Pa] of the fundamental at ``turns``.
+
+        Parameters
+        ----------
+        turns : ndarray
+            Disc positions [rev] from angle 0.
+
+        Returns
+        -------
+        ndarray, the shape of ``turns``
+        """
         pos = (turns % 1.0) * _N_ANGLE
         grid = np.append(self.log_env, self.log_env[0])
         return self.amp_pa * np.exp(np.interp(pos, np.arange(_N_ANGLE + 1), grid))
 
     def block(self, start: int, stop: int) -> dict[str, NDArray[np.float64]]:
-        """Samples ``start:stop`` of both channels (noise seeded by block start)."""
+        """Samples ``start:stop`` of both channels (noise seeded by block start).
+
+        Parameters
+        ----------
+        start, stop : int
+            Sample range, ``0 <= start < stop <= n_samples``.
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``mic`` [Pa], ``displacement`` [m] and ``tacho`` [V].
+        """
         idx = np.arange(start, stop)
         t = idx / self.fs
         turns = self.turns(t)
@@ -159,6 +201,20 @@ class SyntheticSource:
 
     def iter_blocks(self, channels: Sequence[str | int], *, block: int = DEFAULT_BLOCK
                     ) -> Iterator[tuple[int, dict[str, NDArray[np.float64]]]]:
+        """Yield ``(start_sample, {name: samples})`` in order, as :meth:`RecordingSource.iter_blocks`.
+
+        Parameters
+        ----------
+        channels : sequence of str or int
+            Channel names or indices (``mic``, ``displacement``, ``tacho``).
+        block : int, optional
+            Samples per block.
+
+        Yields
+        ------
+        start_sample : int
+        data : dict of str to ndarray
+        """
         names = [self.resolve(c) for c in channels]
         for s in range(0, self.n_samples, block):
             data = self.block(s, min(self.n_samples, s + block))
@@ -171,6 +227,21 @@ class SyntheticSource:
         Levels are those of the noise-free squeal (fundamental and harmonics), A-weighted and
         time weighted with ``time_constant`` [s] (IEC 61672-1 Fast: 0.125), as a sound level
         meter shows them.
+
+        Parameters
+        ----------
+        threshold_dba : float, default 70.0
+            Squeal threshold [dB(A)].
+        merge_gap : float, default 0.01
+            Gaps [s] shorter than this join two events into one.
+        time_constant : float, default 0.125
+            Exponential time constant [s] of the level.
+
+        Returns
+        -------
+        dict
+            ``frequency_hz``, ``event_starts_s``, ``event_ends_s``, ``rising_fraction``,
+            ``threshold_dba``, ``runout_phase_deg``, ``peak_dba`` (None where there is no squeal).
         """
         step = 8
         t = np.arange(0, self.n_samples, step) / self.fs
