@@ -22,6 +22,7 @@ from typing import Any
 
 import xarray as xr
 
+from . import _accessor  # noqa: F401  (registers ds.squeal.plot(), also on loaded results)
 from ._validation import InputError
 
 __all__ = ["atomic_path", "check_output", "load_dataset", "output_folder", "save_dataset", "save_figure",
@@ -174,6 +175,12 @@ def atomic_path(path: str | Path, *, directory: bool = False) -> Iterator[Path]:
         The final file (or directory, with ``directory=True``, e.g. a zarr store).
     directory : bool
         Whether the output is a directory tree.
+
+    Yields
+    ------
+    Path
+        The staging path to write to (in ``path``'s folder); it replaces ``path`` when the
+        block ends without an exception and is removed otherwise.
 
     Examples
     --------

@@ -23,7 +23,25 @@ _MODES = ("drag", "stop")
 
 @dataclass(frozen=True)
 class Application:
-    """One brake application of the matrix (conditions in SI-adjacent units named in the field)."""
+    """One brake application of the matrix (conditions in SI-adjacent units named in the field).
+
+    Attributes
+    ----------
+    application : str
+        Unique id of the application.
+    file : Path
+        Its recording (made absolute against the matrix's folder by :func:`read_matrix`).
+    section : str
+        Section of the test programme (``""`` when not given).
+    mode : {"drag", "stop", ""}
+        Kind of application (``""`` when not given).
+    pressure_bar, temperature_c, speed_kmh : float
+        Brake pressure [bar], temperature [degC] and vehicle speed [km/h]; NaN when not given.
+    rpm : float
+        Disc speed [rev/min] where there is no tacho; NaN when not given.
+    extra : dict of str to str
+        Any other column of the matrix, as text.
+    """
 
     application: str
     file: Path
@@ -38,6 +56,23 @@ class Application:
 
 def read_matrix(path: str | Path) -> tuple[Application, ...]:
     """Read and check a test matrix CSV (see the module docstring for its columns).
+
+    Parameters
+    ----------
+    path : str or Path
+        The matrix CSV (UTF-8, header row).
+
+    Returns
+    -------
+    tuple of Application
+        One per row, in file order.
+
+    Raises
+    ------
+    InputError
+        If the file is missing or empty, lacks the ``application`` or ``file`` column, or a
+        row has an empty or repeated id, no file, an unknown mode or a non-numeric condition;
+        the message names the line.
 
     Examples
     --------

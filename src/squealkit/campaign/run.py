@@ -97,11 +97,13 @@ def run_campaign(
         As for :func:`squealkit.measurement.analyze_recording`; a matrix column ``rpm``
         gives each application's speed where there is no tacho.
     setup, band, threshold_dba, time_weighting, min_duration
-        The squeal criteria (:func:`squealkit.measurement.squeal_criteria`).
+        The squeal criteria (:func:`squealkit.measurement.squeal_criteria`; ``band`` in [Hz]).
     client : distributed.Client, optional
         Analyse the applications on a Dask cluster (the files must be readable there).
     progress : callable, optional
         ``progress(done, total)`` in applications still to analyse.
+    report : bool, default True
+        Also write ``out/report.html`` and its figures.
     pressure_channel, temperature_channel : str, optional
         Channels [bar], [C] whose mean over an application gives its condition where the
         matrix leaves ``pressure_bar`` or ``temperature_c`` empty.

@@ -42,7 +42,20 @@ EVENT_COLUMNS = {
 
 
 class CampaignStore:
-    """A DuckDB file holding a campaign's applications and events (see the module docstring)."""
+    """A DuckDB file holding a campaign's applications and events (see the module docstring).
+
+    Use it as a context manager, which closes the connection.
+
+    Parameters
+    ----------
+    path : str or Path
+        The DuckDB file; created with empty ``applications`` and ``events`` tables when new.
+
+    Raises
+    ------
+    InputError
+        If DuckDB is not installed (the ``campaign`` extra).
+    """
 
     def __init__(self, path: str | Path):
         try:
@@ -69,13 +82,32 @@ class CampaignStore:
         self.close()
 
     def done(self, criteria: str) -> dict[str, tuple[int, int]]:
-        """``{application: (file_size, file_mtime_ns)}`` of applications analysed with ``criteria``."""
+        """``{application: (file_size, file_mtime_ns)}`` of applications analysed with ``criteria``.
+
+        Parameters
+        ----------
+        criteria : str
+            The criteria's description (:meth:`SquealCriteria.describe`) they were analysed with.
+
+        Returns
+        -------
+        dict of str to (int, int)
+            File size [bytes] and modification time [ns] of each application's file at analysis.
+        """
         rows = self.con.execute("SELECT application, file_size, file_mtime_ns FROM applications "
                                 "WHERE criteria = ? AND error IS NULL", [criteria]).fetchall()
         return {a: (s, m) for a, s, m in rows}
 
     def put(self, app: Mapping[str, Any], events: Sequence[Mapping[str, Any]]) -> None:
-        """Replace one application's rows, in one transaction."""
+        """Replace one application's rows, in one transaction.
+
+        Parameters
+        ----------
+        app : mapping
+            The application's row (keys: :data:`APPLICATION_COLUMNS`).
+        events : sequence of mapping
+            Its squeal events (keys: :data:`EVENT_COLUMNS`).
+        """
         a_cols, e_cols = list(APPLICATION_COLUMNS), list(EVENT_COLUMNS)
         self.con.execute("BEGIN TRANSACTION")
         try:
@@ -93,5 +125,17 @@ class CampaignStore:
             raise
 
     def query(self, sql: str, params: Sequence[Any] = ()):
-        """Rows of a SQL query as a pandas DataFrame."""
+        """Rows of a SQL query as a pandas DataFrame.
+
+        Parameters
+        ----------
+        sql : str
+            The query, over the tables ``applications`` and ``events`` and the view ``squeal``.
+        params : sequence, optional
+            Values of its ``?`` placeholders.
+
+        Returns
+        -------
+        pandas.DataFrame
+        """
         return self.con.execute(sql, list(params)).df()

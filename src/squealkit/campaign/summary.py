@@ -18,6 +18,16 @@ def third_octave_bands(band: tuple[float, float]) -> list[tuple[float, float, fl
     ``centre * 10**(-+1 / 20)``; a band counts when its nominal centre lies in ``band`` (the
     exact centre of nominal 2 kHz is 1995 Hz).
 
+    Parameters
+    ----------
+    band : (float, float)
+        ``(freq_lower, freq_upper)`` [Hz], e.g. the squeal criteria's band.
+
+    Returns
+    -------
+    list of (float, float, float)
+        ``(centre, lower, upper)`` [Hz] of each band, in increasing frequency.
+
     Examples
     --------
     >>> [round(c) for c, _, _ in third_octave_bands((2000.0, 16000.0))][:4]
@@ -38,7 +48,25 @@ def band_of(freq: float, bands: list[tuple[float, float, float]]) -> tuple[float
 
 
 def campaign_summary(store, band: tuple[float, float], criteria: str) -> dict[str, Any]:
-    """``summary.json``: applications, occurrence (J2521: % of applications with squeal), by band and condition."""
+    """``summary.json``: applications, occurrence (J2521: % of applications with squeal), by band and condition.
+
+    Parameters
+    ----------
+    store : CampaignStore
+        The campaign's store, after the applications were analysed.
+    band : (float, float)
+        Squeal band ``(freq_lower, freq_upper)`` [Hz], split into 1/3-octave bands
+        (:func:`third_octave_bands`).
+    criteria : str
+        Description of the squeal criteria (stored as the summary's ``criteria``).
+
+    Returns
+    -------
+    dict
+        JSON-ready: ``criteria``, ``applications``, ``applications_with_squeal``,
+        ``occurrence_percent``, ``by_band``, ``by_temperature_c``, ``by_pressure_bar``,
+        ``max_peak_dba``, ``runout_link`` and ``failed`` (applications that could not be read).
+    """
     apps = store.query("SELECT * FROM applications WHERE error IS NULL ORDER BY application")
     ev = store.query("SELECT application, band_center_hz FROM events")
     failed = store.query("SELECT application, error FROM applications WHERE error IS NOT NULL")

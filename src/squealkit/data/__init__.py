@@ -15,7 +15,23 @@ _HERE = Path(__file__).resolve().parent
 
 
 def nlevp_path(name: str = "disk_brake100.mat") -> Path:
-    """Path of a shipped NLEVP file (``disk_brake100.mat``, ``disk_brake100.m``, ``LICENSE-nlevp.txt``)."""
+    """Path of a shipped NLEVP file (``disk_brake100.mat``, ``disk_brake100.m``, ``LICENSE-nlevp.txt``).
+
+    Parameters
+    ----------
+    name : str, default "disk_brake100.mat"
+        File name in the shipped ``nlevp`` folder.
+
+    Returns
+    -------
+    Path
+        The file's absolute path.
+
+    Raises
+    ------
+    InputError
+        If no such file is shipped (the message lists the known ones).
+    """
     p = _HERE / "nlevp" / name
     if not p.is_file():
         from .._validation import InputError

@@ -42,7 +42,44 @@ _LOBE = 2
 
 @dataclass(frozen=True)
 class AnalysisSettings:
-    """Criteria and processing settings of :func:`analyze_recording` (all SI / Hz / s)."""
+    """Criteria and processing settings of :func:`analyze_recording` (all SI / Hz / s).
+
+    Attributes
+    ----------
+    rpm : float
+        Disc speed [rev/min] (without a tacho: constant).
+    radius : float
+        Probe (and pin) radius on the disc [m].
+    criteria : SquealCriteria, default ``squeal_criteria()``
+        What counts as squeal (band, threshold, time weighting, minimum duration).
+    lowpass_freq : float, default 1000.0
+        Corner [Hz] of the low-pass that keeps the surface run-out (paper Fig. 12).
+    macro_orders : int, default 10
+        Highest revolution order counted as macro run-out (see :func:`split_runout`).
+    nperseg, hop : int, default 512, 256
+        Frame length and hop [samples] of the spectral frames (Hann window).
+    freq_tol : float, default 100.0
+        Frequency tolerance [Hz] of one tonal line: the width of a component and how far it
+        may move between frames and still join the same event.
+    n_angle_bins : int, default 72
+        Bins of disc angle of the polar result (72: 5 deg).
+    chunk_s : float, default 10.0
+        Length [s] of the blocks the recording is processed in (bounds memory).
+    probe_offset_deg : float, default 0.0
+        How far upstream of the pin the probe sits [deg], in (-360, 360).
+    acoustic_delay : float, default 0.0
+        Delay [s] from the pin to the microphone, >= 0.
+    polarity : {1, -1}, default 1
+        -1 when the probe reads the run-out reversed.
+    tacho_kind : {"pulses", "angle"}, default "pulses"
+        What a tacho channel holds (see :func:`squealkit.measurement.tacho.read_tacho`).
+    pulses_per_rev : int, default 1
+        Tacho pulses per revolution.
+    tacho_level : float or None, default None
+        Trigger level of the pulses (default: halfway between the first block's extremes).
+    angle_unit : {"deg", "rad", "rev"}, default "deg"
+        Unit of an angle tacho channel.
+    """
 
     rpm: float
     radius: float
@@ -78,6 +115,23 @@ class AnalysisSettings:
         return self.criteria.min_duration
 
     def validated(self, fs: float) -> AnalysisSettings:
+        """These settings, checked against each other and the sample rate.
+
+        Parameters
+        ----------
+        fs : float
+            Sample rate [Hz] of the recording (the band must lie below ``fs / 2``).
+
+        Returns
+        -------
+        AnalysisSettings
+            ``self``, unchanged.
+
+        Raises
+        ------
+        InputError
+            If a setting is out of range.
+        """
         validate_positive("rpm", self.rpm)
         validate_positive("radius", self.radius)
         validate_positive("chunk_s", self.chunk_s)
@@ -125,9 +179,18 @@ class MeasurementResult:
         The application's peak level (SAE J2521): the highest time-weighted (Fast unless the
         criteria say Slow), A-weighted level in the criteria band [dB(A)], whether or not it
         reached the threshold. Independent of the analysis frames.
+    duration_s : float
+        Length of the recording [s].
+    fs : float
+        Its sample rate [Hz].
+    settings : AnalysisSettings
+        The settings the analysis ran with.
     frames, revolutions, polar, spectrum : xarray.Dataset
         Per-frame level, ridge and slope; per-revolution run-out peak-to-peak; squeal level
         and run-out against disc angle; mean spectra.
+    attrs : dict
+        ``source`` (the file), ``synthetic``, ``max_tan_theta`` (largest run-out slope [1]) and
+        ``surface_speed`` [m/s].
     """
 
     squeal_frequency_hz: float | None
@@ -150,6 +213,31 @@ class MeasurementResult:
     def squeal(self) -> bool:
         """Whether any event met the criteria."""
         return bool(self.events)
+
+    def plot(self, ax: Any = None, *, kind: str = "level", **kwargs: Any) -> Any:
+        """Draw the result with :mod:`squealkit.plotting.measurement` (imported now, not before).
+
+        Parameters
+        ----------
+        ax : matplotlib Axes, optional
+            Where to draw (polar axes for ``kind="polar"``); a new figure if omitted.
+        kind : {"level", "polar"}, default "level"
+            :func:`~squealkit.plotting.measurement.level_plot` (level against time with the
+            threshold and the events) or :func:`~squealkit.plotting.measurement.polar_plot`
+            (level and run-out against disc angle).
+        **kwargs
+            Passed on to the plotting function.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        from ..plotting import measurement as plots
+
+        funcs = {"level": plots.level_plot, "polar": plots.polar_plot}
+        if kind not in funcs:
+            raise InputError(f"Parameter kind={kind!r} must be 'level' or 'polar'.")
+        return funcs[kind](self, ax=ax, **kwargs)
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready summary (stable keys; see the CLI's ``--json``)."""

@@ -61,6 +61,16 @@ _A1000 = -2.000
 def a_weighting_db(freq: ArrayLike) -> NDArray[np.float64]:
     """A-weighting A(f) [dB] per IEC 61672-1 (analytic form, Annex E).
 
+    Parameters
+    ----------
+    freq : array_like
+        Frequencies [Hz], >= 0.
+
+    Returns
+    -------
+    ndarray of float64
+        A(f) [dB], the shape of ``freq``; 0 dB at 1 kHz and ``-inf`` at 0 Hz.
+
     Examples
     --------
     >>> round(float(a_weighting_db(1000.0)), 2)
@@ -149,6 +159,17 @@ def squeal_criteria(
     min_duration : float
         Shortest tonal event [s].
 
+    Returns
+    -------
+    SquealCriteria
+        The validated criteria.
+
+    Raises
+    ------
+    InputError
+        On an unknown setup or time weighting, ``setup="user"`` without a band, a band that
+        is not two positive increasing frequencies, or a negative ``min_duration``.
+
     Examples
     --------
     >>> squeal_criteria().band
@@ -218,6 +239,11 @@ def band_weighted_signal(x: ArrayLike, fs: float, band: tuple[float, float], *, 
         ``(freq_lower, freq_upper)`` [Hz], upper below ``fs / 2``.
     workers : int, optional
         FFT threads (default: squealkit's thread limit, see ``SQUEALKIT_THREADS``).
+
+    Returns
+    -------
+    ndarray of float32, shape (n,)
+        The A-weighted, band-limited sound pressure [Pa].
     """
     if workers is None:
         from .._threads import thread_limit
@@ -249,6 +275,11 @@ def exponential_average(
         Time constant [s] (Fast 0.125, Slow 1).
     initial : float
         ``y`` before the first step (to carry the state from one block to the next).
+
+    Returns
+    -------
+    ndarray of float64, shape (n,)
+        The time-weighted mean square [unit^2], one value per step.
     """
     a = math.exp(-dt / tau)
     y, _ = signal.lfilter([1.0 - a], [1.0, -a], np.asarray(x, dtype=np.float64), zi=[a * initial])
@@ -257,6 +288,20 @@ def exponential_average(
 
 def time_weighted_level(x: ArrayLike, fs: float, criteria: SquealCriteria) -> NDArray[np.float64]:
     """Time-weighted A-weighted sound level L_AF(t) [dB(A)] in the criteria band, per sample.
+
+    Parameters
+    ----------
+    x : array_like, shape (n,)
+        Sound pressure [Pa] sampled at ``fs``.
+    fs : float
+        Sample rate [Hz]; the band's upper edge must lie below ``fs / 2``.
+    criteria : SquealCriteria
+        Band and time weighting (Fast or Slow), from :func:`squeal_criteria`.
+
+    Returns
+    -------
+    ndarray of float64, shape (n,)
+        The level [dB(A) re 20 uPa], starting from silence at the first sample.
 
     Examples
     --------

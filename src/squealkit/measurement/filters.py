@@ -37,6 +37,16 @@ def butter_sos(kind: str, freq: float | tuple[float, float], fs: float, *, order
     order : int
         Filter order (per pass; the zero-phase filter doubles the attenuation).
 
+    Returns
+    -------
+    ndarray, shape (n_sections, 6)
+        Second-order sections for :func:`scipy.signal.sosfiltfilt`.
+
+    Raises
+    ------
+    InputError
+        If ``kind`` or ``order`` is invalid, or a corner is not in ``(0, fs / 2)``.
+
     Examples
     --------
     >>> butter_sos("lowpass", 1000.0, 40000.0).shape
@@ -134,10 +144,13 @@ def lowpass_decimated(
         Decimation factor, with ``fs / dec >= 4 freq``.
     order : int
         Butterworth order per pass.
+    axis : int, default -1
+        Axis of ``x`` along which time runs.
 
     Returns
     -------
     ndarray, ``ceil(n / dec)`` samples along ``axis``
+        The filtered signal at ``fs / dec``.
 
     Examples
     --------
@@ -166,17 +179,77 @@ def lowpass_decimated(
 
 
 def lowpass(x: ArrayLike, freq: float, fs: float, *, order: int = 4, axis: int = -1) -> NDArray[np.float64]:
-    """Zero-phase Butterworth low-pass of ``x`` at ``freq`` [Hz] (paper Fig. 12: 1000 Hz)."""
+    """Zero-phase Butterworth low-pass of ``x`` at ``freq`` [Hz] (paper Fig. 12: 1000 Hz).
+
+    Parameters
+    ----------
+    x : array_like
+        Signal sampled at ``fs``, filtered along ``axis`` (at least 2 samples).
+    freq : float
+        Corner frequency [Hz].
+    fs : float
+        Sample rate [Hz] of ``x``; the corner(s) must lie below ``fs / 2``.
+    order : int, default 4
+        Butterworth order per pass (the zero-phase filter doubles the attenuation; the
+        corner is where the gain is -6 dB after both passes).
+    axis : int, default -1
+        Axis of ``x`` along which time runs.
+
+    Returns
+    -------
+    ndarray of float64
+        The filtered signal, the shape of ``x``.
+    """
     return _apply(x, butter_sos("lowpass", freq, fs, order=order), axis)
 
 
 def highpass(x: ArrayLike, freq: float, fs: float, *, order: int = 4, axis: int = -1) -> NDArray[np.float64]:
-    """Zero-phase Butterworth high-pass of ``x`` at ``freq`` [Hz]."""
+    """Zero-phase Butterworth high-pass of ``x`` at ``freq`` [Hz].
+
+    Parameters
+    ----------
+    x : array_like
+        Signal sampled at ``fs``, filtered along ``axis`` (at least 2 samples).
+    freq : float
+        Corner frequency [Hz].
+    fs : float
+        Sample rate [Hz] of ``x``; the corner(s) must lie below ``fs / 2``.
+    order : int, default 4
+        Butterworth order per pass (the zero-phase filter doubles the attenuation; the
+        corner is where the gain is -6 dB after both passes).
+    axis : int, default -1
+        Axis of ``x`` along which time runs.
+
+    Returns
+    -------
+    ndarray of float64
+        The filtered signal, the shape of ``x``.
+    """
     return _apply(x, butter_sos("highpass", freq, fs, order=order), axis)
 
 
 def bandpass(
     x: ArrayLike, freq_lower: float, freq_upper: float, fs: float, *, order: int = 4, axis: int = -1
 ) -> NDArray[np.float64]:
-    """Zero-phase Butterworth band-pass of ``x`` (paper Fig. 13: 1000-2500 Hz)."""
+    """Zero-phase Butterworth band-pass of ``x`` (paper Fig. 13: 1000-2500 Hz).
+
+    Parameters
+    ----------
+    x : array_like
+        Signal sampled at ``fs``, filtered along ``axis`` (at least 2 samples).
+    freq_lower, freq_upper : float
+        Lower and upper corner frequencies [Hz], ``freq_lower < freq_upper``.
+    fs : float
+        Sample rate [Hz] of ``x``; the corner(s) must lie below ``fs / 2``.
+    order : int, default 4
+        Butterworth order per pass (the zero-phase filter doubles the attenuation; the
+        corner is where the gain is -6 dB after both passes).
+    axis : int, default -1
+        Axis of ``x`` along which time runs.
+
+    Returns
+    -------
+    ndarray of float64
+        The filtered signal, the shape of ``x``.
+    """
     return _apply(x, butter_sos("bandpass", (freq_lower, freq_upper), fs, order=order), axis)

@@ -50,15 +50,19 @@ class RecordingSource:
     Attributes
     ----------
     path : Path
+        The recording file.
     fmt : str
-        ``"csv"``, ``"wav"``, ``"netcdf"`` or ``"tdms"``.
+        ``"csv"``, ``"wav"``, ``"netcdf"``, ``"tdms"``, ``"mdf4"`` or ``"uff"``.
     fs : float
         Sample rate [Hz].
     n_samples : int
+        Samples per channel.
     channels : tuple of str
         Channel names in file order.
     units : dict
         Unit of each channel (``""`` when the file does not say).
+    scales : dict of str to float
+        Factor from file values to physical units, per channel name (absent: 1).
     """
 
     path: Path
@@ -81,7 +85,24 @@ class RecordingSource:
         return self.n_samples / self.fs
 
     def resolve(self, channel: str | int) -> str:
-        """Channel name for a name or a 0-based index (also given as a digit string)."""
+        """Channel name for a name or a 0-based index (also given as a digit string).
+
+        Parameters
+        ----------
+        channel : str or int
+            A channel name (for TDMS also the channel part of ``group/channel`` when unique) or
+            a 0-based index.
+
+        Returns
+        -------
+        str
+            The channel's name in the file.
+
+        Raises
+        ------
+        InputError
+            If there is no such channel (the message lists the available ones).
+        """
         if isinstance(channel, str) and channel in self.channels:
             return channel
         if isinstance(channel, str) and self.fmt == "tdms":
@@ -103,7 +124,22 @@ class RecordingSource:
     def iter_blocks(
         self, channels: Sequence[str | int], *, block: int = DEFAULT_BLOCK
     ) -> Iterator[tuple[int, dict[str, NDArray[np.float64]]]]:
-        """Yield ``(start_sample, {name: samples})`` in order, in physical units, checked finite."""
+        """Yield ``(start_sample, {name: samples})`` in order, in physical units, checked finite.
+
+        Parameters
+        ----------
+        channels : sequence of str or int
+            The channels to read (names or indices, see :meth:`resolve`).
+        block : int, optional
+            Samples per block (default 2**18, about 6.5 s at 40 kHz); the last block is shorter.
+
+        Yields
+        ------
+        start_sample : int
+            Index of the block's first sample.
+        data : dict of str to ndarray
+            Channel name -> samples (float64, physical units).
+        """
         names = [self.resolve(c) for c in channels]
         reader = getattr(self, f"_blocks_{self.fmt}")
         for start, data in reader(names, block):
@@ -269,6 +305,18 @@ def open_recording(
         a WAV channel). Keys of a mapping are channel names (resolved like channels).
     units : mapping, optional
         Unit per channel, overriding the file's own (e.g. ``{"ch0": "Pa"}``).
+
+    Returns
+    -------
+    RecordingSource
+        The file's channels, units and sample rate; samples are read only by
+        :meth:`RecordingSource.iter_blocks`.
+
+    Raises
+    ------
+    InputError
+        If the file is missing, a folder, of an unknown format, or unreadable; one line naming
+        the file (and channel).
 
     Examples
     --------
@@ -499,7 +547,24 @@ def recording_dataset(
     channels: Mapping[str, NDArray[np.float64]], fs: float, units: Mapping[str, str] | None = None,
     attrs: Mapping[str, Any] | None = None,
 ) -> xr.Dataset:
-    """Label equally sampled channels as a Dataset with a ``time`` coordinate [s]."""
+    """Label equally sampled channels as a Dataset with a ``time`` coordinate [s].
+
+    Parameters
+    ----------
+    channels : mapping of str to array_like
+        Channel name -> samples, all of one length ``n``.
+    fs : float
+        Sample rate [Hz]; ``time = arange(n) / fs``.
+    units : mapping of str to str, optional
+        Unit per channel (stored as each variable's ``units`` attribute; default ``""``).
+    attrs : mapping, optional
+        Further Dataset attributes (``fs`` is always set).
+
+    Returns
+    -------
+    xarray.Dataset
+        One float64 variable per channel along ``time``.
+    """
     fs = validate_fs(fs)
     n = len(next(iter(channels.values())))
     ds = xr.Dataset(
@@ -516,6 +581,20 @@ def read_recording(path: str | Path, channels: Sequence[str | int] | None = None
 
     Keyword arguments are those of :func:`open_recording`. Use :func:`open_recording` and
     :meth:`RecordingSource.iter_blocks` for recordings too long to hold in memory.
+
+    Parameters
+    ----------
+    path : str or Path
+        The recording file (formats as in :func:`open_recording`).
+    channels : sequence of str or int, optional
+        Channel names or 0-based indices to load (default: all).
+    **kwargs
+        ``fs``, ``scale``, ``units`` of :func:`open_recording`.
+
+    Returns
+    -------
+    xarray.Dataset
+        As :func:`recording_dataset`, with a ``source`` attribute naming the file.
     """
     src = open_recording(path, **kwargs)
     names = [src.resolve(c) for c in (channels if channels is not None else src.channels)]

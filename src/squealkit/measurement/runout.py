@@ -21,12 +21,41 @@ __all__ = ["incline", "revolution_frequency", "split_runout", "surface_speed"]
 
 
 def revolution_frequency(rpm: float) -> float:
-    """Disc revolutions per second [Hz] for a speed in rpm (900 rpm -> 15 Hz)."""
+    """Disc revolutions per second [Hz] for a speed in rpm (900 rpm -> 15 Hz).
+
+    Parameters
+    ----------
+    rpm : float
+        Disc speed [rev/min], > 0.
+
+    Returns
+    -------
+    float
+        ``rpm / 60`` [Hz].
+    """
     return validate_positive("rpm", rpm) / 60.0
 
 
 def surface_speed(rpm: float, radius: float) -> float:
-    """Sliding speed ``v = 2 pi r n / 60`` [m/s] at probe radius ``radius`` [m]."""
+    """Sliding speed ``v = 2 pi r n / 60`` [m/s] at probe radius ``radius`` [m].
+
+    Parameters
+    ----------
+    rpm : float
+        Disc speed ``n`` [rev/min], > 0.
+    radius : float
+        Radius ``r`` of the sliding track [m], > 0.
+
+    Returns
+    -------
+    float
+        The sliding speed [m/s].
+
+    Examples
+    --------
+    >>> round(surface_speed(900.0, 0.1), 4)
+    9.4248
+    """
     return 2.0 * math.pi * validate_positive("radius", radius) * validate_positive("rpm", rpm) / 60.0
 
 
@@ -69,5 +98,23 @@ def split_runout(
 
 
 def incline(sro: ArrayLike, fs: float, rpm: float, radius: float) -> NDArray[np.float64]:
-    """Run-out slope ``tan(theta) = (dq/dt) / v`` along the sliding direction (paper eq. 11)."""
+    """Run-out slope ``tan(theta) = (dq/dt) / v`` along the sliding direction (paper eq. 11).
+
+    Parameters
+    ----------
+    sro : array_like, shape (n,)
+        Surface run-out ``q`` [m] sampled at ``fs`` (e.g. the first output of :func:`split_runout`).
+    fs : float
+        Sample rate [Hz].
+    rpm : float
+        Disc speed [rev/min].
+    radius : float
+        Radius of the sliding track [m].
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        ``tan(theta)`` [1] (dimensionless; ``arctan`` gives theta in rad), positive where the
+        surface rises under the pin. ``dq/dt`` is the central difference of :func:`numpy.gradient`.
+    """
     return np.gradient(np.asarray(sro, dtype=np.float64)) * validate_fs(fs) / surface_speed(rpm, radius)

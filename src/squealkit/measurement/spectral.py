@@ -144,10 +144,15 @@ def spectrogram(x: ArrayLike, fs: float, *, nperseg: int = 1024, hop: int | None
     Parameters
     ----------
     x : array_like, shape (n,)
+        The signal, at least ``nperseg`` samples.
     fs : float
         Sample rate [Hz].
     nperseg, hop : int
         Frame length and hop in samples (Hann window; default hop ``nperseg // 4``).
+    units : str, default ""
+        Units of ``x`` (e.g. ``"Pa"``); the power's ``units`` attribute is their square.
+    name : str, default "x"
+        Name of the signal, used for the DataArray's name and ``long_name``.
 
     Returns
     -------
@@ -172,7 +177,25 @@ def spectrogram(x: ArrayLike, fs: float, *, nperseg: int = 1024, hop: int | None
 
 
 def ridge(spec: NDArray[np.complex128], fs: float, nperseg: int, band: tuple[float, float]) -> NDArray[np.float64]:
-    """Refined frequency [Hz] of the strongest line in ``band`` in each frame (the ridge)."""
+    """Refined frequency [Hz] of the strongest line in ``band`` in each frame (the ridge).
+
+    Parameters
+    ----------
+    spec : ndarray, shape (n_frames, nperseg // 2 + 1)
+        Hann-windowed frame spectra, as the first output of :func:`frame_power`.
+    fs : float
+        Sample rate [Hz] of the framed signal.
+    nperseg : int
+        Frame length [samples].
+    band : (float, float)
+        ``(freq_lower, freq_upper)`` [Hz] searched for the peak.
+
+    Returns
+    -------
+    ndarray of float64, shape (n_frames,)
+        The peak frequency [Hz] per frame, refined with :func:`refine_peak`; all NaN when the
+        band holds fewer than 3 bins.
+    """
     f = np.fft.rfftfreq(nperseg, 1 / fs)
     lo, hi = np.searchsorted(f, band[0]), np.searchsorted(f, band[1], side="right")
     mag = np.abs(spec[:, lo:hi])

@@ -35,7 +35,43 @@ class SyntheticSource:
     """A synthetic recording generated block by block (bounded memory for any duration).
 
     Same block interface as :class:`~squealkit.measurement.readers.RecordingSource`.
-    Build it with :func:`synthetic_source`; see the module docstring for the physics.
+    Build it with :func:`synthetic_source` (whose parameters these fields hold, in SI units);
+    see the module docstring for the physics.
+
+    Attributes
+    ----------
+    fs : float
+        Sample rate [Hz].
+    n_samples : int
+        Samples per channel.
+    rpm, rpm_end : float
+        Disc speed [rev/min] at the start and, for a linear deceleration, at the end (else None).
+    radius : float
+        Probe radius [m].
+    freq : float
+        Squeal frequency [Hz].
+    amp_pa : float
+        Peak amplitude [Pa] of the saturated fundamental.
+    harmonics : tuple of float
+        Relative amplitudes of harmonics 2, 3, ...
+    disp_squeal_m, noise_pa, noise_m : float
+        Squeal on the displacement channel [m]; noise on the microphone [Pa] and displacement [m].
+    seed : int or None
+        Seed of the noise.
+    sro_orders, sro_amps, sro_phases : ndarray
+        Run-out revolution orders, amplitudes [m] and phases [rad].
+    log_env : ndarray, shape (8192,)
+        ``ln(envelope / amp_pa)`` over one revolution.
+    probe_offset_deg, polarity, acoustic_delay, tacho_ppr
+        Probe geometry [deg], probe polarity, pin-to-microphone delay [s], tacho pulses per revolution.
+    channels : tuple of str
+        ``("mic", "displacement", "tacho")``.
+    units : dict
+        ``Pa``, ``m`` and ``V``.
+    path : Path
+        ``<synthetic>``.
+    fmt : str
+        ``"synthetic"``.
     """
 
     fs: float
@@ -70,7 +106,17 @@ class SyntheticSource:
         return self.n_samples / self.fs
 
     def turns(self, t: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Disc position [rev] at times ``t`` [s]: 0 at t = 0, constant speed or a linear deceleration."""
+        """Disc position [rev] at times ``t`` [s]: 0 at t = 0, constant speed or a linear deceleration.
+
+        Parameters
+        ----------
+        t : ndarray
+            Times [s].
+
+        Returns
+        -------
+        ndarray, the shape of ``t``
+        """
         f0 = self.rpm / 60.0
         if self.rpm_end is None:
             return t * f0
@@ -78,20 +124,52 @@ class SyntheticSource:
         return f0 * t + 0.5 * (f1 - f0) / self.duration * t * t
 
     def surface(self, turns: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """True run-out [m] and its slope tan(theta) at disc positions ``turns`` (revolutions)."""
+        """True run-out [m] and its slope tan(theta) at disc positions ``turns`` (revolutions).
+
+        Parameters
+        ----------
+        turns : ndarray
+            Disc positions [rev] from angle 0.
+
+        Returns
+        -------
+        q, tan_theta : ndarray, the shape of ``turns``
+            Run-out [m] and slope [1] at the probe radius.
+        """
         ph = 2 * np.pi * np.multiply.outer(turns, self.sro_orders) + self.sro_phases
         q = np.sin(ph) @ self.sro_amps
         dq_dturn = np.cos(ph) @ (self.sro_amps * 2 * np.pi * self.sro_orders)
         return q, dq_dturn / (2 * np.pi * self.radius)
 
     def envelope(self, turns: NDArray[np.float64]) -> NDArray[np.float64]:
-        """True squeal pressure amplitude [Pa] of the fundamental at ``turns``."""
+        """True squeal pressure amplitude [Pa] of the fundamental at ``turns``.
+
+        Parameters
+        ----------
+        turns : ndarray
+            Disc positions [rev] from angle 0.
+
+        Returns
+        -------
+        ndarray, the shape of ``turns``
+        """
         pos = (turns % 1.0) * _N_ANGLE
         grid = np.append(self.log_env, self.log_env[0])
         return self.amp_pa * np.exp(np.interp(pos, np.arange(_N_ANGLE + 1), grid))
 
     def block(self, start: int, stop: int) -> dict[str, NDArray[np.float64]]:
-        """Samples ``start:stop`` of both channels (noise seeded by block start)."""
+        """Samples ``start:stop`` of both channels (noise seeded by block start).
+
+        Parameters
+        ----------
+        start, stop : int
+            Sample range, ``0 <= start < stop <= n_samples``.
+
+        Returns
+        -------
+        dict of str to ndarray
+            ``mic`` [Pa], ``displacement`` [m] and ``tacho`` [V].
+        """
         idx = np.arange(start, stop)
         t = idx / self.fs
         turns = self.turns(t)
@@ -123,6 +201,20 @@ class SyntheticSource:
 
     def iter_blocks(self, channels: Sequence[str | int], *, block: int = DEFAULT_BLOCK
                     ) -> Iterator[tuple[int, dict[str, NDArray[np.float64]]]]:
+        """Yield ``(start_sample, {name: samples})`` in order, as :meth:`RecordingSource.iter_blocks`.
+
+        Parameters
+        ----------
+        channels : sequence of str or int
+            Channel names or indices (``mic``, ``displacement``, ``tacho``).
+        block : int, optional
+            Samples per block.
+
+        Yields
+        ------
+        start_sample : int
+        data : dict of str to ndarray
+        """
         names = [self.resolve(c) for c in channels]
         for s in range(0, self.n_samples, block):
             data = self.block(s, min(self.n_samples, s + block))
@@ -135,6 +227,21 @@ class SyntheticSource:
         Levels are those of the noise-free squeal (fundamental and harmonics), A-weighted and
         time weighted with ``time_constant`` [s] (IEC 61672-1 Fast: 0.125), as a sound level
         meter shows them.
+
+        Parameters
+        ----------
+        threshold_dba : float, default 70.0
+            Squeal threshold [dB(A)].
+        merge_gap : float, default 0.01
+            Gaps [s] shorter than this join two events into one.
+        time_constant : float, default 0.125
+            Exponential time constant [s] of the level.
+
+        Returns
+        -------
+        dict
+            ``frequency_hz``, ``event_starts_s``, ``event_ends_s``, ``rising_fraction``,
+            ``threshold_dba``, ``runout_phase_deg``, ``peak_dba`` (None where there is no squeal).
         """
         step = 8
         t = np.arange(0, self.n_samples, step) / self.fs
@@ -194,7 +301,73 @@ def synthetic_source(
     acoustic_delay: float = 0.0,
     tacho_ppr: int = 1,
 ) -> SyntheticSource:
-    """Build a :class:`SyntheticSource` (see :func:`synthetic_recording` for parameters)."""
+    """Build a :class:`SyntheticSource`: a synthetic recording generated block by block.
+
+    Parameters
+    ----------
+    duration : float, default 2.0
+        Length [s] (as the paper's steady drag).
+    fs : float, default 40000.0
+        Sample rate [Hz] (paper: 40 kHz).
+    rpm : float, default 900.0
+        Disc speed [rev/min] (paper: 900).
+    rpm_end : float, optional
+        Speed at the end [rev/min]: the disc slows down linearly from ``rpm`` (a decelerating
+        stop). The squeal envelope and the run-out are functions of the disc angle.
+    radius : float, default 0.05
+        Probe (and pin) radius [m].
+    freq : float, default 2388.0
+        Squeal frequency [Hz] (paper: about 2388 Hz, the coupled pin/disc mode); it and its
+        harmonics must lie below ``fs / 2``.
+    level_dba : float, default 90.0
+        A-weighted level of the saturated squeal's fundamental [dB(A)].
+    squeal_on : {"rising", "falling", "none"}, default "rising"
+        On which run-out stage the squeal grows (the paper: rising).
+    growth_rate, decay_rate : float, default 1500.0, 3000.0
+        Largest growth rate of the envelope on the unstable stage and decay rate on the
+        stable stage [1/s].
+    dynamic_range_db : float, default 60.0
+        How far below the saturated level the envelope may fall [dB].
+    macro_amps : sequence of float, default (20e-6, 5e-6)
+        Run-out amplitudes [m] of revolution orders 1, 2, ...
+    micro_amp : float, default 0.1e-6
+        Largest amplitude [m] of a micro run-out order (each is drawn in 0.3-1 times it).
+    micro_orders : (int, int), default (20, 40)
+        First and last revolution order of the micro run-out (inclusive).
+    harmonics : sequence of float, default (0.05, 0.02)
+        Amplitudes of harmonics 2, 3, ... relative to the fundamental.
+    disp_squeal_m : float, default 0.5e-6
+        Amplitude [m] of the squeal vibration on the displacement channel at full envelope.
+    noise_pa, noise_m : float, default 2e-3, 0.05e-6
+        Standard deviation of white noise on the microphone [Pa] and displacement [m] channels.
+    seed : int, optional
+        Seed of the run-out phases (unless ``rng`` is given) and of the noise.
+    rng : numpy.random.Generator, optional
+        Generator of the run-out phases and micro amplitudes (default: from ``seed``).
+    probe_offset_deg : float, default 0.0
+        The probe sits this many degrees upstream of the pin: it sees each point of the
+        surface that much rotation before the pin does.
+    polarity : {1, -1}, default 1
+        -1: the probe reads the run-out reversed.
+    acoustic_delay : float, default 0.0
+        Delay [s] of the sound from the pin to the microphone, >= 0.
+    tacho_ppr : int, default 1
+        Pulses per revolution of the ``tacho`` channel (5 V pulses; the first edge of a
+        once-per-revolution tacho is the disc's angle 0).
+
+    Returns
+    -------
+    SyntheticSource
+        The recording, with the block interface of
+        :class:`~squealkit.measurement.readers.RecordingSource` and its known truth
+        (:meth:`SyntheticSource.truth`).
+
+    Raises
+    ------
+    InputError
+        On a non-positive duration, speed, radius or frequency, a squeal above ``fs / 2``,
+        or an unknown ``squeal_on``.
+    """
     fs = validate_fs(fs)
     duration = validate_positive("duration", duration)
     validate_positive("rpm", rpm)
@@ -252,41 +425,10 @@ def synthetic_recording(*, threshold_dba: float = 70.0, **kwargs) -> xr.Dataset:
 
     Parameters
     ----------
-    duration : float
-        Length [s] (default 2, as the paper's steady drag).
-    fs : float
-        Sample rate [Hz] (paper: 40 kHz).
-    rpm, radius : float
-        Disc speed [rpm] (paper: 900) and probe radius [m].
-    rpm_end : float, optional
-        Speed at the end [rpm]: the disc slows down linearly from ``rpm`` (a decelerating stop).
-        The squeal envelope and the run-out are functions of the disc angle.
-    probe_offset_deg : float
-        The probe sits this many degrees upstream of the pin: it sees each point of the surface
-        that much rotation before the pin does.
-    polarity : {1, -1}
-        -1: the probe reads the run-out reversed.
-    acoustic_delay : float
-        Delay [s] of the sound from the pin to the microphone.
-    tacho_ppr : int
-        Pulses per revolution of the ``tacho`` channel (5 V pulses; the first edge of a
-        once-per-revolution tacho is the disc's angle 0).
-    freq : float
-        Squeal frequency [Hz] (paper: about 2388 Hz, the coupled pin/disc mode).
-    level_dba : float
-        A-weighted level of the saturated squeal [dB(A)].
-    squeal_on : {"rising", "falling", "none"}
-        On which run-out stage the squeal grows (the paper: rising).
-    growth_rate, decay_rate : float
-        Largest growth rate on the unstable stage and decay rate on the stable stage [1/s].
-    macro_amps, micro_amp, micro_orders
-        Run-out: amplitudes [m] of revolution orders 1, 2, ... and of the micro orders.
-    harmonics : sequence of float
-        Relative amplitudes of harmonics 2, 3, ...
-    noise_pa, noise_m : float
-        Standard deviation of white noise on each channel.
-    seed : int, optional / rng : numpy.random.Generator, optional
-        Randomness of the run-out phases; noise is seeded by ``seed``.
+    **kwargs
+        The parameters of :func:`synthetic_source` (``duration``, ``fs``, ``rpm``, ``rpm_end``,
+        ``radius``, ``freq``, ``level_dba``, ``squeal_on``, ``growth_rate``, ``decay_rate``,
+        run-out, noise, ``seed``/``rng``, probe geometry and ``tacho_ppr``), with their defaults.
     threshold_dba : float
         Threshold for the truth's event intervals.
 

@@ -96,23 +96,78 @@ class DiscAngle:
         object.__setattr__(self, "_inverse", CubicSpline(us, ts, bc_type="not-a-knot"))
 
     def turns(self, t: ArrayLike) -> NDArray[np.float64]:
-        """Disc position [revolutions] at times ``t`` [s] (extrapolated by one spline piece at the ends)."""
+        """Disc position [revolutions] at times ``t`` [s] (extrapolated by one spline piece at the ends).
+
+        Parameters
+        ----------
+        t : array_like
+            Times [s] (on the recording's clock).
+
+        Returns
+        -------
+        ndarray, the shape of ``t``
+            Revolutions from the reference mark.
+        """
         return self._spline(np.asarray(t, dtype=np.float64))
 
     def rev_per_s(self, t: ArrayLike) -> NDArray[np.float64]:
-        """Disc speed [rev/s] at times ``t`` [s]."""
+        """Disc speed [rev/s] at times ``t`` [s].
+
+        Parameters
+        ----------
+        t : array_like
+            Times [s] (on the recording's clock).
+
+        Returns
+        -------
+        ndarray, the shape of ``t``
+            Speed [rev/s].
+        """
         return self._spline(np.asarray(t, dtype=np.float64), 1)
 
     def rpm(self, t: ArrayLike) -> NDArray[np.float64]:
-        """Disc speed [rpm] at times ``t`` [s]."""
+        """Disc speed [rpm] at times ``t`` [s].
+
+        Parameters
+        ----------
+        t : array_like
+            Times [s] (on the recording's clock).
+
+        Returns
+        -------
+        ndarray, the shape of ``t``
+            Speed [rev/min].
+        """
         return 60.0 * self.rev_per_s(t)
 
     def rpm_at(self, t: ArrayLike) -> NDArray[np.float64]:
-        """Disc speed [rpm] at times ``t`` [s] (as :meth:`rpm`)."""
+        """Disc speed [rpm] at times ``t`` [s] (as :meth:`rpm`).
+
+        Parameters
+        ----------
+        t : array_like
+            Times [s] (on the recording's clock).
+
+        Returns
+        -------
+        ndarray, the shape of ``t``
+            Speed [rev/min].
+        """
         return self.rpm(t)
 
     def time_at(self, turns: ArrayLike) -> NDArray[np.float64]:
-        """Times [s] at which the disc reaches positions ``turns`` [rev] (a spline through the marks reversed)."""
+        """Times [s] at which the disc reaches positions ``turns`` [rev] (a spline through the marks reversed).
+
+        Parameters
+        ----------
+        turns : array_like
+            Disc positions [rev] from the reference mark.
+
+        Returns
+        -------
+        ndarray, the shape of ``turns``
+            Times [s].
+        """
         return self._inverse(np.asarray(turns, dtype=np.float64))
 
 
@@ -182,11 +237,16 @@ def angular_resample(
     Parameters
     ----------
     x : array_like, shape (n,)
-        Signal sampled at ``fs`` [Hz]; ``x[0]`` at time ``t0`` [s].
+        Signal sampled at ``fs``; ``x[0]`` at time ``t0``.
+    fs : float
+        Sample rate [Hz] of ``x``.
     angle : DiscAngle
+        Disc position against time (from :func:`tacho_angle`, or a :class:`ConstantSpeed`).
     samples_per_rev : int
-        Angular samples per revolution; orders up to ``samples_per_rev / 2`` are kept (low-pass
+        Angular samples per revolution, >= 4; orders up to ``samples_per_rev / 2`` are kept (low-pass
         ``x`` below ``samples_per_rev / 2`` times the lowest speed first, or they fold).
+    t0 : float, default 0.0
+        Time [s] of ``x[0]`` on the clock of ``angle``.
 
     Returns
     -------
@@ -208,8 +268,21 @@ def angular_resample(
 
 def synchronous_average(
     x: ArrayLike, fs: float, angle: DiscAngle, *, samples_per_rev: int = 1024, t0: float = 0.0
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
     """Time-synchronous average of ``x`` over whole revolutions (run-out per revolution).
+
+    Parameters
+    ----------
+    x : array_like, shape (n,)
+        Signal sampled at ``fs`` (e.g. the displacement [m]).
+    fs : float
+        Sample rate [Hz].
+    angle : DiscAngle
+        Disc position against time (from :func:`tacho_angle`, or a :class:`ConstantSpeed`).
+    samples_per_rev : int, default 1024
+        Angular samples per revolution (see :func:`angular_resample`).
+    t0 : float, default 0.0
+        Time [s] of ``x[0]`` on the clock of ``angle``.
 
     Returns
     -------
@@ -219,7 +292,14 @@ def synchronous_average(
         The average over revolutions (what is locked to the disc: its run-out).
     per_rev : ndarray, shape (n_revolutions, samples_per_rev)
         Each whole revolution in the angle domain (``per_rev.ptp(axis=1)``: run-out
-        peak-to-peak per revolution), with the revolution numbers in the third return value.
+        peak-to-peak per revolution).
+    revolutions : ndarray of int64, shape (n_revolutions,)
+        The revolution number of each row of ``per_rev`` (counted from the reference mark).
+
+    Raises
+    ------
+    InputError
+        If the recording holds no whole revolution.
 
     Examples
     --------
@@ -245,7 +325,13 @@ def synchronous_average(
 
 @dataclass(frozen=True)
 class ConstantSpeed:
-    """A disc turning at constant speed (no tacho): same interface as :class:`DiscAngle`."""
+    """A disc turning at constant speed (no tacho): same interface as :class:`DiscAngle`.
+
+    Attributes
+    ----------
+    rpm : float
+        Disc speed [rev/min].
+    """
 
     rpm: float
 

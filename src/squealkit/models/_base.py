@@ -221,7 +221,16 @@ class FrictionModel(ABC):
         """Contact parts ``(Kn(t), Kf(t)) = (Kn + s t Knx, Kf + s t Kfx)`` [N/m] at slope(s) t.
 
         ``K = K0 + (1 - mu t) Kn(t) + s (mu + t) Kf(t)``; the paper's kinematics give the
-        constant ``Kn``, ``Kf``. Shape ``tan_theta.shape + (n, n)``.
+        constant ``Kn``, ``Kf``.
+
+        Parameters
+        ----------
+        tan_theta : array_like, default 0.0
+            Slope(s) ``tan(theta)`` [1] of the disc surface.
+
+        Returns
+        -------
+        Kn, Kf : ndarray, shape ``tan_theta.shape + (n, n)``
         """
         t = np.asarray(tan_theta, float)[..., None, None]
         _, Kn, Kf = (np.asarray(a, float) for a in self.stiffness_parts())
@@ -232,7 +241,16 @@ class FrictionModel(ABC):
     def contact_normal(self, tan_theta: ArrayLike = 0.0) -> NDArray[np.float64]:
         """The gap's direction ``b_t`` [1]: ``delta = b_t . x - q`` (``b`` for the paper's kinematics).
 
-        Shape ``tan_theta.shape + (n,)``. Raises InputError without a single point contact.
+        Raises InputError without a single point contact.
+
+        Parameters
+        ----------
+        tan_theta : array_like, default 0.0
+            Slope(s) ``tan(theta)`` [1] of the disc surface.
+
+        Returns
+        -------
+        ndarray, shape ``tan_theta.shape + (n,)``
         """
         pc = require_point_contact(self)
         t = np.asarray(tan_theta, float)[..., None]
@@ -270,7 +288,21 @@ class FrictionModel(ABC):
     def load_vector(
         self, mu: ArrayLike, tan_theta: ArrayLike = 0.0, q: ArrayLike = 0.0
     ) -> NDArray[np.float64]:
-        """Load vector F(mu, tan_theta, q) [N] (paper, eq. 4), shape ``(..., n)``."""
+        """Load vector F(mu, tan_theta, q) [N] (paper, eq. 4).
+
+        Parameters
+        ----------
+        mu : array_like
+            Friction coefficient(s).
+        tan_theta : array_like, default 0.0
+            Slope(s) ``tan(theta)`` [1] of the disc surface.
+        q : array_like, default 0.0
+            Height of the disc surface under the contact [m]; the three broadcast.
+
+        Returns
+        -------
+        ndarray, shape ``broadcast(mu, tan_theta, q).shape + (n,)``
+        """
         mu_a, t_a, q_a = np.broadcast_arrays(
             np.asarray(mu, float), np.asarray(tan_theta, float), np.asarray(q, float)
         )
@@ -280,7 +312,20 @@ class FrictionModel(ABC):
         return F0 + q_a[..., None] * (g * fn + e * ff)
 
     def matrices(self, mu: ArrayLike, tan_theta: ArrayLike = 0.0) -> SystemMatrices:
-        """All three matrices at once; ``K`` has one matrix per grid point."""
+        """All three matrices at once; ``K`` has one matrix per grid point.
+
+        Parameters
+        ----------
+        mu : array_like
+            Friction coefficient(s).
+        tan_theta : array_like, default 0.0
+            Slope(s) ``tan(theta)`` [1] of the disc surface.
+
+        Returns
+        -------
+        SystemMatrices
+            ``M`` [kg] and ``C`` [N s/m] of shape (n, n), ``K`` [N/m] as :meth:`stiffness_matrix`.
+        """
         return SystemMatrices(
             self.mass_matrix(), self.damping_matrix(), self.stiffness_matrix(mu, tan_theta)
         )
@@ -288,7 +333,22 @@ class FrictionModel(ABC):
     def static_equilibrium(
         self, mu: float = 0.0, tan_theta: float = 0.0, q: float = 0.0
     ) -> NDArray[np.float64]:
-        """Static deflection x solving K(mu, tan_theta) x = F(mu, tan_theta, q) [m]."""
+        """Static deflection x solving K(mu, tan_theta) x = F(mu, tan_theta, q) [m].
+
+        Parameters
+        ----------
+        mu : float, default 0.0
+            Friction coefficient.
+        tan_theta : float, default 0.0
+            Slope ``tan(theta)`` [1] of the disc surface.
+        q : float, default 0.0
+            Height of the disc surface under the contact [m].
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            The displacements [m].
+        """
         K = self.stiffness_matrix(mu, tan_theta)
         F = self.load_vector(mu, tan_theta, q)
         return np.linalg.solve(K, F)
@@ -301,6 +361,20 @@ class FrictionModel(ABC):
 
         ``x`` solves ``K(mu, tan_theta) x = F(mu, tan_theta, q)``; the arguments broadcast.
         This is the force that multiplies the friction terms of eq. (4).
+
+        Parameters
+        ----------
+        mu : array_like
+            Friction coefficient(s).
+        tan_theta : array_like, default 0.0
+            Slope(s) ``tan(theta)`` [1] of the disc surface.
+        q : array_like, default 0.0
+            Height of the disc surface under the contact [m]; the three broadcast.
+
+        Returns
+        -------
+        ndarray, shape ``broadcast(mu, tan_theta, q).shape``
+            The contact force [N] (positive: pressing).
 
         Raises
         ------
@@ -330,7 +404,16 @@ class FrictionModel(ABC):
         changes by ``-(dmu/dv) N0 D x'`` with ``D = (f - s tan_theta b) fhat^T``, ``N0`` the
         :meth:`static_contact_force`. (The friction force is ``N0 mu s f`` and the slope's
         share ``-N0 mu tan_theta b``, eq. 4; ``s fhat . x'`` is the contact's velocity along
-        the disc's motion.) Shape ``tan_theta.shape + (n, n)``.
+        the disc's motion.)
+
+        Parameters
+        ----------
+        tan_theta : array_like, default 0.0
+            Slope(s) ``tan(theta)`` [1] of the disc surface.
+
+        Returns
+        -------
+        ndarray, shape ``tan_theta.shape + (n, n)``
 
         Raises
         ------
@@ -356,7 +439,21 @@ class FrictionModel(ABC):
         ``mu`` is the kinetic coefficient; ``N0`` is the static contact force at the
         coefficient ``law.mu(mu, speed)`` the contact has while sliding at ``speed`` [m/s]
         (on the mean surface, q = 0), ``D`` the :meth:`friction_damping_matrix`. Add it to C.
-        Shape ``broadcast(mu, tan_theta).shape + (n, n)``.
+
+        Parameters
+        ----------
+        law : Stribeck
+            The speed-dependent friction law.
+        mu : array_like
+            Kinetic friction coefficient(s).
+        tan_theta : array_like, default 0.0
+            Slope(s) ``tan(theta)`` [1] of the disc surface.
+        speed : float
+            Sliding speed [m/s] the law is linearised at.
+
+        Returns
+        -------
+        ndarray, shape ``broadcast(mu, tan_theta).shape + (n, n)``
 
         Examples
         --------
@@ -390,6 +487,16 @@ class FrictionModel(ABC):
 
     def replace(self, **changes: Any) -> FrictionModel:
         """A new model with some parameters changed (validated); ``*_deg`` names accepted.
+
+        Parameters
+        ----------
+        **changes
+            ``name=value`` in SI units, or ``name_deg=value`` in degrees for an angle.
+
+        Returns
+        -------
+        FrictionModel
+            A new model of the same kind (this one is unchanged).
 
         Examples
         --------

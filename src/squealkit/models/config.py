@@ -76,7 +76,23 @@ _FE_KEYS = ("file", "files", "names", "omega_ref", "mu_ref", "f_ref")
 
 
 def get_preset(name: str) -> FrictionModel:
-    """The built-in model called ``name`` (see :data:`PRESETS`)."""
+    """The built-in model called ``name`` (see :data:`PRESETS`).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`PRESETS`: ``"lv2013"`` (the paper's rig) or ``"hoffmann2002"``.
+
+    Returns
+    -------
+    FrictionModel
+        A new model with the preset's values.
+
+    Raises
+    ------
+    InputError
+        If ``name`` is not a preset.
+    """
     if name not in PRESETS:
         raise InputError(f"Unknown preset {name!r}; known: {', '.join(PRESETS)}.")
     return PRESETS[name][1]()
@@ -117,7 +133,26 @@ def _fe_from_table(table: Any, base_dir: Path | None) -> FEModel:
 def model_from_dict(doc: Mapping[str, Any], base_dir: str | Path | None = None) -> FrictionModel | FEModel:
     """Build a model from a parsed model file (see the module docstring).
 
-    ``base_dir`` is the folder relative matrix file paths of an ``[fe]`` table start from.
+    Parameters
+    ----------
+    doc : mapping
+        The parsed TOML document: top-level keys ``model``, ``preset``, ``description`` and
+        tables ``[parameters]``, ``[rig]``, ``[matrices]``, ``[fe]`` (``[uncertain]`` is
+        ignored here).
+    base_dir : str or Path, optional
+        The folder relative matrix file paths of an ``[fe]`` table start from (default: the
+        current directory).
+
+    Returns
+    -------
+    FrictionModel or FEModel
+        The model, with the ``[parameters]`` table applied.
+
+    Raises
+    ------
+    InputError
+        On an unknown table or key (with "did you mean"), a preset of another model kind, or
+        any invalid value.
     """
     unknown = sorted(set(doc) - _TOP_KEYS - _OTHER_TABLES)
     if unknown:
@@ -188,7 +223,23 @@ def _read_toml(path: str | Path) -> dict[str, Any]:
 
 
 def load_model(path: str | Path) -> FrictionModel | FEModel:
-    """Read a model file (TOML). Errors name the file and what is wrong in it."""
+    """Read a model file (TOML). Errors name the file and what is wrong in it.
+
+    Parameters
+    ----------
+    path : str or Path
+        The model file (TOML, at most 16 MiB; see the module docstring for its tables).
+
+    Returns
+    -------
+    FrictionModel or FEModel
+        The model it describes (see :func:`model_from_dict`).
+
+    Raises
+    ------
+    InputError
+        If the file is missing, unreadable, not TOML, or describes an invalid model.
+    """
     p = Path(path)
     doc = _read_toml(p)
     try:
@@ -198,7 +249,18 @@ def load_model(path: str | Path) -> FrictionModel | FEModel:
 
 
 def load_rig(path: str | Path) -> PinOnDiscRig | None:
-    """The rig described by a model file's ``[rig]`` table, or None if it has none."""
+    """The rig described by a model file's ``[rig]`` table, or None if it has none.
+
+    Parameters
+    ----------
+    path : str or Path
+        The model file (TOML).
+
+    Returns
+    -------
+    PinOnDiscRig or None
+        The rig (fields as in :class:`PinOnDiscRig`), or ``None`` without a ``[rig]`` table.
+    """
     doc = _read_toml(path)
     table = doc.get("rig")
     if table is None:
@@ -214,6 +276,26 @@ def parse_assignments(items: Iterable[str]) -> dict[str, float | str]:
 
     A value that is not a number stays a string, for the model's options (``kinematics=consistent``);
     the model's own check then says whether the parameter takes it.
+
+    Parameters
+    ----------
+    items : iterable of str
+        Assignments such as ``"m1=0.05"`` or ``"alpha_deg=2"`` (SI units, or a ``*_deg`` name).
+
+    Returns
+    -------
+    dict of str to float or str
+        Name -> value, in the order given (a later assignment to a name wins).
+
+    Raises
+    ------
+    InputError
+        If an item is not ``NAME=VALUE`` or a number is not finite.
+
+    Examples
+    --------
+    >>> parse_assignments(["m1=0.05", "kinematics=consistent"])
+    {'m1': 0.05, 'kinematics': 'consistent'}
     """
     out: dict[str, float | str] = {}
     for item in items:
@@ -244,6 +326,26 @@ def build_model(
     """The model a command works on: a preset or a model file, then overrides.
 
     With neither ``preset`` nor ``config`` the default preset ``lv2013`` is used.
+
+    Parameters
+    ----------
+    preset : str, optional
+        A key of :data:`PRESETS`.
+    config : str or Path, optional
+        A model file (TOML), read with :func:`load_model`; not together with ``preset``.
+    overrides : mapping, optional
+        Parameter values applied last with ``model.replace(**overrides)`` (SI units, or
+        ``*_deg`` names in degrees).
+
+    Returns
+    -------
+    FrictionModel or FEModel
+        The model.
+
+    Raises
+    ------
+    InputError
+        If both ``preset`` and ``config`` are given, or any part is invalid.
     """
     if preset is not None and config is not None:
         raise InputError("Give either a preset or a model file, not both.")

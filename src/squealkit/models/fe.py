@@ -148,6 +148,23 @@ class FEModel:
                       dof_names: Any = None, mesh: Any = None, source: str | None = None, **mats: Any) -> FEModel:
         """The model of the matrices given by name (``M=..., K1=..., KR=...``), validated.
 
+        Parameters
+        ----------
+        omega_ref, mu_ref, f_ref : float, default 1.0
+            Reference values (see the class: disc speed [rad/s], friction coefficient, ``Fref``).
+        dof_names : tuple of str, optional
+            A name per DOF.
+        mesh : object, optional
+            Mesh metadata for mode shape export.
+        source : str, optional
+            Where the matrices came from.
+        **mats : array_like or sparse matrix
+            The matrices by name (``M``, ``D1``, ``DG``, ``DR``, ``D4``, ``K1``, ``KR``, ``KGeo``).
+
+        Returns
+        -------
+        FEModel
+
         Raises
         ------
         InputError
@@ -176,6 +193,20 @@ class FEModel:
 
         ``C = sum f[D] D`` over the damping matrices and ``K = sum f[K] K`` over the stiffness
         matrices; ``mu_e = mu + tan_theta`` is the friction (run-out slope as extra friction).
+
+        Parameters
+        ----------
+        omega : float
+            Disc speed [rad/s] (> 0 when ``DR`` is present).
+        mu : float
+            Friction coefficient.
+        tan_theta : float, default 0.0
+            Run-out slope [1]; ``mu_e = mu + tan_theta`` replaces ``mu``.
+
+        Returns
+        -------
+        dict of str to float
+            Matrix name -> factor, for the matrices present.
         """
         omega = validate_finite("omega", omega)
         mu_e = validate_finite("mu", mu) + validate_finite("tan_theta", tan_theta)
@@ -205,11 +236,39 @@ class FEModel:
         return self.M
 
     def damping_matrix(self, omega: float, mu: float, tan_theta: float = 0.0) -> sp.csr_matrix:
-        """``C(omega, mu) = D1 + (mu_e/mu_ref)(omega_ref/omega) DR + (omega/omega_ref) DG + D4/f_ref``."""
+        """``C(omega, mu) = D1 + (mu_e/mu_ref)(omega_ref/omega) DR + (omega/omega_ref) DG + D4/f_ref``.
+
+        Parameters
+        ----------
+        omega : float
+            Disc speed [rad/s] (> 0 when ``DR`` is present).
+        mu : float
+            Friction coefficient.
+        tan_theta : float, default 0.0
+            Run-out slope [1]; ``mu_e = mu + tan_theta`` replaces ``mu``.
+
+        Returns
+        -------
+        scipy.sparse.csr_matrix, shape (n, n)
+        """
         return self._combine(_DAMPING, self.factors(omega, mu, tan_theta))
 
     def stiffness_matrix(self, omega: float, mu: float, tan_theta: float = 0.0) -> sp.csr_matrix:
-        """``K(omega, mu) = K1 + (mu_e/mu_ref) KR + (omega/omega_ref)^2 KGeo``."""
+        """``K(omega, mu) = K1 + (mu_e/mu_ref) KR + (omega/omega_ref)^2 KGeo``.
+
+        Parameters
+        ----------
+        omega : float
+            Disc speed [rad/s] (> 0 when ``DR`` is present).
+        mu : float
+            Friction coefficient.
+        tan_theta : float, default 0.0
+            Run-out slope [1]; ``mu_e = mu + tan_theta`` replaces ``mu``.
+
+        Returns
+        -------
+        scipy.sparse.csr_matrix, shape (n, n)
+        """
         return self._combine(_STIFFNESS, self.factors(omega, mu, tan_theta))
 
     # -- derived models ------------------------------------------------------------------
@@ -225,6 +284,16 @@ class FEModel:
         """The reduced model ``V^T A V`` of every matrix A, for a real basis V (n x k).
 
         The reduced model keeps the reference values; its DOFs are the basis vectors.
+
+        Parameters
+        ----------
+        V : array_like, shape (n, k)
+            A real, finite basis.
+
+        Returns
+        -------
+        FEModel
+            The k-DOF model, DOFs named ``b0, b1, ...``.
         """
         V = np.asarray(V, dtype=np.float64)
         if V.ndim != 2 or V.shape[0] != self.n_dof or not np.all(np.isfinite(V)):
@@ -243,7 +312,21 @@ class FEModel:
         return json.dumps(self.to_dict(), sort_keys=True)
 
     def norms(self, omega: float, mu: float, tan_theta: float = 0.0) -> tuple[float, float, float]:
-        """Frobenius norms of M, C and K at ``(omega, mu)`` (for backward errors)."""
+        """Frobenius norms of M, C and K at ``(omega, mu)`` (for backward errors).
+
+        Parameters
+        ----------
+        omega : float
+            Disc speed [rad/s] (> 0 when ``DR`` is present).
+        mu : float
+            Friction coefficient.
+        tan_theta : float, default 0.0
+            Run-out slope [1]; ``mu_e = mu + tan_theta`` replaces ``mu``.
+
+        Returns
+        -------
+        (float, float, float)
+        """
         f = self.factors(omega, mu, tan_theta)
         return (float(spla.norm(self.M)), float(spla.norm(self._combine(_DAMPING, f))),
                 float(spla.norm(self._combine(_STIFFNESS, f))))

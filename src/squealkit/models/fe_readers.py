@@ -168,6 +168,17 @@ def load_fe_model(
     base_dir : path, optional
         Folder relative paths start from (the model file's folder).
 
+    Returns
+    -------
+    FEModel
+        The model; matrices absent from the files are zero.
+
+    Raises
+    ------
+    InputError
+        If neither or both of ``file`` and ``files`` are given, a name is not an FE matrix,
+        or a file cannot be read.
+
     Examples
     --------
     >>> from squealkit.data import nlevp_path

@@ -63,19 +63,55 @@ class Stribeck:
         object.__setattr__(self, "v_stribeck", validate_positive("v_stribeck", self.v_stribeck))
 
     def mu(self, mu: ArrayLike, speed: ArrayLike) -> NDArray[np.float64]:
-        """Friction coefficient at sliding speed ``speed`` [m/s], for kinetic coefficient(s) ``mu``."""
+        """Friction coefficient at sliding speed ``speed`` [m/s], for kinetic coefficient(s) ``mu``.
+
+        Parameters
+        ----------
+        mu : array_like
+            Kinetic friction coefficient(s) (the value at high speed).
+        speed : array_like
+            Sliding speed(s) [m/s]; broadcasts against ``mu``.
+
+        Returns
+        -------
+        ndarray
+            ``mu + (mu_static - mu) exp(-|speed| / v_stribeck)``.
+        """
         mu_a = np.asarray(mu, dtype=float)
         return mu_a + (self.mu_static - mu_a) * np.exp(-np.abs(np.asarray(speed, float)) / self.v_stribeck)
 
     def slope(self, mu: ArrayLike, speed: ArrayLike) -> NDArray[np.float64]:
-        """``dmu/dv`` [s/m] at sliding speed ``speed`` > 0 (negative where friction falls with speed)."""
+        """``dmu/dv`` [s/m] at sliding speed ``speed`` > 0 (negative where friction falls with speed).
+
+        Parameters
+        ----------
+        mu : array_like
+            Kinetic friction coefficient(s).
+        speed : array_like
+            Sliding speed(s) [m/s], > 0; broadcasts against ``mu``.
+
+        Returns
+        -------
+        ndarray
+            ``-(mu_static - mu) / v_stribeck exp(-speed / v_stribeck)`` [s/m].
+        """
         mu_a = np.asarray(mu, dtype=float)
         v = np.asarray(speed, float)
         return -np.sign(v) * (self.mu_static - mu_a) / self.v_stribeck * np.exp(-np.abs(v) / self.v_stribeck)
 
     def flat_at(self, speed: float) -> bool:
         """True when the law is exactly flat at ``speed``: ``exp(-|v| / v_stribeck)`` underflows
-        to 0, so ``mu(v) = mu`` and the slope is 0 for every ``mu``."""
+        to 0, so ``mu(v) = mu`` and the slope is 0 for every ``mu``.
+
+        Parameters
+        ----------
+        speed : float
+            Sliding speed [m/s].
+
+        Returns
+        -------
+        bool
+        """
         return bool(np.exp(-abs(float(speed)) / self.v_stribeck) == 0.0)
 
     def describe(self) -> str:

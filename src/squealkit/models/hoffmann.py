@@ -39,6 +39,21 @@ class Hoffmann2002(FrictionModel):
 
     The defaults are illustrative (the structure is Hoffmann's; the values are chosen so
     that the two modes lie close and flutter sets in near mu = 0.22).
+
+    Parameters
+    ----------
+    m : float, default 1.0
+        Mass [kg], > 0.
+    k1, k2 : float, default 1.0e6, 0.6e6
+        Support springs [N/m], > 0.
+    k3 : float, default 0.8e6
+        Contact spring [N/m], > 0; the normal force is ``k3 y``.
+    alpha1, alpha2 : float, default radians(30), radians(150)
+        Angles of ``k1`` and ``k2`` from the sliding direction [rad].
+    c : float, default 0.0
+        Viscous damping on both DOFs [N s/m], >= 0.
+    sliding : {+1, -1}, default +1
+        Sliding direction of the belt.
     """
 
     kind: ClassVar[str] = "hoffmann"

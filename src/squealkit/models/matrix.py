@@ -38,6 +38,32 @@ class MatrixModel(FrictionModel):
     ``F = F0 + q [(1 - mu tan_theta) fn + s (mu + tan_theta) ff]`` as for every model.
     Matrices not given default to zero; ``dof_names`` default to ``q0, q1, ...``.
 
+    Parameters
+    ----------
+    M : array_like, shape (n, n)
+        Mass matrix [kg], symmetric positive definite (required).
+    K0 : array_like, shape (n, n)
+        Structural stiffness without contact [N/m] (required).
+    C : array_like, shape (n, n), optional
+        Viscous damping [N s/m].
+    Kn, Kf : array_like, shape (n, n), optional
+        Normal-contact and friction stiffness parts [N/m], scaled by ``1 - mu tan_theta``
+        and ``s (mu + tan_theta)``.
+    F0 : array_like, shape (n,), optional
+        Static load [N].
+    fn, ff : array_like, shape (n,), optional
+        Normal-contact and friction load parts [N/m], multiplied by the surface height ``q`` [m].
+    sliding : {+1, -1}, default +1
+        Sliding direction ``s``.
+    names : sequence of str, optional
+        DOF names, one per row of ``M``; default ``q0, q1, ...``.
+
+    Raises
+    ------
+    InputError
+        If ``M`` or ``K0`` is missing, a matrix or vector has the wrong shape, or ``M`` is
+        not positive definite.
+
     Examples
     --------
     Two modal DOFs coupled by friction (a Hoffmann-like system from modal data):

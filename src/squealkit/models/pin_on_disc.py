@@ -47,6 +47,10 @@ class PinOnDisc3DOF(FrictionModel):
         ``alpha -> -alpha``. With ``alpha = 2 deg`` the printed equations never lose
         stability for ``mu <= 0.8``; the published Fig. 2 (lock-in at 14997-15317 rad/s)
         needs ``sliding = -1``, which is the preset's value.
+    kinematics : {"paper", "consistent"}, default "paper"
+        Contact kinematics: ``"paper"`` is eq. (2) as printed; ``"consistent"`` (beyond the
+        paper) adds the slope the pin sees where it is displaced along the surface, a gap with
+        ``tan(theta) x1`` (see :meth:`slope_parts`).
 
     Notes
     -----

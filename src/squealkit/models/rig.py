@@ -38,6 +38,23 @@ _BETA1_CLAMPED_FREE = 1.8751040687119611
 def modal_stiffness(mass: float, freq: float) -> float:
     """Modal stiffness ``k = m (2 pi f)^2`` [N/m] of a mode of frequency ``freq`` [Hz].
 
+    Parameters
+    ----------
+    mass : float
+        Modal mass of the mode [kg], > 0.
+    freq : float
+        Its natural frequency [Hz], > 0.
+
+    Returns
+    -------
+    float
+        The modal stiffness [N/m].
+
+    Raises
+    ------
+    InputError
+        If ``mass`` or ``freq`` is not a positive finite number.
+
     Examples
     --------
     >>> round(modal_stiffness(0.033, 2561.0) / 1e6, 3)   # paper §3: k1 = 8.545e6 N/m
@@ -49,7 +66,25 @@ def modal_stiffness(mass: float, freq: float) -> float:
 
 
 def rod_mass(diameter: float, length: float, density: float) -> float:
-    """Mass ``rho pi d^2 / 4 L`` [kg] of a round rod."""
+    """Mass ``rho pi d^2 / 4 L`` [kg] of a round rod.
+
+    Parameters
+    ----------
+    diameter, length : float
+        Rod diameter and length [m], > 0.
+    density : float
+        Material density [kg/m^3], > 0.
+
+    Returns
+    -------
+    float
+        The rod's mass [kg].
+
+    Examples
+    --------
+    >>> round(rod_mass(0.03, 0.045, 1040) * 1e3, 2)   # the paper's PA6 pin [g]
+    33.08
+    """
     d = validate_positive("diameter", diameter)
     L = validate_positive("length", length)
     rho = validate_positive("density", density)
@@ -57,7 +92,25 @@ def rod_mass(diameter: float, length: float, density: float) -> float:
 
 
 def contact_stiffness(diameter: float, length: float, youngs_modulus: float) -> float:
-    """Axial stiffness ``E A / L`` [N/m] of a round rod, the paper's contact stiffness kc."""
+    """Axial stiffness ``E A / L`` [N/m] of a round rod, the paper's contact stiffness kc.
+
+    Parameters
+    ----------
+    diameter, length : float
+        Rod diameter and length [m], > 0.
+    youngs_modulus : float
+        Young's modulus E [Pa], > 0.
+
+    Returns
+    -------
+    float
+        The axial stiffness [N/m].
+
+    Examples
+    --------
+    >>> round(contact_stiffness(0.03, 0.045, 2.95e9) / 1e7, 3)   # paper §3: kc = 4.632e7 N/m
+    4.634
+    """
     d = validate_positive("diameter", diameter)
     L = validate_positive("length", length)
     E = validate_positive("youngs_modulus", youngs_modulus)
@@ -65,7 +118,22 @@ def contact_stiffness(diameter: float, length: float, youngs_modulus: float) -> 
 
 
 def rod_axial_frequency(length: float, youngs_modulus: float, density: float) -> float:
-    """First axial frequency of a clamped-free rod, ``sqrt(E / rho) / (4 L)`` [Hz]."""
+    """First axial frequency of a clamped-free rod, ``sqrt(E / rho) / (4 L)`` [Hz].
+
+    Parameters
+    ----------
+    length : float
+        Free length of the rod [m], > 0.
+    youngs_modulus : float
+        Young's modulus E [Pa], > 0.
+    density : float
+        Material density [kg/m^3], > 0.
+
+    Returns
+    -------
+    float
+        The quarter-wave frequency [Hz].
+    """
     L = validate_positive("length", length)
     E = validate_positive("youngs_modulus", youngs_modulus)
     rho = validate_positive("density", density)
@@ -118,6 +186,11 @@ def cantilever_bending_frequency(
         Poisson's ratio (Timoshenko only: shear modulus and Cowper's shear coefficient).
     theory : {"timoshenko", "euler_bernoulli"}
         Beam theory. Euler-Bernoulli overestimates stubby rods.
+
+    Returns
+    -------
+    float
+        The first bending frequency [Hz].
 
     Examples
     --------
@@ -187,6 +260,45 @@ class PinOnDiscRig:
       the paper's 10 N); ``"contact_force"`` makes ``P`` the static contact force.
     - ``kc = E A / L``, the pin's own axial stiffness (the paper's choice; k2 models the
       same pin's axial mode, so the pin's axial compliance is counted twice).
+
+    Parameters
+    ----------
+    pin_diameter, pin_length : float, default 0.030, 0.045
+        Diameter and free length of the round pin [m] (paper §3: 30 mm by 45 mm).
+    pin_youngs_modulus : float, default 2.95e9
+        Young's modulus of the pin [Pa] (PA6).
+    pin_density : float, default 1040.0
+        Density of the pin [kg/m^3].
+    pin_poisson : float, default 0.35
+        Poisson's ratio of the pin (Timoshenko theory only), in (-1, 0.5).
+    disc_mass : float, default 4.35
+        Modal mass of the disc's out-of-plane mode [kg].
+    disc_freq : float, default 2346.0
+        Frequency of that disc mode [Hz] (paper Table 1).
+    pin_bending_freq : float or {"timoshenko", "euler_bernoulli"} or None, default None
+        Pin bending frequency [Hz]; ``None`` or a theory's name computes it from beam theory
+        (``None`` uses ``pin_bending_theory``).
+    pin_axial_freq : float or {"rod"} or None, default None
+        Pin axial (tensile) frequency [Hz]; ``None`` or ``"rod"`` uses the quarter-wave rod.
+    pin_bending_theory : {"timoshenko", "euler_bernoulli"}, default "timoshenko"
+        Beam theory used when ``pin_bending_freq`` is ``None``.
+    alpha : float, default radians(2)
+        Incline of the pin spring k2 from the vertical [rad] (paper: 2 deg).
+    P : float, default 10.0
+        Axial load [N], >= 0; its meaning is set by ``preload``.
+    c1, c2, c3 : float, default 220.0
+        Dampers beside k1, k2, k3 [N s/m], >= 0 (paper §4).
+    sliding : {-1, +1}, default -1
+        Sliding direction, as in :class:`PinOnDisc3DOF` (the paper's Fig. 2 needs -1).
+    pin_mass_factor : float, default 1.0
+        Pin modal mass as a share of the whole pin mass, in (0, 1].
+    preload : {"pin_load", "contact_force"}, default "pin_load"
+        Whether ``P`` is the load on the pin (the paper) or the static contact force.
+
+    Raises
+    ------
+    InputError
+        If a value is out of its range or a theory's name is unknown.
 
     Examples
     --------

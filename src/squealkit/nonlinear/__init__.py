@@ -1,6 +1,7 @@
 """Nonlinear steady states: squeal limit cycles by harmonic balance, their continuation in
 friction, their stability, and the first Lyapunov coefficient at the Hopf point."""
 
+from .. import _accessor  # noqa: F401  (registers ds.squeal.plot() on the results)
 from .continuation import (
     Branch,
     continue_branch,

@@ -60,8 +60,22 @@ def floquet_multipliers(system: SecondOrderSystem, cycle: LimitCycle, *, n_floqu
 
     The monodromy matrix is the product over ``n_floquet`` sub-intervals of
     ``expm(A(t_j + dt/2) dt)`` with ``A`` the variational matrix along the cycle
-    (exponential midpoint rule, second order in ``dt``). Returns all 2n multipliers sorted
-    with the one nearest 1 (the trivial multiplier) last.
+    (exponential midpoint rule, second order in ``dt``).
+
+    Parameters
+    ----------
+    system : SecondOrderSystem
+        The system the cycle belongs to.
+    cycle : LimitCycle
+        A converged limit cycle of ``system`` (from :func:`harmonic_balance` or a branch).
+    n_floquet : int, default 1024
+        Sub-intervals of the period in the monodromy product.
+
+    Returns
+    -------
+    ndarray of complex, shape (2 n,)
+        All 2n multipliers, largest modulus first, with the one nearest 1 (the trivial
+        multiplier) last.
     """
     n = system.n_dof
     N = int(n_floquet)
@@ -88,7 +102,27 @@ def floquet_multipliers(system: SecondOrderSystem, cycle: LimitCycle, *, n_floqu
 
 @dataclass(frozen=True)
 class Branch:
-    """A continued branch of limit cycles (see :func:`continue_branch`)."""
+    """A continued branch of limit cycles (see :func:`continue_branch`).
+
+    Attributes
+    ----------
+    cycles : tuple of LimitCycle
+        The limit cycles along the branch, in continuation order (``n_points`` of them).
+    multipliers : ndarray of complex, shape (n_points, 2 n)
+        Floquet multipliers of each cycle (:func:`floquet_multipliers`: largest modulus first,
+        the trivial one last).
+    stable : ndarray of bool, shape (n_points,)
+        Whether every non-trivial multiplier lies in the unit circle (within the error that the
+        trivial multiplier's distance from 1 shows).
+    tangent_p : ndarray, shape (n_points,)
+        ``dp/ds`` of the arclength tangent at each point; a sign change marks a fold.
+    folds : tuple of int
+        Indices of the points nearest to each fold.
+    hopf : HopfPoint
+        The Hopf point the branch starts from.
+    stop_reason : {"max_points", "corrector_failed", "left_range", "max_amplitude"}
+        Why the continuation stopped.
+    """
 
     cycles: tuple[LimitCycle, ...]
     multipliers: NDArray[np.complex128]  # (points, 2n)

@@ -66,6 +66,8 @@ class SecondOrderSystem:
         ``contact_open(x, p)`` -> boolean array ``(...)``: True where contact is lost.
     equilibrium : callable, optional
         ``equilibrium(p)`` -> static equilibrium ``(n,)`` [m] (default: solve ``K x = F0 + f``).
+    description : str, optional
+        One line saying what the system is (stored with the results).
     """
 
     M: NDArray[np.float64]
@@ -85,7 +87,18 @@ class SecondOrderSystem:
         return len(self.dof_names)
 
     def static_equilibrium(self, p: float) -> NDArray[np.float64]:
-        """Static equilibrium at parameter ``p``: ``K x = F0 + force(x, 0, p)`` (Newton)."""
+        """Static equilibrium at parameter ``p``: ``K x = F0 + force(x, 0, p)`` (Newton).
+
+        Parameters
+        ----------
+        p : float
+            The parameter (e.g. mu).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            Displacements [m].
+        """
         if self.equilibrium is not None:
             return np.asarray(self.equilibrium(p), float)
         x = np.zeros(self.n_dof)
@@ -100,14 +113,39 @@ class SecondOrderSystem:
         return x
 
     def jacobian(self, x: NDArray, p: float) -> NDArray[np.float64]:
-        """First-order state matrix ``A`` (2n, 2n) of the linearisation about ``(x, 0)``."""
+        """First-order state matrix ``A`` (2n, 2n) of the linearisation about ``(x, 0)``.
+
+        Parameters
+        ----------
+        x : ndarray, shape (n,)
+            Displacements [m] (at rest).
+        p : float
+            The parameter (e.g. mu).
+
+        Returns
+        -------
+        ndarray, shape (2n, 2n)
+        """
         n = self.n_dof
         _, dfdx, dfdv, _ = self.force(np.asarray(x, float), np.zeros(n), p)
         Minv = np.linalg.inv(self.M)
         return np.block([[np.zeros((n, n)), np.eye(n)], [Minv @ (dfdx - self.K), Minv @ (dfdv - self.C)]])
 
     def vector_field(self, y: NDArray, p: float) -> NDArray[np.float64]:
-        """First-order vector field ``y' = F(y)``, ``y = [x, x']``, for arrays ``(..., 2n)``."""
+        """First-order vector field ``y' = F(y)``, ``y = [x, x']``, for arrays ``(..., 2n)``.
+
+        Parameters
+        ----------
+        y : ndarray, shape (..., 2n)
+            States: displacements [m] and velocities [m/s].
+        p : float
+            The parameter (e.g. mu).
+
+        Returns
+        -------
+        ndarray, shape (..., 2n)
+            ``[x', x'']``.
+        """
         n = self.n_dof
         x, v = y[..., :n], y[..., n:]
         f = self.force(x, v, p)[0]
@@ -386,7 +424,20 @@ class LimitCycle:
         return self.omega / (2 * math.pi)
 
     def signal(self, n_samples: int = 256) -> tuple[NDArray, NDArray]:
-        """One period sampled at ``n_samples`` points: time [s] (n_samples,) and x [m] (n_samples, n)."""
+        """One period sampled at ``n_samples`` points: time [s] (n_samples,) and x [m] (n_samples, n).
+
+        Parameters
+        ----------
+        n_samples : int, default 256
+            Samples per period.
+
+        Returns
+        -------
+        t : ndarray, shape (n_samples,)
+            Times [s] from 0 to one period (excluded).
+        x : ndarray, shape (n_samples, n)
+            Displacements [m].
+        """
         b = _Basis.make(self.harmonics, n_samples)
         return np.arange(n_samples) / n_samples * 2 * math.pi / self.omega, b.E @ self.coefficients
 

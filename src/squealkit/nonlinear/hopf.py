@@ -87,6 +87,16 @@ class HopfPoint:
 
         ``r^2 = -sigma'(p_c) (p - p_c) / (omega_0 l1)``, amplitude ``2 |q_x| r L``; NaN where
         ``r^2 < 0`` (no small cycle on that side).
+
+        Parameters
+        ----------
+        p : float or ndarray
+            Parameter value(s) near the Hopf point.
+
+        Returns
+        -------
+        ndarray, shape ``p.shape + (n,)``
+            Peak-to-peak half amplitude [m] per DOF.
         """
         p = np.asarray(p, float)
         r2 = -self.growth_slope * (p - self.p) / (self.omega * self.lyapunov_coefficient)
@@ -157,7 +167,29 @@ def hopf_point(system: SecondOrderSystem, p_guess: float, *, dp: float | None = 
 def lyapunov_coefficient(system: SecondOrderSystem, p: float, x_eq: NDArray, *, fd_step: float = 1e-3):
     """First Lyapunov coefficient at the equilibrium ``x_eq`` of ``system`` at ``p``.
 
-    Returns ``(l1, omega_0, q, p_left)`` on the scaled state (see the module).
+    Kuznetsov's eq. (3.20), on the state scaled by ``D = diag(L, omega_0 L)`` (see the module).
+
+    Parameters
+    ----------
+    system : SecondOrderSystem
+        The nonlinear system.
+    p : float
+        The parameter at the Hopf point (e.g. from :func:`hopf_point`).
+    x_eq : ndarray, shape (n,)
+        The static equilibrium [m] at ``p``.
+    fd_step : float, default 1e-3
+        Step of the central differences of the force's Jacobian, on the scaled state (in
+        units of the system's ``length_scale``).
+
+    Returns
+    -------
+    l1 : float
+        The first Lyapunov coefficient (per ``L^2``): < 0 supercritical, > 0 subcritical.
+    omega_0 : float
+        The critical pair's frequency [rad/s].
+    q, p_left : ndarray of complex, shape (2 n,)
+        The critical eigenvector (``<q, q> = 1``) and the adjoint one (``<p, q> = 1``) of
+        the scaled linearisation.
     """
     n = system.n_dof
     A_phys = system.jacobian(x_eq, p)

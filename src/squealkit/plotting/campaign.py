@@ -22,7 +22,21 @@ def _fig(ax, **kw):
 
 
 def occurrence_by_band_plot(summary: dict, *, synthetic: bool = False, ax=None):
-    """Noise occurrence [% of applications] per 1/3-octave band."""
+    """Noise occurrence [% of applications] per 1/3-octave band.
+
+    Parameters
+    ----------
+    summary : dict
+        A campaign summary (:func:`squealkit.campaign.campaign_summary`, ``summary.json``).
+    synthetic : bool, default False
+        Mark the title ``[SYNTHETIC]`` (the campaign's recordings are synthetic).
+    ax : matplotlib Axes, optional
+        Where to draw; a new figure if omitted.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig, ax = _fig(ax, figsize=(8, 4))
     bands = summary["by_band"]
     labels = [f"{b['center_hz'] / 1000:.3g}" for b in bands]
@@ -40,7 +54,28 @@ def occurrence_by_band_plot(summary: dict, *, synthetic: bool = False, ax=None):
 
 def noise_matrix_plot(events, *, by: str = "temperature_c", label: str = "brake temperature [C]",
                       threshold_dba: float = 70.0, synthetic: bool = False, ax=None):
-    """The noise matrix: each event's frequency against a condition, coloured by its peak level."""
+    """The noise matrix: each event's frequency against a condition, coloured by its peak level.
+
+    Parameters
+    ----------
+    events : pandas.DataFrame
+        The campaign's squeal events with their conditions (the store's ``squeal`` view):
+        columns ``frequency_hz``, ``peak_dba`` and ``by``.
+    by : str, default "temperature_c"
+        The condition column on the x axis (e.g. ``"pressure_bar"``).
+    label : str, default "brake temperature [C]"
+        Its axis label.
+    threshold_dba : float, default 70.0
+        Lower end of the colour scale [dB(A)] (the squeal threshold).
+    synthetic : bool, default False
+        Mark the title ``[SYNTHETIC]`` (the campaign's recordings are synthetic).
+    ax : matplotlib Axes, optional
+        Where to draw; a new figure if omitted.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig, ax = _fig(ax, figsize=(8, 4.5))
     if len(events):
         sc = ax.scatter(events[by], events["frequency_hz"] / 1000, c=events["peak_dba"], cmap="inferno_r",
@@ -62,7 +97,23 @@ def noise_matrix_plot(events, *, by: str = "temperature_c", label: str = "brake 
 
 
 def level_vs_application_plot(apps, *, threshold_dba: float = 70.0, synthetic: bool = False, ax=None):
-    """Each application's peak level (Fast, A-weighted, in the criteria band) in matrix order."""
+    """Each application's peak level (Fast, A-weighted, in the criteria band) in matrix order.
+
+    Parameters
+    ----------
+    apps : pandas.DataFrame
+        The store's ``applications`` table: columns ``squeal`` and ``peak_dba``.
+    threshold_dba : float, default 70.0
+        The squeal threshold [dB(A)], drawn as a line.
+    synthetic : bool, default False
+        Mark the title ``[SYNTHETIC]`` (the campaign's recordings are synthetic).
+    ax : matplotlib Axes, optional
+        Where to draw; a new figure if omitted.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig, ax = _fig(ax, figsize=(8, 4))
     x = np.arange(1, len(apps) + 1)
     sq = apps["squeal"].to_numpy(bool)
@@ -79,7 +130,21 @@ def level_vs_application_plot(apps, *, threshold_dba: float = 70.0, synthetic: b
 
 
 def runout_phase_plot(apps, *, synthetic: bool = False, ax=None):
-    """Where on the disc the squeal sounds, relative to the run-out crest, per squealing application."""
+    """Where on the disc the squeal sounds, relative to the run-out crest, per squealing application.
+
+    Parameters
+    ----------
+    apps : pandas.DataFrame
+        Applications with a ``runout_phase_deg`` column [deg] (NaN rows are left out).
+    synthetic : bool, default False
+        Mark the title ``[SYNTHETIC]`` (the campaign's recordings are synthetic).
+    ax : matplotlib Axes, optional
+        Polar axes to draw into; a new figure if omitted.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     import matplotlib.pyplot as plt
 
     if ax is None:

@@ -65,6 +65,13 @@ def fe_growth_plot(ds: xr.Dataset, *, max_panels: int = 4, fig=None):
 def fe_map_plot(ds: xr.Dataset, *, ax=None):
     """Largest growth rate over disc speed x friction, with the stability boundary.
 
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`squealkit.stability.fe_stability_map` (dims ``rpm``, ``mu``).
+    ax : matplotlib Axes, optional
+        Where to draw; a new figure if omitted.
+
     Returns
     -------
     matplotlib.figure.Figure

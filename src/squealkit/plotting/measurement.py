@@ -40,7 +40,21 @@ def _window(rec: xr.Dataset, t_range: tuple[float, float] | None) -> xr.Dataset:
 
 def time_history_plot(rec: xr.Dataset, *, mic: str = "mic", displacement: str = "displacement",
                       t_range: tuple[float, float] | None = None):
-    """Sound pressure and disc displacement against time (paper Figs. 6-7; zoom: Figs. 10-11)."""
+    """Sound pressure and disc displacement against time (paper Figs. 6-7; zoom: Figs. 10-11).
+
+    Parameters
+    ----------
+    rec : xarray.Dataset
+        The recording (:func:`squealkit.measurement.read_recording`), with attribute ``fs`` [Hz].
+    mic, displacement : str, default "mic", "displacement"
+        Names of the microphone [Pa] and displacement [m] channels.
+    t_range : (float, float), optional
+        Time window [s] drawn (default: all).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     r = _window(rec, t_range)
     fig = _figure(figsize=(8, 5))
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
@@ -55,7 +69,25 @@ def time_history_plot(rec: xr.Dataset, *, mic: str = "mic", displacement: str = 
 
 def spectrogram_plot(rec: xr.Dataset, result: Any = None, *, mic: str = "mic", displacement: str = "displacement",
                      nperseg: int = 1024, freq_max: float = 10000.0):
-    """Spectrograms of both channels in dB (paper Figs. 8-9), with the squeal ridge if given."""
+    """Spectrograms of both channels in dB (paper Figs. 8-9), with the squeal ridge if given.
+
+    Parameters
+    ----------
+    rec : xarray.Dataset
+        The recording (:func:`squealkit.measurement.read_recording`), with attribute ``fs`` [Hz].
+    result : MeasurementResult, optional
+        Its analysis: the ridge of the frames above the threshold is drawn on the sound.
+    mic, displacement : str, default "mic", "displacement"
+        Names of the microphone [Pa] and displacement [m] channels.
+    nperseg : int, default 1024
+        Frame length [samples] (Hann window).
+    freq_max : float, default 10000.0
+        Highest frequency drawn [Hz].
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     from ..measurement.spectral import P_REF, spectrogram
 
     fs = float(rec.attrs["fs"])
@@ -78,7 +110,27 @@ def spectrogram_plot(rec: xr.Dataset, result: Any = None, *, mic: str = "mic", d
 
 def runout_plot(rec: xr.Dataset, *, displacement: str = "displacement", rpm: float, lowpass_freq: float = 1000.0,
                 macro_orders: int = 10, t_range: tuple[float, float] | None = None):
-    """Low-passed displacement with its macro and micro run-out (paper Fig. 12)."""
+    """Low-passed displacement with its macro and micro run-out (paper Fig. 12).
+
+    Parameters
+    ----------
+    rec : xarray.Dataset
+        The recording (:func:`squealkit.measurement.read_recording`), with attribute ``fs`` [Hz].
+    displacement : str, default "displacement"
+        Name of the displacement channel [m].
+    rpm : float
+        Disc speed [rev/min].
+    lowpass_freq : float, default 1000.0
+        Corner [Hz] of the low-pass that keeps the surface (:func:`~squealkit.measurement.split_runout`).
+    macro_orders : int, default 10
+        Highest revolution order counted as macro run-out.
+    t_range : (float, float), optional
+        Time window [s] drawn (default: all).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     from ..measurement.runout import split_runout
 
     fs = float(rec.attrs["fs"])
@@ -100,7 +152,23 @@ def runout_plot(rec: xr.Dataset, *, displacement: str = "displacement", rpm: flo
 
 def band_vs_pressure_plot(rec: xr.Dataset, *, mic: str = "mic", displacement: str = "displacement",
                           band: tuple[float, float] = (1000.0, 2500.0), t_range: tuple[float, float] | None = None):
-    """Band-passed displacement (1000-2500 Hz) against the sound pressure (paper Fig. 13)."""
+    """Band-passed displacement (1000-2500 Hz) against the sound pressure (paper Fig. 13).
+
+    Parameters
+    ----------
+    rec : xarray.Dataset
+        The recording (:func:`squealkit.measurement.read_recording`), with attribute ``fs`` [Hz].
+    mic, displacement : str, default "mic", "displacement"
+        Names of the microphone [Pa] and displacement [m] channels.
+    band : (float, float), default (1000.0, 2500.0)
+        ``(freq_lower, freq_upper)`` [Hz] of the displacement's band-pass (the paper's Fig. 13).
+    t_range : (float, float), optional
+        Time window [s] drawn (default: all).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     from ..measurement.filters import bandpass
 
     fs = float(rec.attrs["fs"])
@@ -118,10 +186,25 @@ def band_vs_pressure_plot(rec: xr.Dataset, *, mic: str = "mic", displacement: st
     return fig
 
 
-def level_plot(result: Any):
-    """A-weighted level against time with the threshold and the events."""
-    fig = _figure(figsize=(8, 3.5))
-    ax = fig.subplots()
+def level_plot(result: Any, ax: Any = None):
+    """A-weighted level against time with the threshold and the events.
+
+    Parameters
+    ----------
+    result : MeasurementResult
+        A result of :func:`squealkit.measurement.analyze_recording`.
+    ax : matplotlib Axes, optional
+        Where to draw; a new figure if omitted.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    if ax is None:
+        fig = _figure(figsize=(8, 3.5))
+        ax = fig.subplots()
+    else:
+        fig = ax.figure
     fr = result.frames
     ax.plot(fr["time"], fr["level_dba"], lw=0.6)
     c = result.settings.criteria
@@ -136,10 +219,27 @@ def level_plot(result: Any):
     return fig
 
 
-def polar_plot(result: Any):
-    """Squeal level and run-out against disc angle over all revolutions (polar)."""
-    fig = _figure(figsize=(5.5, 5.5))
-    ax = fig.add_subplot(projection="polar")
+def polar_plot(result: Any, ax: Any = None):
+    """Squeal level and run-out against disc angle over all revolutions (polar).
+
+    Parameters
+    ----------
+    result : MeasurementResult
+        A result of :func:`squealkit.measurement.analyze_recording`.
+    ax : matplotlib Axes, optional
+        Polar axes to draw into (``projection="polar"``); a new figure if omitted.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    if ax is None:
+        fig = _figure(figsize=(5.5, 5.5))
+        ax = fig.add_subplot(projection="polar")
+    elif ax.name != "polar":
+        raise ValueError(f"polar_plot needs polar axes (projection='polar'), not {ax.name!r} axes.")
+    else:
+        fig = ax.figure
     pol = result.polar
     ang = np.append(pol["angle"].values, pol["angle"].values[0])
     lev = np.append(pol["angle_level_db"].values, pol["angle_level_db"].values[0])
@@ -159,6 +259,22 @@ def squeal_views(result: Any, t_end: float, *, revolutions: float = 3.0) -> dict
     onset, the vibration band around the detected squeal frequency, the spectrogram's top.
 
     Without squeal: the first revolutions from the start, the paper's 1000-2500 Hz band (Fig. 13).
+
+    Parameters
+    ----------
+    result : MeasurementResult
+        A result of :func:`squealkit.measurement.analyze_recording`.
+    t_end : float
+        End of the recording [s]; the zoom stops there.
+    revolutions : float, default 3.0
+        Length of the zoom in disc revolutions.
+
+    Returns
+    -------
+    dict
+        ``zoom``: ``(t0, t1)`` [s]; ``band``: ``(freq_lower, freq_upper)`` [Hz] around the squeal
+        frequency ``f`` (``max(lowpass_freq, 0.6 f)`` to ``min(1.25 f, 0.45 fs)``); ``freq_max``:
+        top of the spectrogram [Hz].
     """
     fr = result.frames
     fs = result.fs
@@ -186,6 +302,22 @@ def measurement_figures(rec: xr.Dataset, result: Any, *, mic: str = "mic", displ
     The zoom, the band-pass of Fig. 13 and the spectrogram follow the squeal found
     (:func:`squeal_views`): three revolutions at the actual disc speed from the onset of the squeal,
     the band around its frequency. ``zoom`` overrides the time range.
+
+    Parameters
+    ----------
+    rec : xarray.Dataset
+        The recording (:func:`squealkit.measurement.read_recording`), with attribute ``fs`` [Hz].
+    result : MeasurementResult
+        Its analysis (:func:`squealkit.measurement.analyze_recording`).
+    mic, displacement : str, default "mic", "displacement"
+        Names of the microphone [Pa] and displacement [m] channels.
+    zoom : (float, float), optional
+        Time window [s] of the zoomed figures (default: from :func:`squeal_views`).
+
+    Returns
+    -------
+    dict of str to matplotlib.figure.Figure
+        ``time``, ``spectrogram``, ``zoom``, ``runout``, ``band``, ``level`` and ``polar``.
     """
     rpm = result.settings.rpm
     views = squeal_views(result, float(rec["time"].values[-1]))

@@ -31,6 +31,17 @@ def coupled_modes(ds: xr.Dataset) -> list[int]:
     """Modes that become unstable anywhere on the grid, with the modes they lock in with.
 
     Falls back to all modes on a grid without instability.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`squealkit.stability.stability_map` (dims ``mu``, ``theta``, ``mode``).
+
+    Returns
+    -------
+    list of int
+        Mode indices, increasing: the unstable ones and the mode nearest in frequency to the
+        fastest-growing one at its grid point (its lock-in partner).
     """
     sigma = ds["growth_rate"].values
     omega = ds["omega"].values

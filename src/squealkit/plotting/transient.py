@@ -11,6 +11,8 @@ from typing import Any
 
 import xarray as xr
 
+from .._deprecation import renamed_kwargs
+
 __all__ = ["envelope_plot", "fig3_plot", "fig4_plot", "floquet_plot"]
 
 
@@ -101,17 +103,34 @@ def fig4_plot(ds: xr.Dataset, ax: Any = None, *, smooth: xr.Dataset | None = Non
     return fig
 
 
-def envelope_plot(ds: xr.Dataset, ax: Any = None, *, var: str = "x1_ddot", freq_lower: float = 1000.0):
+@renamed_kwargs(freq_lower="highpass_freq")
+def envelope_plot(ds: xr.Dataset, ax: Any = None, *, var: str = "x1_ddot", highpass_freq: float = 1000.0):
     """Vibration envelope (log scale) against the frozen-time growth rate sigma(t).
 
     Where sigma > 0 the envelope should rise with slope sigma on the log scale, where sigma < 0
     it should fall (paper section 4).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Result of :func:`~squealkit.transient.simulate`.
+    ax : matplotlib Axes, optional
+        Where to draw; a new figure if omitted.
+    var : str, default "x1_ddot"
+        The variable whose envelope is drawn.
+    highpass_freq : float, default 1000.0
+        High-pass corner [Hz] of :func:`~squealkit.transient.response_envelope` (formerly
+        ``freq_lower``, still accepted with a DeprecationWarning).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     import numpy as np
 
     from ..transient.simulate import response_envelope
 
-    env = response_envelope(ds, var, freq_lower=freq_lower)
+    env = response_envelope(ds, var, highpass_freq=highpass_freq)
     fig, axes = _axes(ax, 1, (7.0, 3.5))
     a = axes[0]
     t = ds.time.values
@@ -131,7 +150,18 @@ def floquet_plot(ds: xr.Dataset, ax: Any = None):
     """Floquet exponent over friction and run-out amplitude (a :func:`~squealkit.transient.floquet.floquet_map`).
 
     Colour: the exponent [1/s] (red grows); black line: exponent 0; dashed: where the period
-    average of the frozen-time sigma is 0. Returns the Figure.
+    average of the frozen-time sigma is 0.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`~squealkit.transient.floquet.floquet_map` (dims ``mu``, ``amplitude``).
+    ax : matplotlib Axes, optional
+        Where to draw; a new figure if omitted.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
     import numpy as np
 

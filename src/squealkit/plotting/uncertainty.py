@@ -89,7 +89,19 @@ def sensitivity_plot(ds: xr.Dataset, ax=None):
 
 
 def uncertainty_plot(ds: xr.Dataset, fig=None):
-    """Both panels side by side: :func:`propensity_plot` and (if computed) :func:`sensitivity_plot`."""
+    """Both panels side by side: :func:`propensity_plot` and (if computed) :func:`sensitivity_plot`.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`squealkit.uncertainty.squeal_propensity`.
+    fig : matplotlib Figure, optional
+        Figure to draw into (cleared); a new one otherwise.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     fig = fig or _figure(figsize=(13, 4.8) if "sobol_total" in ds else (7, 4.8))
     fig.clf()
     if "sobol_total" in ds:

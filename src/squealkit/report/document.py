@@ -19,6 +19,21 @@ class Comparison:
 
     ``published`` may be a number, a ``(low, high)`` band, or None (nothing published).
     ``agrees`` is the caller's verdict with the tolerance stated in ``note``.
+
+    Attributes
+    ----------
+    quantity : str
+        What is compared, e.g. ``"critical friction"``.
+    published : float or (float, float) or None
+        The paper's value or band (None: nothing published).
+    computed : float or (float, float) or None
+        squealkit's value or band, in the same ``unit``.
+    unit : str
+        Unit of both values (``""`` when dimensionless).
+    agrees : bool or None, default None
+        The caller's verdict (None: no verdict, e.g. nothing published).
+    note : str, default ""
+        The tolerance or reason behind the verdict.
     """
 
     quantity: str
@@ -43,7 +58,17 @@ class Comparison:
 
 @dataclass(frozen=True)
 class Table:
-    """A plain table: a header row and rows of cells (numbers are formatted by the renderer)."""
+    """A plain table: a header row and rows of cells (numbers are formatted by the renderer).
+
+    Attributes
+    ----------
+    caption : str
+        The table's caption.
+    header : tuple of str
+        Column headings.
+    rows : tuple of tuple
+        Rows of cells (numbers or text), each as long as ``header``.
+    """
 
     caption: str
     header: tuple[str, ...]
@@ -52,7 +77,15 @@ class Table:
 
 @dataclass(frozen=True)
 class FigureRef:
-    """A figure written by a step: its file stem in ``figures/`` and a caption."""
+    """A figure written by a step: its file stem in ``figures/`` and a caption.
+
+    Attributes
+    ----------
+    stem : str
+        File name without extension in ``figures/`` (the figure is written as PNG and SVG).
+    caption : str
+        The figure's caption.
+    """
 
     stem: str
     caption: str
@@ -60,7 +93,25 @@ class FigureRef:
 
 @dataclass(frozen=True)
 class Section:
-    """One part of the report (a paper section or figure group)."""
+    """One part of the report (a paper section or figure group).
+
+    Attributes
+    ----------
+    key : str
+        Short id (e.g. ``"critical"``), the key of :meth:`ReproduceResult.numbers`.
+    title : str
+        Heading.
+    paragraphs : tuple of str
+        Text, each generated from the computed numbers.
+    comparisons : tuple of Comparison
+        Published-versus-computed rows.
+    tables, figures : tuple of Table, tuple of FigureRef
+        Tables and figures of the section.
+    data : tuple of str
+        Files the section wrote to ``data/``.
+    numbers : dict of str to float
+        The computed numbers the text quotes, for tests and ``--json``.
+    """
 
     key: str
     title: str

@@ -51,7 +51,21 @@ class ReproduceResult:
 
 @dataclass(frozen=True)
 class RecordingSpec:
-    """A user's rig recording for the report's §5 (see :func:`squealkit.measurement.analyze_recording`)."""
+    """A user's rig recording for the report's §5 (see :func:`squealkit.measurement.analyze_recording`).
+
+    Attributes
+    ----------
+    path : Path
+        The recording file.
+    mic, displacement : str
+        Channel names (or indices as text) of the microphone [Pa] and the displacement probe [m].
+    rpm : float
+        Disc speed [rev/min].
+    radius : float
+        Probe (and pin) radius [m].
+    fs : float or None, default None
+        Sample rate [Hz] where the file does not carry one.
+    """
 
     path: Path
     mic: str

@@ -100,10 +100,10 @@ def transient_step(model: FrictionModel, figures: Path, data: Path, *, quick: bo
     f_eig = abs(float(lam_06.imag[k] / (2 * math.pi)))
     # the paper high-passes at 1000 Hz (its squeal is near 2.4 kHz); a model vibrating lower gets half its frequency
     f_low = min(1000.0, 0.5 * f_eig) if f_eig > 0 else 1000.0
-    _save_fig(envelope_plot(sro, var=var, freq_lower=f_low), figures, "fig4_envelope_vs_sigma")
+    _save_fig(envelope_plot(sro, var=var, highpass_freq=f_low), figures, "fig4_envelope_vs_sigma")
     sigma_06 = float(lam_06.real[k])
     f_sim = _dominant_frequency(smooth_clear, var, f_low)
-    summary = transient_summary(sro, freq_lower=f_low)
+    summary = transient_summary(sro, highpass_freq=f_low)
     whole = [s for s in summary["stages"] if not s["partial"]]
     rising = [s["rate_per_s"] for s in whole if s["stage"] == "rising"]
     falling = [s["rate_per_s"] for s in whole if s["stage"] == "falling"]

@@ -1,6 +1,7 @@
 """Stability of friction-coupled systems: complex eigenvalues, critical friction, tolerances,
 mode shapes and sensitivities."""
 
+from .. import _accessor  # noqa: F401  (registers ds.squeal.plot() on the results)
 from ._solve import IndeterminateWarning
 from .critical import (
     ONSET_STATUS,

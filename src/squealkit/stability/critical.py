@@ -350,7 +350,9 @@ class RunoutTolerance:
     q0_max : float or None
         Largest run-out amplitude [m] at that wavelength, ``s lambda / (2 pi)`` (eq. 11).
     stable_on_flat_disc : bool
+        Whether the brake is stable at ``mu`` without run-out.
     damped : bool
+        Whether damping was included.
     """
 
     mu: float
@@ -381,17 +383,24 @@ def runout_tolerance(
     Parameters
     ----------
     model : FrictionModel
+        The system, e.g. ``get_preset("lv2013")``.
     mu : float
         Friction coefficient.
     wavelength : float, optional
         Run-out wavelength [m]; with it the amplitude tolerance ``q0_max`` [m] is given.
     damped : bool
         Include damping.
-    slope_max : float
-        Largest slope searched.
+    slope_max : float, default tan(80 deg)
+        Largest slope ``tan(theta)`` [1] searched, on each side.
     friction, speed : Stribeck and float, optional
         Speed-dependent friction (``mu`` its kinetic coefficient) and the sliding speed [m/s];
         see :func:`~squealkit.stability.eigenvalues`.
+
+    Returns
+    -------
+    RunoutTolerance
+        The largest stable slope on both sides, the side that limits it and, with
+        ``wavelength``, the amplitude ``q0_max`` [m].
 
     Examples
     --------

@@ -453,6 +453,15 @@ def stability_map(
         and tracked on its own, from a first column tracked up front.
     tile_points : int
         Grid points per tile when streaming.
+    rpm : array_like, 1-D, optional
+        FE models only: disc speeds [rev/min] (see
+        :func:`~squealkit.stability.fe_sweep.fe_stability_map`).
+    method : {"auto", "dense", "sparse", "modal", "pod"}, default "auto"
+        FE models only: the eigenvalue solver.
+    band : (float, float), optional
+        FE models only: frequency band [Hz] of the modes reported.
+    n_modes : int, optional
+        FE models only: reduced basis size for ``modal``/``pod``.
 
     Returns
     -------

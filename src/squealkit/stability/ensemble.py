@@ -59,6 +59,17 @@ class ModelEnsemble:
     def from_models(cls, models: Sequence[FrictionModel], *, damped: bool = False) -> ModelEnsemble:
         """Stack the matrices of ``models`` (``damped=False`` zeroes C, as in paper eq. 7).
 
+        Parameters
+        ----------
+        models : sequence of FrictionModel
+            S models with the same number of DOFs.
+        damped : bool, default False
+            Keep each model's damping matrix.
+
+        Returns
+        -------
+        ModelEnsemble
+
         Examples
         --------
         >>> from squealkit.models import Hoffmann2002
@@ -92,13 +103,33 @@ class ModelEnsemble:
         return self.M.shape[-1]
 
     def take(self, index: ArrayLike) -> ModelEnsemble:
-        """The sub-ensemble of the models at ``index``."""
+        """The sub-ensemble of the models at ``index``.
+
+        Parameters
+        ----------
+        index : array_like of int or bool
+            Which models (any NumPy index along the first axis).
+
+        Returns
+        -------
+        ModelEnsemble
+        """
         i = np.asarray(index)
         slope = (None, None) if self.Knx is None else (self.Knx[i], self.Kfx[i])
         return ModelEnsemble(self.M[i], self.C[i], self.K0[i], self.Kn[i], self.Kf[i], self.sliding[i], *slope)
 
     def contact_parts(self, tan_theta: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """``(Kn(t), Kf(t))`` of every model at the slope ``tan_theta`` (see ``FrictionModel.contact_parts``)."""
+        """``(Kn(t), Kf(t))`` of every model at the slope ``tan_theta`` (see ``FrictionModel.contact_parts``).
+
+        Parameters
+        ----------
+        tan_theta : float
+            Run-out slope [1].
+
+        Returns
+        -------
+        Kn, Kf : ndarray, shape (S, n, n)
+        """
         if self.Knx is None:
             return self.Kn, self.Kf
         st = (self.sliding * tan_theta)[:, None, None]

@@ -516,6 +516,29 @@ def fe_critical_friction(
     ``n_scan``). With ``mu_operating`` the run-out tolerance follows from ``mu_e = mu + tan(theta)``:
     the largest slope ``tan_theta_max = mu_e_critical - mu_operating`` the brake stays stable with.
 
+    Parameters
+    ----------
+    model : FEModel
+        The FE brake model.
+    rpm : array_like, 1-D
+        Disc speeds [rev/min].
+    mu_max : float, optional
+        Upper end of the friction range searched (default ``2 mu_ref`` of the model).
+    theta : float, default 0.0
+        Run-out incline [rad]; ``mu_e = mu + tan(theta)`` enters the model.
+    mu_operating : float, optional
+        Operating friction for the run-out tolerance ``tan_theta_max``.
+    n_scan : int, default 41
+        Friction values of the scan over ``[0, mu_max]``, >= 2.
+    xtol : float, default 1e-6
+        Absolute tolerance of the bisection in mu.
+    method : {"auto", "dense", "sparse", "modal", "pod"}, default "auto"
+        Solver (see :func:`fe_stability_map` and the module docstring).
+    band : (float, float), optional
+        Frequency band [Hz]: only modes in it count (``sparse``: default 1-16 kHz).
+    n_modes : int, optional
+        Reduced basis size for ``modal``/``pod``.
+
     Returns
     -------
     xarray.Dataset
@@ -574,6 +597,25 @@ def fe_modes(
     unstable_only: bool = False,
 ) -> xr.Dataset:
     """Modes of an FE model at one operating point, with their right eigenvectors (shapes).
+
+    Parameters
+    ----------
+    model : FEModel
+        The FE brake model.
+    rpm : float
+        Disc speed [rev/min].
+    mu : float, optional
+        Friction coefficient (default: the model's ``mu_ref``).
+    theta : float, default 0.0
+        Run-out incline [rad]; ``mu_e = mu + tan(theta)`` enters the model.
+    method : {"auto", "dense", "sparse", "modal", "pod"}, default "auto"
+        Solver (see :func:`fe_stability_map` and the module docstring).
+    band : (float, float), optional
+        Frequency band [Hz]: only modes in it count (``sparse``: default 1-16 kHz).
+    n_modes : int, optional
+        Reduced basis size for ``modal``/``pod``.
+    unstable_only : bool, default False
+        Keep only the unstable modes.
 
     Returns
     -------

@@ -7,6 +7,7 @@
 ['friction_force', 'growth_rate', 'mu_e']
 """
 
+from .. import _accessor  # noqa: F401  (registers ds.squeal.plot() on the results)
 from .contact import Contact
 from .profiles import DiscRunOut, RandomRoughness, SampledProfile, SineRunOut, Smooth, SurfaceProfile
 from .simulate import (

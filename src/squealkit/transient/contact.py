@@ -69,7 +69,21 @@ class Contact:
 
     @classmethod
     def nonlinear(cls, *, v_reg: float = 1e-3, mu_static: float | None = None, v_stribeck: float = 1e-2) -> Contact:
-        """Loss of contact and velocity-sign friction (and Stribeck friction if ``mu_static`` is given)."""
+        """Loss of contact and velocity-sign friction (and Stribeck friction if ``mu_static`` is given).
+
+        Parameters
+        ----------
+        v_reg : float, default 1e-3
+            Regularisation speed [m/s] of the sign law ``mu tanh(w / v_reg)``.
+        mu_static : float, optional
+            Static friction coefficient of a Stribeck law (default: speed-independent friction).
+        v_stribeck : float, default 1e-2
+            Stribeck speed [m/s].
+
+        Returns
+        -------
+        Contact
+        """
         return cls(True, True, v_reg, mu_static, v_stribeck)
 
     @property
@@ -83,7 +97,19 @@ class Contact:
 
     def sliding_mu(self, mu: float, speed: float) -> float:
         """Friction coefficient in steady sliding at ``speed`` [m/s]: ``mu(speed) tanh(speed / v_reg)``
-        with the Stribeck and sign laws this contact includes (``mu`` with neither)."""
+        with the Stribeck and sign laws this contact includes (``mu`` with neither).
+
+        Parameters
+        ----------
+        mu : float
+            Kinetic friction coefficient.
+        speed : float
+            Sliding speed [m/s].
+
+        Returns
+        -------
+        float
+        """
         out = float(mu) if self.mu_static is None else float(self.friction_law.mu(mu, speed))
         return out * math.tanh(speed / self.v_reg) if self.sign_friction else out
 

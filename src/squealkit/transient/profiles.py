@@ -43,11 +43,28 @@ class SurfaceProfile:
     kind: str = "abstract"
 
     def evaluate(self, x: ArrayLike) -> tuple[Array, Array]:  # pragma: no cover - abstract
-        """Run-out q [m] and slope tan(theta) [-] at positions ``x`` [m]."""
+        """Run-out q [m] and slope tan(theta) [-] at positions ``x`` [m].
+
+        Parameters
+        ----------
+        x : array_like
+            Positions along the sliding path [m].
+
+        Returns
+        -------
+        q, tan_theta : ndarray, the shape of ``x``
+            Surface height [m] and its slope ``dq/dx`` [1].
+        """
         raise NotImplementedError
 
     def check_range(self, x_start: float, x_stop: float) -> None:
-        """Raise :class:`InputError` if the profile is undefined anywhere on [x_start, x_stop]."""
+        """Raise :class:`InputError` if the profile is undefined anywhere on [x_start, x_stop].
+
+        Parameters
+        ----------
+        x_start, x_stop : float
+            First and last position [m] a run covers.
+        """
 
     def describe(self) -> str:
         """A one-line description for result attributes."""
@@ -132,6 +149,8 @@ class SampledProfile(SurfaceProfile):
         Whether the profile repeats with period ``position[-1] - position[0]`` (a disc
         turn); then ``height[-1]`` must equal ``height[0]``. Otherwise positions outside
         the sampled range are an error.
+    source : str, default "array"
+        Where the samples came from (the file, for :meth:`from_file`), shown by ``describe()``.
     """
 
     position: Array
@@ -164,7 +183,20 @@ class SampledProfile(SurfaceProfile):
 
     @classmethod
     def from_file(cls, path: str | Path, *, periodic: bool = False) -> SampledProfile:
-        """Read a two-column text file (position [m], q [m]); commas or blanks; '#' comments."""
+        """Read a two-column text file (position [m], q [m]); commas or blanks; '#' comments.
+
+        Parameters
+        ----------
+        path : str or Path
+            The text file.
+        periodic : bool, default False
+            Whether the profile repeats (see the class).
+
+        Returns
+        -------
+        SampledProfile
+            With ``source`` the file's path.
+        """
         p = Path(path)
         if not p.is_file():
             raise InputError(f"Profile file {str(p)!r} does not exist.")
@@ -230,6 +262,21 @@ class RandomRoughness(SurfaceProfile):
         n_components: int = 64,
     ) -> RandomRoughness:
         """Draw a roughness profile of RMS ``rms`` [m] in the band [wavelength_min, wavelength_max] [m].
+
+        Parameters
+        ----------
+        rms : float
+            RMS height [m], >= 0.
+        wavelength_min, wavelength_max : float
+            Shortest and longest wavelength [m], ``wavelength_min < wavelength_max``.
+        rng : numpy.random.Generator
+            Source of the wavenumber jitter and the phases.
+        n_components : int, default 64
+            Number of sines.
+
+        Returns
+        -------
+        RandomRoughness
 
         Examples
         --------
@@ -318,6 +365,23 @@ class DiscRunOut(SurfaceProfile):
 
         The micro part has RMS ``micro_rms`` [m] spread evenly over the orders in
         ``micro_orders`` (inclusive) with random phases drawn from ``rng``.
+
+        Parameters
+        ----------
+        radius : float
+            Track radius [m].
+        macro : dict of int to float, optional
+            Amplitude [m] of each macro order (cycles per revolution).
+        micro_rms : float, default 0.0
+            RMS [m] of the micro run-out.
+        micro_orders : (int, int), default (30, 300)
+            First and last micro order.
+        rng : numpy.random.Generator, optional
+            Source of the micro phases (required when ``micro_rms > 0``).
+
+        Returns
+        -------
+        DiscRunOut
         """
         orders, amps, phases = [], [], []
         for n, a in (macro or {}).items():
@@ -340,7 +404,17 @@ class DiscRunOut(SurfaceProfile):
         return cls(radius, np.array(orders), np.array(amps), np.array(phases))
 
     def sliding_speed(self, rpm: float) -> float:
-        """Sliding speed v = 2 pi r rpm / 60 [m/s] at the track radius."""
+        """Sliding speed v = 2 pi r rpm / 60 [m/s] at the track radius.
+
+        Parameters
+        ----------
+        rpm : float
+            Disc speed [rev/min].
+
+        Returns
+        -------
+        float
+        """
         return 2 * math.pi * self.radius * validate_positive("rpm", rpm) / 60.0
 
     def evaluate(self, x: ArrayLike) -> tuple[Array, Array]:

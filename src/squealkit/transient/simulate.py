@@ -37,6 +37,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike
 
+from .._deprecation import renamed_kwargs
 from .._threads import limit_threads, threads_for
 from .._validation import InputError, validate_finite, validate_fs, validate_positive
 from ..models import FrictionModel
@@ -158,11 +159,27 @@ def step_bound(model: FrictionModel, *, mu: float, contact: Contact | str = "lin
                method: str = "dopri5") -> dict[str, float]:
     """The largest stable explicit step [s] for a model, and what sets it.
 
-    Returns ``{"omega_max": ..., "friction_rate": ..., "mode_bound": ..., "friction_bound": ...,
-    "bound": ...}``: the fastest mode omega_max [rad/s] gives ``0.25 / omega_max`` (RK4, for
-    accuracy) or ``3 / omega_max`` (Dormand-Prince, stability); a regularised or Stribeck
-    friction law a rate ``c fhat.M^-1.fhat`` [1/s] (``c = mu N / v_reg``: see the module notes)
-    and ``2.5 / rate``. ``bound`` is the smaller.
+    Parameters
+    ----------
+    model : FrictionModel
+        The system, e.g. ``get_preset("lv2013")``.
+    mu : float
+        Friction coefficient (kinetic value for the Stribeck law).
+    contact : Contact or {"linear", "nonlinear"}, default "linear"
+        Contact law (see :class:`Contact`).
+    speed : float, default 0.02
+        Sliding speed [m/s], >= 0.
+    method : {"dopri5", "rosenbrock", "rk4"}, default "dopri5"
+        Integrator whose mode bound is wanted (see :func:`simulate`).
+
+    Returns
+    -------
+    dict of str to float
+        ``{"omega_max": ..., "friction_rate": ..., "mode_bound": ..., "friction_bound": ...,
+        "bound": ...}``: the fastest mode omega_max [rad/s] gives ``0.25 / omega_max`` (RK4, for
+        accuracy) or ``3 / omega_max`` (Dormand-Prince, stability); a regularised or Stribeck
+        friction law a rate ``c fhat.M^-1.fhat`` [1/s] (``c = mu N / v_reg``: see the module notes)
+        and ``2.5 / rate``. ``bound`` is the smaller [s].
 
     Examples
     --------
@@ -729,6 +746,55 @@ def simulate_batch(
     and the perturbations are fixed for the whole batch up front, so the numbers are
     identical to the in-memory run.
 
+    Parameters
+    ----------
+    models : FrictionModel or sequence of FrictionModel
+        One model for all runs, or one per run (same DOFs).
+    mu : float or array_like
+        Friction coefficient(s), one or one per run.
+    profiles : SurfaceProfile or sequence of SurfaceProfile or None, optional
+        Disc surface(s), one or one per run (None: :class:`~squealkit.transient.profiles.Smooth`).
+    speed : float or array_like, default 0.02
+        Sliding speed(s) [m/s], one or one per run.
+    duration : float
+        Simulated time [s].
+    fs : float, default 40000.0
+        Output sample rate [Hz].
+    contact : Contact or {"linear", "nonlinear"}, default "linear"
+        Contact law, the same for all runs.
+    x0 : array_like, shape (n,), optional
+        Initial displacements [m] of every run (default: the static equilibrium of each).
+    perturbation : float, default 0.0
+        Standard deviation [m] of a random initial displacement, drawn per run (needs ``rng``).
+    rng : numpy.random.Generator, optional
+        Source of the perturbations.
+    x_start : float, default 0.0
+        Position on the profile at t = 0 [m].
+    dt : float, optional
+        Step [s] as for :func:`simulate`.
+    limit : float, default 1.0
+        A run whose displacement exceeds ``limit`` [m] stops with status ``"diverged"``.
+    progress : callable, optional
+        Called as ``progress(done, total)``.
+    store : str or Path, optional
+        A ``.zarr`` path to stream the runs into (returned opened lazily).
+    client : distributed.Client, optional
+        Run the pieces on this Dask cluster (needs ``store``).
+    runs_per_task : int, default 16
+        Runs per piece written to ``store`` (and per Dask task).
+    method : {"dopri5", "rosenbrock", "rk4"}, default "dopri5"
+        Integrator (see :func:`simulate`).
+    rtol : float, default 1e-8
+        Relative tolerance of the error control.
+    atol : float, optional
+        Absolute displacement tolerance [m] (see :func:`simulate`).
+
+    Returns
+    -------
+    xarray.Dataset
+        The variables of :func:`simulate` with a leading ``run`` dimension, and per run
+        ``status``, ``mu``, ``speed`` and the contact and step statistics described above.
+
     Examples
     --------
     >>> from squealkit.models import get_preset
@@ -822,12 +888,28 @@ def _batch_dataset(runs: Sequence[_Run], *, duration, fs, contact, x0, perturbat
     return ds
 
 
-def response_envelope(ds: xr.Dataset, var: str, *, freq_lower: float = 1000.0) -> xr.DataArray:
-    """Envelope of the vibration of ``var``: high-pass above ``freq_lower`` [Hz], then ``|Hilbert|``.
+@renamed_kwargs(freq_lower="highpass_freq")
+def response_envelope(ds: xr.Dataset, var: str, *, highpass_freq: float = 1000.0) -> xr.DataArray:
+    """Envelope of the vibration of ``var``: high-pass above ``highpass_freq`` [Hz], then ``|Hilbert|``.
 
     The high-pass (4th-order Butterworth, zero phase) removes the quasi-static response to the
     run-out so that what remains is the self-excited vibration (paper section 5 does the same
     with the rig's displacement).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`simulate` (or :func:`simulate_batch`), with attribute ``fs`` [Hz].
+    var : str
+        The variable, e.g. ``"x1_ddot"``; time is its last dimension.
+    highpass_freq : float, default 1000.0
+        High-pass corner [Hz], in ``(0, fs / 2)`` (formerly ``freq_lower``, still accepted
+        with a DeprecationWarning).
+
+    Returns
+    -------
+    xarray.DataArray
+        The envelope, the shape, coordinates and units of ``ds[var]``, named ``{var}_envelope``.
     """
     from scipy.signal import butter, hilbert, sosfiltfilt
 
@@ -835,16 +917,16 @@ def response_envelope(ds: xr.Dataset, var: str, *, freq_lower: float = 1000.0) -
         raise InputError(f"Variable {var!r} is not in the dataset; have {sorted(ds.data_vars)}.")
     fs = float(ds.attrs["fs"])
     y = np.asarray(ds[var].values, dtype=float)
-    if not 0 < freq_lower < fs / 2:
-        raise InputError(f"Parameter freq_lower={freq_lower!r} Hz must lie between 0 and fs/2 = {fs / 2:g} Hz.")
+    if not 0 < highpass_freq < fs / 2:
+        raise InputError(f"Parameter highpass_freq={highpass_freq!r} Hz must lie between 0 and fs/2 = {fs / 2:g} Hz.")
     if y.shape[-1] > 27:
-        sos = butter(4, freq_lower, btype="highpass", fs=fs, output="sos")
+        sos = butter(4, highpass_freq, btype="highpass", fs=fs, output="sos")
         y = sosfiltfilt(sos, y - y[..., :1], axis=-1)
     env = np.abs(hilbert(y, axis=-1))
     out = xr.DataArray(env, dims=ds[var].dims, coords=ds[var].coords, name=f"{var}_envelope")
     out.attrs = {
         "units": ds[var].attrs.get("units", ""),
-        "long_name": f"vibration envelope of {var} (> {freq_lower:g} Hz)",
+        "long_name": f"vibration envelope of {var} (> {highpass_freq:g} Hz)",
     }
     return out
 
@@ -858,13 +940,33 @@ def _stages(tan_theta: np.ndarray) -> list[tuple[int, int, str]]:
     return [(int(a), int(b), names[int(label[a])]) for a, b in itertools.pairwise(bounds)]
 
 
-def transient_summary(ds: xr.Dataset, *, max_stages: int = 50, freq_lower: float = 1000.0) -> dict[str, object]:
+@renamed_kwargs(freq_lower="highpass_freq")
+def transient_summary(ds: xr.Dataset, *, max_stages: int = 50, highpass_freq: float = 1000.0) -> dict[str, object]:
     """Peak amplitudes, and growth or decay rate of the vibration per run-out stage.
 
     The growth rate of a stage [1/s] is the least-squares slope of the log of the envelope
     (see :func:`response_envelope`, first DOF's acceleration) over the stage, leaving out the
     first and last 5 ms of the record (filter end effects); it is positive
     where the vibration grows (paper Fig. 4: rising SRO) and negative where it decays.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One run of :func:`simulate`.
+    max_stages : int, default 50
+        At most this many stages are listed (``stages_truncated`` says whether more were cut).
+    highpass_freq : float, default 1000.0
+        High-pass corner [Hz] of the envelope (:func:`response_envelope`; formerly
+        ``freq_lower``, still accepted with a DeprecationWarning).
+
+    Returns
+    -------
+    dict
+        JSON-ready: the run's ``status``, ``t_stop``, ``duration`` [s], ``fs`` [Hz], ``mu``,
+        ``speed``, ``profile``, ``contact``, step statistics, ``peak`` per DOF (displacement
+        change [m], velocity [m/s], acceleration [m/s^2]), ``growth_rate_max`` [1/s] and
+        ``stages`` (``stage``, ``t_start``, ``t_end``, ``rate_per_s``, ``sigma_mean_per_s``,
+        ``partial``).
     """
     model_dofs = [v[: -len("_ddot")] for v in ds.data_vars if str(v).endswith("_ddot")]
     fs = float(ds.attrs["fs"])
@@ -896,7 +998,7 @@ def transient_summary(ds: xr.Dataset, *, max_stages: int = 50, freq_lower: float
     out["growth_rate_max"] = float(ds.growth_rate.max())
     stages = []
     if time.size > 32 and fs > 2500.0:
-        env = response_envelope(ds, f"{model_dofs[0]}_ddot", freq_lower=freq_lower).values
+        env = response_envelope(ds, f"{model_dofs[0]}_ddot", highpass_freq=highpass_freq).values
         # The zero-phase filter and the Hilbert transform ring for a few ms at both ends of
         # the record: those samples take no part in the rate fits.
         edge = np.zeros(time.size, dtype=bool)
