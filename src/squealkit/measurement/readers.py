@@ -278,6 +278,9 @@ class RecordingSource:
             reader = pd.read_csv(self.path, usecols=list(dict.fromkeys(wanted.values())), chunksize=block,
                                  skipinitialspace=True, skip_blank_lines=False)
             for df in reader:
+                df = df.iloc[: max(0, self.n_samples - start)]  # empty lines at the end are not rows
+                if df.empty:
+                    break
                 data = {}
                 for n, label in wanted.items():
                     col = df[label]
@@ -537,8 +540,8 @@ def _csv_rows(p: Path, n_fields: int) -> int:
                     if before.size:
                         raise _fail(p, f"line {line + 1 + int(before[0])} is empty; data rows must follow each other.")
                     more = "extra fields" if fields[i] > n_fields else "missing fields (a truncated row?)"
-                    raise _fail(p, f"line {line + 1 + i} has {fields[i]} field{'s' * (fields[i] != 1)} where the "
-                                   f"header has {n_fields}: {more}.")
+                    has = f"{fields[i]} field" + ("" if fields[i] == 1 else "s")
+                    raise _fail(p, f"line {line + 1 + i} has {has} where the header has {n_fields}: {more}.")
                 if blank.any():
                     j = int(np.argmax(blank))
                     if not blank[j:].all():
