@@ -41,7 +41,8 @@ def campaign_summary(store, band: tuple[float, float], criteria: str) -> dict[st
     """``summary.json``: applications, occurrence (J2521: % of applications with squeal), by band and condition."""
     apps = store.query("SELECT * FROM applications WHERE error IS NULL ORDER BY application")
     ev = store.query("SELECT application, band_center_hz FROM events")
-    failed = store.query("SELECT application, error FROM applications WHERE error IS NOT NULL")
+    failed = store.query("SELECT application, file, error FROM applications WHERE error IS NOT NULL "
+                         "ORDER BY application")
     n = len(apps)
     n_sq = int(apps["squeal"].sum()) if n else 0
     by_band = []
@@ -73,6 +74,6 @@ def campaign_summary(store, band: tuple[float, float], criteria: str) -> dict[st
             "median_growth_slope_correlation": float(sq["growth_slope_correlation"].median()) if len(sq) else None,
             "median_rising_fraction": float(sq["rising_fraction"].median()) if len(sq) else None,
         },
-        "failed": [{"application": a, "error": e} for a, e in zip(failed["application"], failed["error"],
-                                                                  strict=True)],
+        "failed": [{"application": a, "file": f, "error": e}
+                   for a, f, e in zip(failed["application"], failed["file"], failed["error"], strict=True)],
     }
