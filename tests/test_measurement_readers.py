@@ -358,3 +358,42 @@ def test_csv_trailing_blank_lines_and_rounded_times_are_fine(tmp_path):
     f.write_text("time,mic\n" + "".join(f"{x:.8g},1\n" for x in t) + "\n")
     ds = read_recording(f)
     assert ds.sizes["time"] == FAULT_N and ds.attrs["fs"] == pytest.approx(40000.0)
+
+
+# -- the streaming time-axis check as a property (hypothesis): no false alarm, every fault found where it is ----
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from squealkit.measurement.readers import _TimeAxis  # noqa: E402
+
+
+def _first_fault(t, dt, block):
+    axis = _TimeAxis("r.csv", "time column 'time'", dt)
+    try:
+        for s in range(0, t.size, block):
+            axis.check(s, t[s:s + block])
+    except InputError as e:
+        return int(str(e).split(" at sample ")[1].split()[0].rstrip(":;."))
+    return None
+
+
+@settings(max_examples=60, deadline=None)
+@given(fs=st.floats(100.0, 1e5), t0=st.floats(0.0, 1e3), n=st.integers(3, 400), block=st.integers(1, 500),
+       fault=st.sampled_from(["none", "back", "jump", "repeat"]), where=st.floats(0.0, 1.0))
+def test_time_axis_check_finds_each_fault_at_its_sample_whatever_the_blocks(fs, t0, n, block, fault, where):
+    # a uniform time base printed with 8 significant digits (as squealkit's CSV writer does) is never a
+    # fault, whatever its start and rate; a step back, a repeat or a jump of 2+ intervals is found at the
+    # very sample where it happens, whether or not it falls on a block boundary
+    t = t0 + np.arange(n) / fs
+    t = np.array([float(f"{x:.8g}") for x in t])
+    k = 1 + int(where * (n - 2))
+    if fault == "back":
+        t[k:] -= 1.5 / fs + 1e-6 * t0
+    elif fault == "jump":
+        t[k:] += 2.0 / fs + 1e-6 * t0
+    elif fault == "repeat" and 1.0 / fs > 1e-6 * t0:  # a repeat is a fault only where the digits resolve dt
+        t[k] = t[k - 1]
+    else:
+        fault = "none"
+    found = _first_fault(t, 1.0 / fs, block)
+    assert found == (None if fault == "none" else k)
