@@ -224,3 +224,9 @@ def test_unreadable_files_are_reported_and_the_rest_analysed(tmp_path, monkeypat
     # a re-run retries the failed applications only (the others are unchanged): here they fail again
     res = run([*args, "--json"])
     assert res.exit_code == 1 and json.loads(res.stdout)["analysed_now"] == 2
+    # taken out of the matrix, they no longer count nor fail (their rows stay in the database)
+    m = tmp_path / "matrix.csv"
+    m.write_text("".join(ln for ln in m.read_text().splitlines(keepends=True) if not ln.startswith(tuple(bad))))
+    res = run([*args, "--json"])
+    s = json.loads(res.stdout)
+    assert res.exit_code == 0 and s["failed"] == [] and s["applications"] == 1 and s["analysed_now"] == 0

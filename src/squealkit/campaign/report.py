@@ -18,8 +18,8 @@ def write_campaign_report(store, summary: dict[str, Any], out: Path, *, threshol
     from ..plotting import campaign as cp
     from ..report.html import render_html
 
-    apps = store.query("SELECT * FROM applications WHERE error IS NULL ORDER BY application")
-    events = store.query("SELECT * FROM squeal ORDER BY application, event")
+    apps = store.query("SELECT * FROM applications WHERE error IS NULL AND {in_matrix} ORDER BY application")
+    events = store.query("SELECT * FROM squeal WHERE {in_matrix} ORDER BY application, event")
     synthetic = bool(len(apps) and apps["synthetic"].all())
     figures = out / "figures"
     figures.mkdir(exist_ok=True)

@@ -176,6 +176,7 @@ def run_campaign(
         for _, (row, events) in map_tasks(_analyze_application, items, client=client, progress=progress,
                                           name="squealkit-application"):
             store.put(row, events)
+        store.limit_to([a.application for a in apps])  # the summary and report: this matrix's applications
         summary = campaign_summary(store, crit.band, crit.describe())
         summary["analysed_now"] = len(items)
         with atomic_path(out / "summary.json") as tmp:

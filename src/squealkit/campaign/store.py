@@ -53,6 +53,7 @@ class CampaignStore:
             raise InputError("Campaigns need DuckDB: pip install 'squealkit[campaign]'.") from e
         self.path = Path(path)
         self.con = duckdb.connect(str(self.path))
+        self._limited = False
         cols = ", ".join(f"{k} {v}" for k, v in APPLICATION_COLUMNS.items())
         self.con.execute(f"CREATE TABLE IF NOT EXISTS applications ({cols})")
         # a store written before the status column: add it, derived from error
@@ -99,6 +100,22 @@ class CampaignStore:
             self.con.execute("ROLLBACK")
             raise
 
+    def limit_to(self, applications: Sequence[str]) -> None:
+        """Let ``{in_matrix}`` in :meth:`query` select only these applications (the current matrix's).
+
+        Rows of applications no longer in the matrix stay in the file but out of the summary
+        and the report (an application taken out of the matrix no longer counts, nor fails).
+        """
+        self.con.execute("CREATE OR REPLACE TEMP TABLE in_matrix (application VARCHAR)")
+        if applications:
+            self.con.executemany("INSERT INTO in_matrix VALUES (?)", [[a] for a in applications])
+        self._limited = True
+
     def query(self, sql: str, params: Sequence[Any] = ()):
-        """Rows of a SQL query as a pandas DataFrame."""
-        return self.con.execute(sql, list(params)).df()
+        """Rows of a SQL query as a pandas DataFrame.
+
+        ``{in_matrix}`` in ``sql`` is a condition on ``application``: true for the applications
+        given to :meth:`limit_to`, for every one if it was not called.
+        """
+        cond = "application IN (SELECT application FROM in_matrix)" if self._limited else "TRUE"
+        return self.con.execute(sql.replace("{in_matrix}", cond), list(params)).df()

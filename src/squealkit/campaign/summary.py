@@ -39,9 +39,9 @@ def band_of(freq: float, bands: list[tuple[float, float, float]]) -> tuple[float
 
 def campaign_summary(store, band: tuple[float, float], criteria: str) -> dict[str, Any]:
     """``summary.json``: applications, occurrence (J2521: % of applications with squeal), by band and condition."""
-    apps = store.query("SELECT * FROM applications WHERE error IS NULL ORDER BY application")
-    ev = store.query("SELECT application, band_center_hz FROM events")
-    failed = store.query("SELECT application, file, error FROM applications WHERE error IS NOT NULL "
+    apps = store.query("SELECT * FROM applications WHERE error IS NULL AND {in_matrix} ORDER BY application")
+    ev = store.query("SELECT application, band_center_hz FROM events WHERE {in_matrix}")
+    failed = store.query("SELECT application, file, error FROM applications WHERE error IS NOT NULL AND {in_matrix} "
                          "ORDER BY application")
     n = len(apps)
     n_sq = int(apps["squeal"].sum()) if n else 0
