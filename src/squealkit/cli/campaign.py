@@ -49,9 +49,10 @@ def campaign(matrix: Path, out_dir: Path, mic: str, displacement: str, radius: f
     not stop the campaign: the others are analysed, and the failed ones are listed on
     stderr at the end, in summary.json ('failed': application, file, error), in the
     database (applications.status = 'failed', applications.error) and in the report. A
-    re-run retries the failed applications; one taken out of the matrix no longer counts. Exit code: 0 when every application was
-    analysed, 1 when some failed (the outputs are complete for the others), 2 for bad
-    input (options, the matrix) with nothing analysed.
+    re-run retries the failed applications; one taken out of the matrix no longer
+    counts. Exit code: 0 when every application was analysed, 1 when some failed (the
+    outputs are complete for the others), 2 for bad input (options, the matrix) with
+    nothing analysed.
 
     \b
     Example:

@@ -143,6 +143,8 @@ class _TimeAxis:
 def _head_interval(path: Path, label: str, t: NDArray[np.float64], where: Callable[[int], str]) -> float:
     """The sample interval [s] of a time axis from its first values (their median step), checked."""
     t = np.asarray(t, dtype=np.float64)
+    if t.size < 2:
+        raise _fail(path, f"{label} has {t.size} value(s) where its first block should hold several.")
     steps = np.diff(t)
     dt = float(np.median(steps)) if steps.size and np.all(np.isfinite(steps)) else math.nan
     if not (math.isfinite(dt) and dt > 0):
@@ -786,8 +788,10 @@ def _open_mdf4(p: Path, fs: float | None) -> RecordingSource:
             for ci, ch in enumerate(group.channels):
                 if ch.name in where or ch.name.lower() in _TIME_NAMES or ci == mdf.masters_db.get(gi):
                     continue
-                if int(getattr(ch, "data_type", 0)) > 5:  # MDF4 data types 0-5 are integers and floats
-                    other[ch.name] = f"text or bytes (MDF4 data type {int(ch.data_type)})"
+                kind = int(getattr(ch, "data_type", 0))
+                # numeric data types: MDF4 0-5 (integers, floats); MDF3 all but 7 (string) and 8 (bytes)
+                if (kind > 5) if str(mdf.version).startswith("4") else kind in (7, 8):
+                    other[ch.name] = f"text or bytes (MDF data type {kind})"
                     continue
                 if n_samples is None:
                     n_samples = int(group.channel_group.cycles_nr)
