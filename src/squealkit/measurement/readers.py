@@ -155,7 +155,7 @@ def _head_interval(path: Path, label: str, t: NDArray[np.float64], where: Callab
         i = int(np.argmax(steps <= 0))
         what = f"goes back from {t[i]:.9g} s to {t[i + 1]:.9g} s" if steps[i] < 0 else f"repeats {t[i]:.9g} s"
         raise _fail(path, f"{label} {what} at {where(i + 1)}; a time axis must increase by one sample interval "
-                          "per sample.")
+                          "per sample (give the sample rate fs, --fs, to ignore it).")
     _TimeAxis(path, label, dt, where).check(0, t)
     return dt
 
