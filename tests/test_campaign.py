@@ -28,10 +28,16 @@ KW = dict(mic="mic", displacement="displacement", radius=0.05, tacho="tacho")
 def camp(tmp_path_factory):
     d = tmp_path_factory.mktemp("camp")
     truth = synthetic_campaign(d, n_applications=40, duration=1.5, seed=3, suffix=".mf4")
+    # a 41st application whose recording was cut short: it fails, the 40 others are the campaign
+    b = (d / "recordings" / "A0001.mf4").read_bytes()
+    (d / "recordings" / "cut.mf4").write_bytes(b[: len(b) // 3])
+    with open(d / "matrix.csv", "a") as fh:
+        fh.write("A0041,recordings/cut.mf4,S8,drag,10.0,100.0,50.0\n")
     res = run(["campaign", str(d / "matrix.csv"), "--out", str(d / "out"), "--mic", "mic", "--displacement",
                "displacement", "--radius", "0.05", "--tacho", "tacho", "--json"])
-    assert res.exit_code == 0, res.output
-    return d, truth, json.loads(res.output)
+    assert res.exit_code == 1, res.output  # 1: some application failed (issue #15)
+    (d / "stderr.txt").write_text(res.stderr)
+    return d, truth, json.loads(res.stdout)
 
 
 def test_occurrence_per_band_within_one_point_of_truth(camp):
@@ -70,6 +76,24 @@ def test_report_and_figures(camp):
     html = (d / "out" / "report.html").read_text()
     assert html.count("data:image/png;base64") == 5 and "SYNTHETIC" in html
     assert len(list((d / "out" / "figures").glob("*.png"))) == 5
+
+
+def test_a_failed_application_is_in_every_output(camp):
+    # issue #15: the cut recording is named in summary.json, the database, the report and on stderr
+    d, _, summary = camp
+    cut = str(d / "recordings" / "cut.mf4")
+    assert [(f["application"], f["file"]) for f in summary["failed"]] == [("A0041", cut)]
+    error = summary["failed"][0]["error"]
+    assert error.startswith(f"Recording {cut!r}: ") and "truncated" in error
+    con = duckdb.connect(str(d / "out" / "campaign.duckdb"), read_only=True)
+    assert con.execute("SELECT application, error IS NOT NULL FROM applications WHERE status = 'failed'").fetchall() \
+        == [("A0041", True)]
+    assert con.execute("SELECT count(*) FROM applications WHERE status = 'ok'").fetchone()[0] == 40
+    con.close()
+    html = (d / "out" / "report.html").read_text()
+    assert "Failed applications" in html and "cut.mf4" in html and "1 of 41 applications could not be analysed" in html
+    tail = (d / "stderr.txt").read_text().strip().splitlines()[-2:]
+    assert "1 of 41 applications failed" in tail[0] and tail[1].startswith(f"A0041 ({cut}): Recording")
 
 
 def test_killed_run_resumes_and_rerun_updates(tmp_path):
@@ -159,3 +183,50 @@ def test_conditions_taken_from_channels(tmp_path):
     for app, p, t in con.execute("SELECT application, pressure_bar, temperature_c FROM applications").fetchall():
         assert p == pytest.approx(truth["by_application"][app]["pressure_bar"], abs=0.01)
         assert t == pytest.approx(truth["by_application"][app]["temperature_c"], abs=0.05)
+
+
+def test_unreadable_files_are_reported_and_the_rest_analysed(tmp_path, monkeypatch):
+    """Issue #15: a campaign went on only past missing files; any file that cannot be analysed (here a
+    truncated one and one whose analysis raises an unexpected error) is now a failed application,
+    listed in the database, summary.json and on stderr (the report: test_a_failed_application_...);
+    exit code 1."""
+    import squealkit.measurement as measurement
+
+    truth = synthetic_campaign(tmp_path, n_applications=3, duration=0.5, seed=1)
+    rec = tmp_path / "recordings"
+    b = (rec / "A0002.nc").read_bytes()
+    (rec / "A0002.nc").write_bytes(b[: len(b) // 2])
+    real = measurement.analyze_recording
+
+    def flaky(path, **kw):  # a fault of no known kind must not stop the campaign either
+        if str(path).endswith("A0003.nc"):
+            raise RuntimeError("something unforeseen")
+        return real(path, **kw)
+
+    monkeypatch.setattr(measurement, "analyze_recording", flaky)
+    args = ["campaign", str(tmp_path / "matrix.csv"), "--out", str(tmp_path / "out"), "--mic", "mic",
+            "--displacement", "displacement", "--radius", "0.05", "--tacho", "tacho", "--no-report"]
+    res = run(args)
+    assert res.exit_code == 1 and isinstance(res.exception, SystemExit | None), res.output
+    bad = ["A0002", "A0003"]
+    tail = res.stderr.strip().splitlines()[-3:]
+    assert "2 of 3 applications failed" in tail[0] and [ln.split()[0] for ln in tail[1:]] == bad, res.stderr
+    assert "A0002.nc" in tail[1] and "truncated" in tail[1] and "RuntimeError: something unforeseen" in tail[2]
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert [f["application"] for f in summary["failed"]] == bad and summary["applications"] == 1
+    assert summary["failed"][0]["file"] == str(rec / "A0002.nc") and "Recording" in summary["failed"][0]["error"]
+    ok = [a for a in truth["by_application"] if a not in bad]
+    assert summary["applications_with_squeal"] == sum(bool(truth["by_application"][a]["lines_hz"]) for a in ok)
+    con = duckdb.connect(str(tmp_path / "out" / "campaign.duckdb"), read_only=True)
+    rows = con.execute("SELECT application, status FROM applications ORDER BY application").fetchall()
+    con.close()
+    assert rows == [(a, "failed" if a in bad else "ok") for a in sorted(truth["by_application"])]
+    # a re-run retries the failed applications only (the others are unchanged): here they fail again
+    res = run([*args, "--json"])
+    assert res.exit_code == 1 and json.loads(res.stdout)["analysed_now"] == 2
+    # taken out of the matrix, they no longer count nor fail (their rows stay in the database)
+    m = tmp_path / "matrix.csv"
+    m.write_text("".join(ln for ln in m.read_text().splitlines(keepends=True) if not ln.startswith(tuple(bad))))
+    res = run([*args, "--json"])
+    s = json.loads(res.stdout)
+    assert res.exit_code == 0 and s["failed"] == [] and s["applications"] == 1 and s["analysed_now"] == 0

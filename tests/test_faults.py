@@ -242,3 +242,43 @@ def test_endless_model_file_is_read_bounded(run):
     r = run("critical", "--config", "/dev/zero")
     assert r.exit_code == 2 and "larger than 16 MiB" in _one_line(r)
     assert time.monotonic() - t0 < 20
+
+
+# -- faults on the input side: a bad recording is one line naming the file and where, exit 2 -----------------
+def _csv_jumping_at_line_3000(tmp_path):
+    t = np.arange(4000) / 40000.0
+    t[2998:] += 5.0  # data row 2998 is line 3000 (the header is line 1); the first 64 rows are fine
+    f = tmp_path / "jump.csv"
+    f.write_text("time,mic,displacement\n" + "".join(f"{x:.8g},0.1,0\n" for x in t))
+    return f, "time column 'time' jumps from 0.074925 s to 5.07495 s at line 3000"
+
+
+def _wav_at_zero_hz(tmp_path):
+    from scipy.io import wavfile
+
+    f = tmp_path / "zero.wav"
+    wavfile.write(f, 40000, np.zeros((4000, 2), np.float32))
+    b = bytearray(f.read_bytes())
+    b[24:28] = bytes(4)  # the header's sample rate (RIFF fmt chunk, bytes 24-27)
+    f.write_bytes(bytes(b))
+    return f, "sample rate (WAV header) is 0 Hz"
+
+
+def _tdms_text_mic(tmp_path):
+    from nptdms import ChannelObject, TdmsWriter
+
+    f = tmp_path / "text.tdms"
+    with TdmsWriter(f) as w:
+        w.write_segment([ChannelObject("rig", "mic", np.array(["0.1"] * 4000)),
+                         ChannelObject("rig", "displacement", np.zeros(4000), properties={"wf_increment": 2.5e-5})])
+    return f, "channel 'rig/mic': holds text"
+
+
+@pytest.mark.parametrize("make", [_csv_jumping_at_line_3000, _wav_at_zero_hz, _tdms_text_mic])
+def test_bad_recording_is_one_line_exit_2(run, tmp_path, make):
+    f, says = make(tmp_path)
+    mic = ["--mic", "0", "--displacement", "1"] if f.suffix == ".wav" else ["--mic", "mic", "--displacement",
+                                                                          "displacement"]
+    r = run("analyze", str(f), *mic, "--rpm", "900", "--radius", "0.05")
+    line = _one_line(r)
+    assert r.exit_code == 2 and says in line and str(f) in line, line

@@ -116,7 +116,7 @@ def test_tdms_written_by_nptdms(tmp_path, signals):
         ("time_only.csv", "time\n0\n0.1\n0.2\n", "no data channel"),
         ("nan.csv", "time,mic\n0,1\n0.1,nan\n0.2,3\n", "non-finite"),
         ("text.csv", "time,mic\n0,1\n0.1,abc\n0.2,3\n", "non-numeric"),
-        ("junk.tdms", "this is not tdms", "could not be read|no channel"),
+        ("junk.tdms", "this is not tdms", "not a TDMS file"),
         ("junk.wav", "RIFF nonsense", "could not be read"),
         ("rec.xyz", "1,2", "unknown format"),
     ],
@@ -171,3 +171,229 @@ def test_mdf4_recording_analyses_like_the_dataset(tmp_path):
     a, b = analyze_recording(rec, **kw), analyze_recording(path, **kw)
     assert a.rising_fraction == pytest.approx(b.rising_fraction, abs=1e-9)
     assert a.peak_dba == pytest.approx(b.peak_dba, abs=1e-9) and b.attrs["synthetic"]
+
+
+# -- every reader x every fault: one line naming the file (and the channel / where), never a traceback ---------
+# (issue #15, "Inputs that are wrong but accepted"). Each bad file is a good small file written by
+# squealkit's own writers, then damaged the way the issue found them damaged.
+FAULT_N, FAULT_FS = 1200, 1000.0
+
+
+def _good(tmp_path, suffix, t=None, **extra):
+    """A small good recording (mic, probe) in ``suffix``; ``t`` replaces the time axis where the format has one."""
+    from squealkit.measurement.writers import write_recording
+
+    rng = np.random.default_rng(0)
+    rec = recording_dataset({"mic": rng.standard_normal(FAULT_N), "probe": rng.standard_normal(FAULT_N)},
+                            FAULT_FS, {"mic": "Pa", "probe": "m"})
+    if t is not None:
+        rec = rec.assign_coords(time=("time", t))
+        if suffix == ".nc":
+            rec.attrs = {}
+    for name, values in extra.items():
+        rec[name] = ("time", values)
+    return write_recording(rec, tmp_path / f"rec{suffix}")
+
+
+def _time_fault(kind):
+    t = np.arange(FAULT_N) / FAULT_FS
+    if kind == "back":  # a block runs backwards (the second half of the file, as a DAQ buffer replayed)
+        t[700:] -= 0.3
+    elif kind == "jump":  # a 5 s jump, beyond the first blocks
+        t[900:] += 5.0
+    elif kind == "repeat":  # a frozen clock: zero sample interval
+        t[:] = 0.0
+    return t
+
+
+def _patch_bytes(path, old, new):
+    b = path.read_bytes()
+    assert old in b
+    path.write_bytes(b.replace(old, new))
+    return path
+
+
+def _text_tdms(tmp_path):
+    from nptdms import ChannelObject, TdmsWriter
+
+    f = tmp_path / "rec.tdms"
+    with TdmsWriter(f) as w:
+        w.write_segment([ChannelObject("rig", "mic", np.zeros(FAULT_N), properties={"wf_increment": 1 / FAULT_FS}),
+                         ChannelObject("rig", "note", np.array(["x"] * FAULT_N))])
+    return f
+
+
+def _text_mdf4(tmp_path):
+    from asammdf import MDF, Signal
+
+    t = np.arange(FAULT_N) / FAULT_FS
+    f = tmp_path / "rec.mf4"
+    with MDF(version="4.10") as m:
+        m.append([Signal(np.zeros(FAULT_N), t, name="mic"),
+                  Signal(np.array([b"x"] * FAULT_N), t, name="note", encoding="utf-8")])
+        m.save(f, overwrite=True)
+    return f
+
+
+def _rate(tmp_path, suffix, value):
+    """A file whose own sample rate (or interval) is ``value`` (0, negative, NaN)."""
+    import struct
+
+    f = _good(tmp_path, suffix)
+    if suffix == ".wav":  # the header's sample rate field (bytes 24-27) and byte rate (28-31)
+        b = bytearray(f.read_bytes())
+        b[24:28] = struct.pack("<I", int(value))
+        f.write_bytes(bytes(b))
+    elif suffix == ".tdms":
+        from nptdms import ChannelObject, TdmsWriter
+
+        with TdmsWriter(f) as w:
+            w.write_segment([ChannelObject("rig", "mic", np.zeros(FAULT_N), properties={"wf_increment": value})])
+    elif suffix == ".uff":  # abscissa_inc, the 5th field of each record's 7th line
+        f.write_text(f.read_text().replace("1.00000e-03", f"{value:.5e}"))
+    elif suffix == ".nc":
+        ds = recording_dataset({"mic": np.zeros(FAULT_N)}, FAULT_FS).drop_vars("time")
+        ds.attrs["fs"] = value
+        ds.to_netcdf(f, engine="h5netcdf")
+    return f
+
+
+def _corrupt_chunk(tmp_path):
+    """A netCDF whose 3rd compressed chunk of 'probe' is overwritten with zeros."""
+    import h5py
+
+    f = tmp_path / "rec.nc"
+    ds = recording_dataset({"mic": np.zeros(FAULT_N), "probe": np.sin(np.arange(FAULT_N))}, FAULT_FS)
+    ds.to_netcdf(f, engine="h5netcdf", encoding={"probe": {"zlib": True, "chunksizes": (200,)}})
+    with h5py.File(f, "r") as h:
+        info = h["probe"].id.get_chunk_info(2)
+    b = bytearray(f.read_bytes())
+    b[info.byte_offset + 4:info.byte_offset + info.size] = bytes(info.size - 4)
+    f.write_bytes(bytes(b))
+    return f
+
+
+def _truncated(tmp_path, suffix):
+    f = _good(tmp_path, suffix)
+    b = f.read_bytes()
+    b = b[: int(len(b) * 0.6)]
+    if suffix == ".csv":  # cut inside a row (a cut inside its last number, with all fields, cannot be told)
+        b = b[: b.rfind(b"\n") + 1] + b"0.7"
+    f.write_bytes(b)
+    return f
+
+
+FAULTS = [
+    # (id, make(tmp_path) -> path, what the one line must say, channel it must name or None)
+    *[(f"empty{s}", lambda tp, s=s: (tp / f"e{s}").write_bytes(b"") or tp / f"e{s}", "empty", None)
+      for s in (".csv", ".wav", ".nc", ".tdms", ".mf4", ".uff")],
+    *[(f"truncated{s}", lambda tp, s=s: _truncated(tp, s), "truncated", None)
+      for s in (".csv", ".wav", ".nc", ".tdms", ".mf4", ".uff")],
+    ("text.csv", lambda tp: _patch_bytes(_good(tp, ".csv"), b"\n0.7,", b"\n0.7,abc") and tp / "rec.csv",
+     "non-numeric value", "mic"),
+    ("text.nc", lambda tp: _good(tp, ".nc", note=np.array(["x"] * FAULT_N)), "not numeric", "note"),
+    ("text.tdms", _text_tdms, "holds text", "rig/note"),
+    ("text.mf4", _text_mdf4, "holds text", "note"),
+    ("rate0.wav", lambda tp: _rate(tp, ".wav", 0), "0 Hz, not a finite number > 0", None),
+    ("rate0.nc", lambda tp: _rate(tp, ".nc", 0.0), "0.0 Hz, not a finite number > 0", None),
+    ("rate-nan.nc", lambda tp: _rate(tp, ".nc", np.nan), "nan Hz", None),
+    ("interval0.tdms", lambda tp: _rate(tp, ".tdms", 0.0), "0.0 s, not a finite number > 0", None),
+    ("interval-neg.tdms", lambda tp: _rate(tp, ".tdms", -1e-3), "-0.001 s", None),
+    ("interval-inf.tdms", lambda tp: _rate(tp, ".tdms", np.inf), "inf s", None),
+    ("interval0.uff", lambda tp: _rate(tp, ".uff", 0.0), "0.0 s, not a finite number > 0", None),
+    *[(f"time-{k}{s}", lambda tp, s=s, k=k: _good(tp, s, t=_time_fault(k)), say, None)
+      for s in (".csv", ".nc", ".mf4")
+      for k, say in (("back", "goes back from 0.699 s to 0.4 s at "), ("jump", "jumps from 0.899 s to 5.9 s at "),
+                     ("repeat", "repeats 0 s at "))],
+    ("corrupt-chunk.nc", _corrupt_chunk, "could not be read at samples", "probe"),
+]
+
+
+@pytest.mark.parametrize(("make", "says", "channel"), [f[1:] for f in FAULTS], ids=[f[0] for f in FAULTS])
+def test_every_reader_fault_is_one_line_naming_file_and_channel(tmp_path, make, says, channel):
+    f = make(tmp_path)
+    with pytest.raises(InputError) as err:
+        src = open_recording(f)  # faults of the header are found here, those of the samples while streaming
+        for _ in src.iter_blocks(src.channels if channel is None or channel not in src.channels else [channel],
+                                 block=500):
+            pass
+        if channel is not None:
+            src.resolve(channel)
+    msg = str(err.value)
+    assert "\n" not in msg and msg.startswith(f"Recording {str(f)!r}") and says in msg, msg
+    if channel is not None:
+        assert f"channel {channel!r}" in msg, msg
+    if "time-" in msg or "jumps" in says or "goes back" in says:
+        where = "line" if f.suffix == ".csv" else "sample"
+        assert f" at {where} " in msg, msg
+
+
+@pytest.mark.parametrize(("rows", "says"), [
+    # the CSV line (header = line 1) and what is wrong with it; rows are "time,mic"
+    ({702: "0.7,1,2"}, "line 702 has 3 fields where the header has 2: extra fields"),
+    ({402: "0.4"}, "line 402 has 1 field where the header has 2: missing fields"),
+    ({302: ""}, "line 302 is empty"),
+    ({1002: "abc,0"}, "time column 'time' has a non-numeric value"),
+    ({1101: "1.2,0"}, "time column 'time' jumps from 1.098 s to 1.2 s at line 1101"),
+])
+def test_csv_rows_are_all_checked_not_only_the_first(tmp_path, rows, says):
+    lines = ["time,mic"] + [f"{i / FAULT_FS:.6g},0" for i in range(FAULT_N)]
+    for k, v in rows.items():
+        lines[k - 1] = v
+    f = tmp_path / "r.csv"
+    f.write_text("\n".join(lines) + "\n")
+    with pytest.raises(InputError, match=says):
+        read_recording(f)
+
+
+def test_csv_trailing_blank_lines_and_rounded_times_are_fine(tmp_path):
+    # 8 significant digits (squealkit's own CSV writer) at t ~ 1000 s resolve 1e-4 s, four sample intervals
+    # at 40 kHz: steps of 0 or 1e-4 s are the rounding of a uniform time base, not a fault
+    t = 1000.0 + np.arange(FAULT_N) / 40000.0
+    f = tmp_path / "r.csv"
+    f.write_text("time,mic\n" + "".join(f"{x:.8g},1\n" for x in t) + "\n\n")
+    src = open_recording(f, fs=40000.0)
+    assert src.n_samples == FAULT_N
+    t = np.arange(FAULT_N) / 40000.0
+    f.write_text("time,mic\n" + "".join(f"{x:.8g},1\n" for x in t) + "\n")
+    ds = read_recording(f)
+    assert ds.sizes["time"] == FAULT_N and ds.attrs["fs"] == pytest.approx(40000.0)
+
+
+# -- the streaming time-axis check as a property (hypothesis): no false alarm, every fault found where it is ----
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from squealkit.measurement.readers import _TimeAxis  # noqa: E402
+
+
+def _first_fault(t, dt, block):
+    axis = _TimeAxis("r.csv", "time column 'time'", dt)
+    try:
+        for s in range(0, t.size, block):
+            axis.check(s, t[s:s + block])
+    except InputError as e:
+        return int(str(e).split(" at sample ")[1].split()[0].rstrip(":;."))
+    return None
+
+
+@settings(max_examples=60, deadline=None)
+@given(fs=st.floats(100.0, 1e5), t0=st.floats(0.0, 1e3), n=st.integers(3, 400), block=st.integers(1, 500),
+       fault=st.sampled_from(["none", "back", "jump", "repeat"]), where=st.floats(0.0, 1.0))
+def test_time_axis_check_finds_each_fault_at_its_sample_whatever_the_blocks(fs, t0, n, block, fault, where):
+    # a uniform time base printed with 8 significant digits (as squealkit's CSV writer does) is never a
+    # fault, whatever its start and rate; a step back, a repeat or a jump of 2+ intervals is found at the
+    # very sample where it happens, whether or not it falls on a block boundary
+    t = t0 + np.arange(n) / fs
+    t = np.array([float(f"{x:.8g}") for x in t])
+    k = 1 + int(where * (n - 2))
+    if fault == "back":
+        t[k:] -= 1.5 / fs + 1e-6 * t0
+    elif fault == "jump":
+        t[k:] += 2.0 / fs + 1e-6 * t0
+    elif fault == "repeat" and 1.0 / fs > 1e-6 * t0:  # a repeat is a fault only where the digits resolve dt
+        t[k] = t[k - 1]
+    else:
+        fault = "none"
+    found = _first_fault(t, 1.0 / fs, block)
+    assert found == (None if fault == "none" else k)

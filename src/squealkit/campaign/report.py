@@ -18,8 +18,8 @@ def write_campaign_report(store, summary: dict[str, Any], out: Path, *, threshol
     from ..plotting import campaign as cp
     from ..report.html import render_html
 
-    apps = store.query("SELECT * FROM applications WHERE error IS NULL ORDER BY application")
-    events = store.query("SELECT * FROM squeal ORDER BY application, event")
+    apps = store.query("SELECT * FROM applications WHERE error IS NULL AND {in_matrix} ORDER BY application")
+    events = store.query("SELECT * FROM squeal WHERE {in_matrix} ORDER BY application, event")
     synthetic = bool(len(apps) and apps["synthetic"].all())
     figures = out / "figures"
     figures.mkdir(exist_ok=True)
@@ -46,6 +46,12 @@ def write_campaign_report(store, summary: dict[str, Any], out: Path, *, threshol
     if synthetic:
         paragraphs.insert(0, "SYNTHETIC DATA: every recording of this campaign was made by squealkit with known "
                              "truth; it is not a measurement.")
+    failed = summary["failed"]
+    if failed:
+        n_all = summary["applications"] + len(failed)
+        paragraphs.append(f"{len(failed)} of {n_all} applications could not be analysed and are left out of every "
+                          "figure and table above the last one; the table 'Failed applications' gives the reason "
+                          "of each (a re-run retries them).")
     link = summary["runout_link"]
     table = Table("Campaign", ("quantity", "value"), (
         ("applications", summary["applications"]),
@@ -62,9 +68,14 @@ def write_campaign_report(store, summary: dict[str, Any], out: Path, *, threshol
     temps = Table("Occurrence by brake temperature", ("temperature [C]", "applications", "occurrence [%]"),
                   tuple((f"{r['range'][0]:g} to {r['range'][1]:g}", r["applications"], r["occurrence_percent"])
                         for r in summary["by_temperature_c"]))
-    section = Section("campaign", "Brake noise campaign", tuple(paragraphs), (), (table, bands, temps), tuple(refs))
+    tables = (table, bands, temps)
+    if failed:
+        tables += (Table("Failed applications", ("application", "file", "error"),
+                         tuple((f["application"], f["file"], f["error"]) for f in failed)),)
+    section = Section("campaign", "Brake noise campaign", tuple(paragraphs), (), tables, tuple(refs))
     html = render_html([section], figures, title="squealkit brake noise campaign",
-                       subtitle=f"{summary['applications']} applications; database: campaign.duckdb (SQL view "
+                       subtitle=f"{summary['applications']} applications"
+                       + (f" ({len(failed)} more failed)" if failed else "") + "; database: campaign.duckdb (SQL view "
                                 "'squeal': events with their conditions)")
     with atomic_path(out / "report.html") as tmp:
         tmp.write_text(html, encoding="utf-8")

@@ -17,8 +17,22 @@ from .summary import band_of, campaign_summary, third_octave_bands
 __all__ = ["run_campaign"]
 
 
+def _failure(e: BaseException) -> str:
+    """One line for a failed application: the message of a bad file or option as it is, anything else
+    with its exception type (a fault of no known kind, still only this application's)."""
+    text = " ".join(str(e).split())
+    if not isinstance(e, InputError | OSError):
+        text = f"{type(e).__name__}: {text}"
+    return text[:500]
+
+
 def _analyze_application(item: dict[str, Any]) -> tuple[dict[str, Any], list[dict[str, Any]]]:
-    """One task: analyse one application's recording; keep its row and its events (small)."""
+    """One task: analyse one application's recording; keep its row and its events (small).
+
+    Whatever goes wrong with one application (an unreadable or damaged file, a channel that
+    is missing or text, an unforeseen error) makes it a failed application with its reason;
+    the campaign goes on with the others.
+    """
     from ..measurement import analyze_recording
 
     app, kw, bands = item["app"], item["analysis"], item["bands"]
@@ -28,8 +42,8 @@ def _analyze_application(item: dict[str, Any]) -> tuple[dict[str, Any], list[dic
             if not math.isfinite(row[col]):  # the matrix does not say: the channel's mean over the application
                 row[col] = _channel_mean(app["file"], channel)
         res = analyze_recording(app["file"], **kw)
-    except (InputError, OSError) as e:
-        row["error"] = str(e).splitlines()[0][:500]
+    except Exception as e:  # one application's fault, whatever it is, is recorded, not raised
+        row["error"] = _failure(e)
         return row, []
     d = res.to_dict()
     row.update(duration_s=res.duration_s, synthetic=bool(d["synthetic"]), squeal=res.squeal, peak_dba=res.peak_dba,
@@ -87,6 +101,12 @@ def run_campaign(
     finishes). Writes ``out/summary.json`` and, with ``report``, ``out/report.html`` with its
     figures in ``out/figures``.
 
+    An application whose recording cannot be analysed (missing, unreadable, damaged, a bad
+    channel) does not stop the campaign: it is stored with ``status = 'failed'`` and its
+    one-line ``error``, left out of every statistic, and listed in the summary's ``failed``
+    (``application``, ``file``, ``error``) and in the report. Failed applications are
+    retried on every re-run (the file may have been fixed); the ones analysed are not.
+
     Parameters
     ----------
     matrix : path
@@ -113,7 +133,8 @@ def run_campaign(
     Returns
     -------
     dict
-        The summary written to ``summary.json``.
+        The summary written to ``summary.json``; ``failed`` lists the applications that
+        could not be analysed (empty when all were).
     """
     from ..io import atomic_path
 
@@ -132,6 +153,8 @@ def run_campaign(
         for a in apps:
             st = a.file.stat() if a.file.is_file() else None
             sig = (st.st_size, st.st_mtime_ns) if st else (None, None)
+            missing = (f"Recording {str(a.file)!r} is a folder, not a file." if a.file.is_dir()
+                       else f"Recording {str(a.file)!r} does not exist.")
             if st is not None and done.get(a.application) == sig:
                 continue
             row = {"application": a.application, "file": str(a.file), "section": a.section, "mode": a.mode,
@@ -145,7 +168,7 @@ def run_campaign(
             elif rpm is not None:
                 kw["rpm"] = rpm
             if st is None:
-                store.put({**row, "error": f"Recording {str(a.file)!r} does not exist."}, [])
+                store.put({**row, "error": missing}, [])
                 continue
             cond = {c: ch for c, ch in (("pressure_bar", pressure_channel), ("temperature_c", temperature_channel))
                     if ch is not None}
@@ -155,6 +178,7 @@ def run_campaign(
         for _, (row, events) in map_tasks(_analyze_application, items, client=client, progress=progress,
                                           name="squealkit-application"):
             store.put(row, events)
+        store.limit_to([a.application for a in apps])  # the summary and report: this matrix's applications
         summary = campaign_summary(store, crit.band, crit.describe())
         summary["analysed_now"] = len(items)
         with atomic_path(out / "summary.json") as tmp:

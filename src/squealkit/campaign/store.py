@@ -9,7 +9,9 @@ atomically. Parquet files are immutable: the same would need one small file per 
 step. The file is queried with plain SQL from DuckDB (Python, CLI, or any tool with a DuckDB
 driver), and ``COPY applications TO 'apps.parquet'`` exports it when Parquet is wanted.
 
-Tables: ``applications`` (one row per brake application: its conditions and results),
+Tables: ``applications`` (one row per brake application: its conditions and results; ``status``
+is ``'ok'`` or ``'failed'``, and ``error`` the one-line reason of a failed application, whose
+results are empty),
 ``events`` (one row per squeal event, VDA 303 tonal component), and the view ``squeal``
 (events with their application's conditions), e.g.::
 
@@ -32,7 +34,7 @@ APPLICATION_COLUMNS = {
     "synthetic": "BOOLEAN", "squeal": "BOOLEAN", "peak_dba": "DOUBLE", "squeal_frequency_hz": "DOUBLE",
     "n_events": "INTEGER", "growth_slope_correlation": "DOUBLE", "rising_fraction": "DOUBLE",
     "runout_phase_deg": "DOUBLE", "mean_rpm": "DOUBLE", "criteria": "VARCHAR", "file_size": "BIGINT",
-    "file_mtime_ns": "BIGINT", "error": "VARCHAR",
+    "file_mtime_ns": "BIGINT", "error": "VARCHAR", "status": "VARCHAR",
 }
 EVENT_COLUMNS = {
     "application": "VARCHAR", "event": "INTEGER", "start_s": "DOUBLE", "end_s": "DOUBLE", "duration_s": "DOUBLE",
@@ -64,8 +66,13 @@ class CampaignStore:
             raise InputError("Campaigns need DuckDB: pip install 'squealkit[campaign]'.") from e
         self.path = Path(path)
         self.con = duckdb.connect(str(self.path))
+        self._limited = False
         cols = ", ".join(f"{k} {v}" for k, v in APPLICATION_COLUMNS.items())
         self.con.execute(f"CREATE TABLE IF NOT EXISTS applications ({cols})")
+        # a store written before the status column: add it, derived from error
+        self.con.execute("ALTER TABLE applications ADD COLUMN IF NOT EXISTS status VARCHAR")
+        self.con.execute("UPDATE applications SET status = CASE WHEN error IS NULL THEN 'ok' ELSE 'failed' END "
+                         "WHERE status IS NULL")
         cols = ", ".join(f"{k} {v}" for k, v in EVENT_COLUMNS.items())
         self.con.execute(f"CREATE TABLE IF NOT EXISTS events ({cols})")
         self.con.execute(
@@ -99,7 +106,7 @@ class CampaignStore:
         return {a: (s, m) for a, s, m in rows}
 
     def put(self, app: Mapping[str, Any], events: Sequence[Mapping[str, Any]]) -> None:
-        """Replace one application's rows, in one transaction.
+        """Replace one application's rows, in one transaction (``status`` follows ``error``).
 
         Parameters
         ----------
@@ -108,6 +115,7 @@ class CampaignStore:
         events : sequence of mapping
             Its squeal events (keys: :data:`EVENT_COLUMNS`).
         """
+        app = {**app, "status": "ok" if app.get("error") is None else "failed"}
         a_cols, e_cols = list(APPLICATION_COLUMNS), list(EVENT_COLUMNS)
         self.con.execute("BEGIN TRANSACTION")
         try:
@@ -124,8 +132,22 @@ class CampaignStore:
             self.con.execute("ROLLBACK")
             raise
 
+    def limit_to(self, applications: Sequence[str]) -> None:
+        """Let ``{in_matrix}`` in :meth:`query` select only these applications (the current matrix's).
+
+        Rows of applications no longer in the matrix stay in the file but out of the summary
+        and the report (an application taken out of the matrix no longer counts, nor fails).
+        """
+        self.con.execute("CREATE OR REPLACE TEMP TABLE in_matrix (application VARCHAR)")
+        if applications:
+            self.con.executemany("INSERT INTO in_matrix VALUES (?)", [[a] for a in applications])
+        self._limited = True
+
     def query(self, sql: str, params: Sequence[Any] = ()):
         """Rows of a SQL query as a pandas DataFrame.
+
+        ``{in_matrix}`` in ``sql`` is a condition on ``application``: true for the applications
+        given to :meth:`limit_to`, for every one if it was not called.
 
         Parameters
         ----------
@@ -138,4 +160,5 @@ class CampaignStore:
         -------
         pandas.DataFrame
         """
-        return self.con.execute(sql, list(params)).df()
+        cond = "application IN (SELECT application FROM in_matrix)" if self._limited else "TRUE"
+        return self.con.execute(sql.replace("{in_matrix}", cond), list(params)).df()

@@ -67,9 +67,10 @@ def campaign_summary(store, band: tuple[float, float], criteria: str) -> dict[st
         ``occurrence_percent``, ``by_band``, ``by_temperature_c``, ``by_pressure_bar``,
         ``max_peak_dba``, ``runout_link`` and ``failed`` (applications that could not be read).
     """
-    apps = store.query("SELECT * FROM applications WHERE error IS NULL ORDER BY application")
-    ev = store.query("SELECT application, band_center_hz FROM events")
-    failed = store.query("SELECT application, error FROM applications WHERE error IS NOT NULL")
+    apps = store.query("SELECT * FROM applications WHERE error IS NULL AND {in_matrix} ORDER BY application")
+    ev = store.query("SELECT application, band_center_hz FROM events WHERE {in_matrix}")
+    failed = store.query("SELECT application, file, error FROM applications WHERE error IS NOT NULL AND {in_matrix} "
+                         "ORDER BY application")
     n = len(apps)
     n_sq = int(apps["squeal"].sum()) if n else 0
     by_band = []
@@ -101,6 +102,6 @@ def campaign_summary(store, band: tuple[float, float], criteria: str) -> dict[st
             "median_growth_slope_correlation": float(sq["growth_slope_correlation"].median()) if len(sq) else None,
             "median_rising_fraction": float(sq["rising_fraction"].median()) if len(sq) else None,
         },
-        "failed": [{"application": a, "error": e} for a, e in zip(failed["application"], failed["error"],
-                                                                  strict=True)],
+        "failed": [{"application": a, "file": f, "error": e}
+                   for a, f, e in zip(failed["application"], failed["file"], failed["error"], strict=True)],
     }

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -151,7 +152,7 @@ class progress_callback:
         self._progress = None
 
     def __enter__(self):
-        if not self.enabled:
+        if not self.enabled or not sys.stderr.isatty():  # a log or a pipe: no bar (rich left a blank line)
             return None
         from rich.console import Console
         from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn

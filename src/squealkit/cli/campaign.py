@@ -35,7 +35,7 @@ def campaign(matrix: Path, out_dir: Path, mic: str, displacement: str, radius: f
              pulses_per_rev: int, rpm: float | None, probe_offset_deg: float, polarity: str,
              pressure_channel: str | None, temperature_channel: str | None, no_report: bool,
              setup: str | None, band: str | None, threshold_dba: float, time_weighting: str, min_duration: float,
-             scheduler: str | None, as_json: bool) -> None:
+             scheduler: str | None, as_json: bool) -> int:
     """Analyse every brake application of a test matrix (SAE J2521 occurrence, VDA 303 events).
 
     MATRIX is a CSV with one row per application: application, file (relative to the
@@ -44,6 +44,15 @@ def campaign(matrix: Path, out_dir: Path, mic: str, displacement: str, radius: f
     the view 'squeal' joins events and conditions); OUT/summary.json holds the occurrence,
     overall and per 1/3-octave band; OUT/report.html the figures. Re-running skips the
     applications already analysed with the same criteria (a killed run resumes).
+
+    A recording that cannot be analysed (missing, unreadable, damaged, a bad channel) does
+    not stop the campaign: the others are analysed, and the failed ones are listed on
+    stderr at the end, in summary.json ('failed': application, file, error), in the
+    database (applications.status = 'failed', applications.error) and in the report. A
+    re-run retries the failed applications; one taken out of the matrix no longer
+    counts. Exit code: 0 when every application was analysed, 1 when some failed (the
+    outputs are complete for the others), 2 for bad input (options, the matrix) with
+    nothing analysed.
 
     \b
     Example:
@@ -67,14 +76,31 @@ def campaign(matrix: Path, out_dir: Path, mic: str, displacement: str, radius: f
         summary = run_campaign(matrix, out_dir, client=client, progress=cb, **kw)
     if as_json:
         emit_json(summary)
-        return
+        return _report_failures(summary)
     click.echo(f"criteria: {summary['criteria']}")
-    click.echo(f"{summary['applications']} applications ({summary['analysed_now']} analysed now), "
-               f"{summary['applications_with_squeal']} with squeal: occurrence {summary['occurrence_percent']:.1f} %")
+    n_ok, n_failed = summary["applications"], len(summary["failed"])
+    if n_ok:
+        click.echo(f"{n_ok} applications analysed ({summary['analysed_now']} run now"
+                   + (f"; {n_failed} more failed" if n_failed else "") + f"), {summary['applications_with_squeal']} "
+                   f"with squeal: occurrence {summary['occurrence_percent']:.1f} %")
+    else:
+        click.echo(f"no application could be analysed ({n_failed} failed)")
     for b in summary["by_band"]:
         if b["occurrence_percent"] > 0:
             click.echo(f"  {b['band_hz'][0]:7.0f}-{b['band_hz'][1]:7.0f} Hz: {b['occurrence_percent']:5.1f} %")
-    for f in summary["failed"]:
-        click.echo(f"  failed {f['application']}: {f['error']}")
     click.echo(f"wrote {out_dir / 'campaign.duckdb'}, {out_dir / 'summary.json'}"
                + ("" if no_report else f", {out_dir / 'report.html'}"))
+    return _report_failures(summary)
+
+
+def _report_failures(summary: dict) -> int:
+    """List the failed applications on stderr, last; the exit code: 1 if any failed, else 0."""
+    failed = summary["failed"]
+    if not failed:
+        return 0
+    total = summary["applications"] + len(failed)
+    click.echo(f"squealkit campaign: {len(failed)} of {total} applications failed (listed in summary.json "
+               "'failed' and the database; a re-run retries them):", err=True)
+    for f in failed:
+        click.echo(f"{f['application']} ({f['file']}): {f['error']}", err=True)
+    return 1

@@ -9,8 +9,13 @@ in order, so recordings of an hour or more are processed with bounded memory;
 
 from __future__ import annotations
 
+import contextlib
+import gc
+import logging
+import math
 import re
-from collections.abc import Iterator, Mapping, Sequence
+import sys
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -27,6 +32,8 @@ _TIME_NAMES = {"t", "time", "time_s", "times", "zeit"}
 _UNIT_RE = re.compile(r"^\s*(.*?)\s*[\[(]\s*([^\])]*)\s*[\])]\s*$")
 #: Samples per block read from disk by default (about 6.5 s at 40 kHz).
 DEFAULT_BLOCK = 1 << 18
+#: Key of a file's own time axis in the blocks of the per-format readers (never a channel name).
+_TIME = "\0time"
 
 
 def _split_unit(label: str) -> tuple[str, str]:
@@ -36,11 +43,121 @@ def _split_unit(label: str) -> tuple[str, str]:
     return label.strip(), ""
 
 
-def _check_finite(name: str, values: NDArray[np.float64], offset: int) -> None:
+def _fail(path: Path | str, what: str, channel: str | None = None) -> InputError:
+    """The one-line error for a bad recording: the file, the channel when there is one, what is wrong."""
+    where = f"Recording {str(path)!r}" + (f", channel {channel!r}" if channel is not None else "")
+    return InputError(f"{where}: {_one_line(what)}")
+
+
+def _one_line(text: object) -> str:
+    return " ".join(str(text).split())
+
+
+def _library_error(e: BaseException) -> str:
+    """A library's exception as a short phrase: its type and the first 300 characters of its message."""
+    return f"{type(e).__name__}: {_one_line(e)[:300]}"
+
+
+def _file_rate(path: Path, value: object, what: str, *, interval: bool = False) -> float:
+    """A sample rate [Hz] read from a file (or a sample interval [s] with ``interval``): finite and > 0."""
+    if isinstance(value, np.generic):
+        value = value.item()
+    try:
+        x = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        x = math.nan
+    if not (math.isfinite(x) and x > 0):
+        unit = "s" if interval else "Hz"
+        raise _fail(path, f"its {what} is {value!r} {unit}, not a finite number > 0; give the sample rate fs "
+                          "(--fs) to read it anyway.")
+    return 1.0 / x if interval else x
+
+
+def _check_finite(path: Path, name: str, values: NDArray[np.float64], offset: int,
+                  where: Callable[[int], str]) -> None:
     bad = ~np.isfinite(values)
     if bad.any():
         i = int(np.argmax(bad))
-        raise InputError(f"Channel {name!r} has a non-finite sample ({values[i]!r}) at sample {offset + i}.")
+        raise _fail(path, f"non-finite sample ({float(values[i])!r}) at {where(offset + i)}.", channel=name)
+
+
+def _as_samples(path: Path, name: str, values: Any) -> NDArray[np.float64]:
+    """A channel's block as float64; text, byte strings and timestamps are named as such."""
+    arr = np.asarray(values)
+    if arr.dtype.kind not in "biuf":
+        kind = {"M": "timestamps", "m": "time differences", "c": "complex numbers"}.get(arr.dtype.kind, "text")
+        raise _fail(path, f"holds {kind} (dtype {arr.dtype}), not numeric samples.", channel=name)
+    return arr.astype(np.float64, copy=False)
+
+
+def _sample_where(k: int) -> str:
+    return f"sample {k}"
+
+
+@dataclass
+class _TimeAxis:
+    """A recording's own time axis, checked block by block as it streams.
+
+    Every step must be one sample interval ``dt``, within half an interval plus the
+    rounding of 8 significant digits (how squealkit and most tools print a time column):
+    a time that goes back, repeats, jumps (a gap) or is not a number is reported with the
+    sample (or CSV line) where it happens.
+    """
+
+    path: Path
+    label: str
+    dt: float
+    where: Callable[[int], str] = _sample_where
+    last: float | None = None
+
+    def check(self, start: int, t: NDArray[np.float64]) -> None:
+        t = np.asarray(t, dtype=np.float64)
+        if t.size == 0:
+            return
+        bad_t = ~np.isfinite(t)
+        if bad_t.any():
+            i = int(np.argmax(bad_t))
+            raise _fail(self.path, f"{self.label} is {float(t[i])!r} at {self.where(start + i)}.")
+        prev = np.concatenate(([self.last], t[:-1])) if self.last is not None else t[:-1]
+        cur = t if self.last is not None else t[1:]
+        first = start if self.last is not None else start + 1
+        steps = cur - prev
+        tol = 0.5 * self.dt + 2e-7 * np.abs(cur)
+        bad = (steps < 0) | (np.abs(steps - self.dt) > tol)
+        if bad.any():
+            i = int(np.argmax(bad))
+            a, b, k = float(prev[i]), float(cur[i]), first + i
+            if b < a:
+                what = (f"goes back from {a:.9g} s to {b:.9g} s at {self.where(k)}; it must increase by one sample "
+                        f"interval ({self.dt:.6g} s) per sample.")
+            elif b - a > self.dt:
+                what = (f"jumps from {a:.9g} s to {b:.9g} s at {self.where(k)}: a gap of {b - a:.6g} s where the "
+                        f"sample interval is {self.dt:.6g} s.")
+            else:
+                what = (f"steps by {b - a:.6g} s (from {a:.9g} s to {b:.9g} s) at {self.where(k)} where the sample "
+                        f"interval is {self.dt:.6g} s.")
+            raise _fail(self.path, f"{self.label} {what}")
+        self.last = float(t[-1])
+
+
+def _head_interval(path: Path, label: str, t: NDArray[np.float64], where: Callable[[int], str]) -> float:
+    """The sample interval [s] of a time axis from its first values (their median step), checked."""
+    t = np.asarray(t, dtype=np.float64)
+    if t.size < 2:
+        raise _fail(path, f"{label} has {t.size} value(s) where its first block should hold several.")
+    steps = np.diff(t)
+    dt = float(np.median(steps)) if steps.size and np.all(np.isfinite(steps)) else math.nan
+    if not (math.isfinite(dt) and dt > 0):
+        bad_t = ~np.isfinite(t)
+        if bad_t.any():
+            i = int(np.argmax(bad_t))
+            raise _fail(path, f"{label} is {float(t[i])!r} at {where(i)}.")
+        i = int(np.argmax(steps <= 0))
+        what = f"goes back from {t[i]:.9g} s to {t[i + 1]:.9g} s" if steps[i] < 0 else f"repeats {t[i]:.9g} s"
+        raise _fail(path, f"{label} {what} at {where(i + 1)}; a time axis must increase by one sample interval "
+                          "per sample (give the sample rate fs, --fs, to ignore it).")
+    _TimeAxis(path, label, dt, where).check(0, t)
+    return dt
 
 
 @dataclass(frozen=True)
@@ -116,15 +233,30 @@ class RecordingSource:
             idx = int(channel)
         if idx is not None and 0 <= idx < len(self.channels):
             return self.channels[idx]
+        other = getattr(self, "_extra", {}).get("non_numeric", {})  # (also lent to in-memory sources)
+        hit = [n for n in other if channel in (n, n.split("/")[-1])]
+        if hit:
+            raise _fail(self.path, f"holds {other[hit[0]]}, not numeric samples; numeric channels: "
+                                   f"{', '.join(repr(c) for c in self.channels)}.", channel=hit[0])
         raise InputError(
             f"Channel {channel!r} is not in {str(self.path)!r}; available: "
             f"{', '.join(repr(c) for c in self.channels)} (or an index 0-{len(self.channels) - 1})."
         )
 
+    def _where(self, k: int) -> str:
+        """Where sample ``k`` is in the file: a CSV line (the header is line 1) or a sample index."""
+        return f"line {k + 2}" if self.fmt == "csv" else f"sample {k}"
+
     def iter_blocks(
         self, channels: Sequence[str | int], *, block: int = DEFAULT_BLOCK
     ) -> Iterator[tuple[int, dict[str, NDArray[np.float64]]]]:
-        """Yield ``(start_sample, {name: samples})`` in order, in physical units, checked finite.
+        """Yield ``(start_sample, {name: samples})`` in order, in physical units, checked.
+
+        Every sample must be finite; where the file has its own time axis (a CSV time column,
+        a netCDF time coordinate, MDF4 time stamps) every step of it must be one sample
+        interval. Anything wrong, and any failure of the format's library (a corrupted
+        compressed chunk, a truncated file), raises :class:`~squealkit.InputError` naming the
+        file, the channel and the sample (or CSV line).
 
         Parameters
         ----------
@@ -141,42 +273,67 @@ class RecordingSource:
             Channel name -> samples (float64, physical units).
         """
         names = [self.resolve(c) for c in channels]
-        reader = getattr(self, f"_blocks_{self.fmt}")
-        for start, data in reader(names, block):
+        if isinstance(block, bool) or not isinstance(block, int | np.integer) or block < 1:
+            raise InputError(f"Parameter block={block!r} must be a whole number >= 1.")
+        spec = self._extra.get("time_axis")
+        axis = _TimeAxis(self.path, spec[0], spec[1], self._where) if spec else None
+        blocks = getattr(self, f"_blocks_{self.fmt}")(names, int(block), axis is not None)
+        done = 0
+        while True:
+            try:
+                start, data = next(blocks)
+            except StopIteration:
+                break
+            except InputError:
+                raise
+            except Exception as e:  # the format's library failed on the file: a damaged or truncated file
+                raise _fail(self.path, f"could not be read after {self._where(done)}: {_library_error(e)}",
+                            channel=names[0] if len(names) == 1 else None) from e
             out = {}
             for n in names:
-                v = np.asarray(data[n], dtype=np.float64)
+                v = _as_samples(self.path, n, data[n])
                 if n in self.scales:
                     v = v * self.scales[n]
-                _check_finite(n, v, start)
+                _check_finite(self.path, n, v, start, self._where)
                 out[n] = v
+            if axis is not None:
+                axis.check(start, data[_TIME])
+            done = start + len(out[names[0]]) if names else done
             yield start, out
+        if names and done != self.n_samples:
+            raise _fail(self.path, f"ends after {done} samples where {self.n_samples} were announced; the file "
+                                   "looks truncated.")
 
-    # -- per-format block readers ------------------------------------------------------
-    def _blocks_csv(self, names: list[str], block: int):
+    # -- per-format block readers: yield (start, {name: values}) and the time axis under _TIME ----------
+    def _blocks_csv(self, names: list[str], block: int, with_time: bool):
         import pandas as pd
 
         cols = self._extra["columns"]
-        usecols = [cols[n] for n in names]
+        wanted = {**{n: cols[n] for n in names}, **({_TIME: self._extra["time_column"]} if with_time else {})}
         start = 0
         try:
-            for df in pd.read_csv(self.path, usecols=usecols, chunksize=block, skipinitialspace=True):
+            reader = pd.read_csv(self.path, usecols=list(dict.fromkeys(wanted.values())), chunksize=block,
+                                 skipinitialspace=True, skip_blank_lines=False)
+            for df in reader:
+                df = df.iloc[: max(0, self.n_samples - start)]  # empty lines at the end are not rows
+                if df.empty:
+                    break
                 data = {}
-                for n in names:
-                    col = df[cols[n]]
+                for n, label in wanted.items():
+                    col = df[label]
                     if not pd.api.types.is_numeric_dtype(col.dtype) or pd.api.types.is_bool_dtype(col.dtype):
                         vals = pd.to_numeric(col, errors="coerce")
                         i = int(np.argmax(vals.isna().to_numpy()))
-                        raise InputError(
-                            f"Channel {n!r} has a non-numeric sample {col.iloc[i]!r} at sample {start + i}."
-                        )
+                        what = f"time column {label!r}" if n == _TIME else f"channel {n!r}"
+                        raise _fail(self.path, f"{what} has a non-numeric value {col.iloc[i]!r} at "
+                                               f"{self._where(start + i)}.")
                     data[n] = col.to_numpy(dtype=np.float64)
                 yield start, data
                 start += len(df)
         except (pd.errors.ParserError, UnicodeDecodeError) as e:
-            raise InputError(f"File {str(self.path)!r} is not a readable CSV: {e}") from e
+            raise _fail(self.path, f"not a readable CSV: {_library_error(e)}") from e
 
-    def _blocks_wav(self, names: list[str], block: int):
+    def _blocks_wav(self, names: list[str], block: int, with_time: bool):
         from scipy.io import wavfile
 
         _, raw = wavfile.read(self.path, mmap=True)
@@ -187,81 +344,102 @@ class RecordingSource:
             chunk = np.asarray(raw[start:start + block])
             yield start, {n: chunk[:, i].astype(np.float64) / full for n, i in zip(names, idx, strict=True)}
 
-    def _blocks_netcdf(self, names: list[str], block: int):
+    def _blocks_netcdf(self, names: list[str], block: int, with_time: bool):
         import h5py
 
-        try:  # netCDF-4 files are HDF5: read slices straight from h5py (much less overhead)
-            with h5py.File(self.path, "r") as f:
-                dsets = {n: f[n] for n in names}
-                if all(d.ndim == 1 and d.shape[0] == self.n_samples and not d.attrs.get("scale_factor")
-                       for d in dsets.values()):
-                    for start in range(0, self.n_samples, block):
-                        yield start, {n: d[start:start + block] for n, d in dsets.items()}
-                    return
-        except (OSError, KeyError):
-            pass
         dim = self._extra["dim"]
-        with xr.open_dataset(self.path, engine="h5netcdf") as ds:
+        keys = {**{n: n for n in names}, **({_TIME: dim} if with_time else {})}
+        try:  # netCDF-4 files are HDF5: read slices straight from h5py (much less overhead)
+            f = h5py.File(self.path, "r")
+        except OSError:
+            f = None
+        if f is not None:
+            with f:
+                dsets = {k: f[v] for k, v in keys.items() if v in f}
+                plain = len(dsets) == len(keys) and all(
+                    d.ndim == 1 and d.shape[0] == self.n_samples and not d.attrs.get("scale_factor")
+                    and not d.attrs.get("add_offset") for d in dsets.values())
+                if plain:
+                    scale = self._extra.get("time_scale", 1.0)
+                    for start in range(0, self.n_samples, block):
+                        data = {}
+                        for k, d in dsets.items():  # a damaged chunk is named with its channel
+                            try:
+                                data[k] = d[start:start + block]
+                            except Exception as e:
+                                what = f"time coordinate {dim!r}" if k == _TIME else f"channel {k!r}"
+                                raise _fail(self.path, f"{what} could not be read at samples {start}-"
+                                                       f"{min(start + block, self.n_samples) - 1}: "
+                                                       f"{_library_error(e)} (a damaged or truncated file?)") from e
+                        if with_time:
+                            data[_TIME] = np.asarray(data[_TIME], dtype=np.float64) * scale
+                        yield start, data
+                    return
+        with xr.open_dataset(self.path, engine="h5netcdf", decode_times=False, decode_timedelta=False) as ds:
+            scale = self._extra.get("time_scale", 1.0)
             for start in range(0, self.n_samples, block):
-                sub = ds[names].isel({dim: slice(start, start + block)}).load()
-                yield start, {n: sub[n].values for n in names}
+                sub = ds[[k for k in keys.values() if k in ds.data_vars]].isel({dim: slice(start, start + block)})
+                data = {n: sub[n].values for n in names}
+                if with_time:
+                    data[_TIME] = np.asarray(ds[dim][start:start + block].values, dtype=np.float64) * scale
+                yield start, data
 
-    def _blocks_mdf4(self, names: list[str], block: int):
+    def _blocks_mdf4(self, names: list[str], block: int, with_time: bool):
         from asammdf import MDF
 
-        # asammdf yields each channel in the chunks of its data blocks; cut them into equal blocks
+        # asammdf yields each channel in the chunks of its data blocks; cut them into equal blocks.
+        # The time stamps come with the first requested channel's samples.
+        where = self._extra["where"]
         with MDF(self.path) as mdf:
-            its = {n: mdf.iter_get(n, group=self._extra["where"][n][0], index=self._extra["where"][n][1],
-                                   samples_only=True) for n in names}
-            buf: dict[str, list[NDArray]] = {n: [] for n in names}
-            have = dict.fromkeys(names, 0)
+            its: dict[str, Iterator[NDArray]] = {
+                n: (s[0] for s in mdf.iter_get(n, group=where[n][0], index=where[n][1], samples_only=True))
+                for n in names}
+            if with_time and names:
+                n0 = names[0]
+                its[_TIME] = (s.timestamps for s in mdf.iter_get(n0, group=where[n0][0], index=where[n0][1]))
+            keys = list(its)
+            buf: dict[str, list[NDArray]] = {k: [] for k in keys}
+            have = dict.fromkeys(keys, 0)
             start = 0
-            done = False
-            while not done:
-                for n in names:
-                    while have[n] < block:
+            exhausted: set[str] = set()
+            while True:
+                for k in keys:
+                    while have[k] < block and k not in exhausted:
                         try:
-                            samples = np.asarray(next(its[n])[0], dtype=np.float64)
+                            samples = np.asarray(next(its[k]))
                         except StopIteration:
-                            done = True
+                            exhausted.add(k)
                             break
-                        buf[n].append(samples)
-                        have[n] += samples.size
-                m = min(have.values())
-                if m == 0:
+                        buf[k].append(samples)
+                        have[k] += samples.size
+                take = min(min(have.values()), block)
+                if take == 0:
                     return
-                take = min(m, block)
                 out = {}
-                for n in names:
-                    joined = np.concatenate(buf[n])
-                    out[n], rest = joined[:take], joined[take:]
-                    buf[n], have[n] = [rest], rest.size
+                for k in keys:
+                    joined = np.concatenate(buf[k])
+                    out[k], rest = joined[:take], joined[take:]
+                    buf[k], have[k] = [rest], rest.size
                 yield start, out
                 start += take
-                if done:
-                    while min(have.values()) > 0:
-                        take = min(min(have.values()), block)
-                        out = {}
-                        for n in names:
-                            joined = np.concatenate(buf[n])
-                            out[n], rest = joined[:take], joined[take:]
-                            buf[n], have[n] = [rest], rest.size
-                        yield start, out
-                        start += take
 
-    def _blocks_uff(self, names: list[str], block: int):
+    def _blocks_uff(self, names: list[str], block: int, with_time: bool):
         import pyuff
 
         # a UFF 58 function is one record: read each wanted channel's record once (only those)
         uff = pyuff.UFF(str(self.path))
-        data = {n: np.asarray(uff.read_sets(self._extra["sets"][n])["data"], dtype=np.float64) for n in names}
+        data = {n: np.asarray(uff.read_sets(self._extra["sets"][n])["data"]) for n in names}
+        for n, d in data.items():
+            if d.shape != (self.n_samples,):
+                raise _fail(self.path, f"holds {d.size} values where its header announces {self.n_samples}; the "
+                                       "record is truncated or damaged.", channel=n)
         for start in range(0, self.n_samples, block):
             yield start, {n: d[start:start + block] for n, d in data.items()}
 
-    def _blocks_tdms(self, names: list[str], block: int):
+    def _blocks_tdms(self, names: list[str], block: int, with_time: bool):
         from nptdms import TdmsFile
 
-        with TdmsFile.open(self.path) as f:
+        with _quiet_logger("nptdms"), TdmsFile.open(self.path) as f:
             chans = {n: f[n.split("/")[0]][n.split("/", 1)[1]] for n in names}
             for start in range(0, self.n_samples, block):
                 yield start, {n: c[start:start + block] for n, c in chans.items()}
@@ -289,6 +467,11 @@ def open_recording(
 ) -> RecordingSource:
     """Inspect a recording file and return a lazy :class:`RecordingSource`.
 
+    Every problem with the file (empty, truncated, damaged, a channel that is text, a sample
+    rate that is zero or not a number, a time axis that goes back or jumps) raises
+    :class:`~squealkit.InputError` with one line naming the file, the channel and where; the
+    samples themselves are checked as they are read (:meth:`RecordingSource.iter_blocks`).
+
     Parameters
     ----------
     path : path-like
@@ -299,7 +482,8 @@ def open_recording(
         ``.uff``/``.unv`` (universal file, dataset 58 time histories, read with pyuff one
         channel record at a time).
     fs : float, optional
-        Sample rate [Hz]; required for a CSV without a time column, otherwise overrides.
+        Sample rate [Hz]; required for a CSV without a time column, otherwise overrides
+        the file's own (its time column or coordinate is then not used nor checked).
     scale : float, sequence or mapping, optional
         Factor per channel from file values to physical units (e.g. Pa per full scale of
         a WAV channel). Keys of a mapping are channel names (resolved like channels).
@@ -332,30 +516,24 @@ def open_recording(
     if fs is not None:
         fs = validate_fs(fs)
     suffix = p.suffix.lower()
+    openers = {".csv": _open_csv, ".txt": _open_csv, ".wav": _open_wav, ".nc": _open_netcdf, ".h5": _open_netcdf,
+               ".hdf5": _open_netcdf, ".nc4": _open_netcdf, ".tdms": _open_tdms, ".mf4": _open_mdf4,
+               ".mdf": _open_mdf4, ".uff": _open_uff, ".unv": _open_uff}
+    if suffix not in openers:
+        raise InputError(f"Recording {str(p)!r} has an unknown format; use .csv, .wav, .nc/.h5, .tdms, "
+                         ".mf4 or .uff/.unv.")
     try:
-        if suffix in (".csv", ".txt"):
-            src = _open_csv(p, fs)
-        elif suffix == ".wav":
-            src = _open_wav(p, fs)
-        elif suffix in (".nc", ".h5", ".hdf5", ".nc4"):
-            src = _open_netcdf(p, fs)
-        elif suffix == ".tdms":
-            src = _open_tdms(p, fs)
-        elif suffix in (".mf4", ".mdf"):
-            src = _open_mdf4(p, fs)
-        elif suffix in (".uff", ".unv"):
-            src = _open_uff(p, fs)
-        else:
-            raise InputError(f"Recording {str(p)!r} has an unknown format; use .csv, .wav, .nc/.h5, .tdms, "
-                             ".mf4 or .uff/.unv.")
+        if p.stat().st_size == 0:
+            raise _fail(p, "the file is empty (0 bytes).")
+        src = openers[suffix](p, fs)
     except InputError:
         raise
     except Exception as e:  # any parser failure is a user's unreadable file
-        raise InputError(f"Recording {str(p)!r} could not be read as {suffix}: {type(e).__name__}: {e}") from e
+        raise _fail(p, f"could not be read as {suffix}: {_library_error(e)}") from e
     if src.n_samples < 2:
-        raise InputError(f"Recording {str(p)!r} has {src.n_samples} sample(s); at least 2 are needed.")
+        raise _fail(p, f"has {src.n_samples} sample(s); at least 2 are needed.")
     if not src.channels:
-        raise InputError(f"Recording {str(p)!r} has no data channel.")
+        raise _fail(p, "has no numeric data channel.")
     unit_map = dict(src.units)
     for k, v in (units or {}).items():
         unit_map[src.resolve(k)] = str(v)
@@ -364,31 +542,101 @@ def open_recording(
     return RecordingSource(src.path, src.fmt, src.fs, src.n_samples, src.channels, unit_map, scales, src._extra)
 
 
+def _csv_rows(p: Path, n_fields: int) -> int:
+    """Count a CSV's data rows, checking on the way that every row has the header's fields.
+
+    Reads the file once in blocks of lines (bounded memory). A row with more or fewer
+    fields (a truncated last row, a row from another table) or an empty row between data
+    rows is reported with its line number; empty lines at the very end are ignored.
+    A block (4 MiB) whose comma count is its row count times the header's is taken as
+    right without looking at each row; only rows with fields too many and others (or empty
+    lines) with as many too few in the same block could hide there (a short row then still
+    fails as a missing sample). Blocks holding a quote character are left to the CSV parser (a quoted
+    field may hold a comma).
+    """
+    line = 1  # lines before the current block (the header is line 1)
+    first_blank: int | None = None
+    rows = 0
+    with open(p, "rb") as fh:
+        fh.readline()
+        rest = b""
+        while True:
+            chunk = fh.read(1 << 22)
+            at_end = not chunk
+            data = rest + chunk
+            if not at_end:
+                cut = data.rfind(b"\n") + 1
+                data, rest = data[:cut], data[cut:]
+            elif data and not data.endswith(b"\n"):
+                data += b"\n"
+            if data and first_blank is None and data.count(b",") == (n_fields - 1) * data.count(b"\n"):
+                # the common case, at the speed of bytes.count: as many fields in the block as rows x fields
+                n_lines = data.count(b"\n")
+                rows += n_lines
+                line += n_lines
+            elif data:
+                a = np.frombuffer(data, dtype=np.uint8)
+                nl = np.flatnonzero(a == 10)
+                length = np.diff(nl, prepend=-1) - 1
+                blank = (length == 0) | ((length == 1) & (a[np.maximum(nl - 1, 0)] == 13))
+                if b'"' in data:
+                    fields = np.full(nl.size, n_fields)
+                else:
+                    fields = np.diff(np.searchsorted(np.flatnonzero(a == 44), nl), prepend=0) + 1
+                bad = (fields != n_fields) & ~blank
+                if first_blank is not None and nl.size and not blank.all():
+                    raise _fail(p, f"line {first_blank} is empty; data rows must follow each other.")
+                if bad.any():
+                    i = int(np.argmax(bad))
+                    before = np.flatnonzero(blank[:i])
+                    if before.size:
+                        raise _fail(p, f"line {line + 1 + int(before[0])} is empty; data rows must follow each other.")
+                    more = "extra fields" if fields[i] > n_fields else "missing fields (a truncated row?)"
+                    has = f"{fields[i]} field" + ("" if fields[i] == 1 else "s")
+                    raise _fail(p, f"line {line + 1 + i} has {has} where the header has {n_fields}: {more}.")
+                if blank.any():
+                    j = int(np.argmax(blank))
+                    if not blank[j:].all():
+                        raise _fail(p, f"line {line + 1 + j} is empty; data rows must follow each other.")
+                    first_blank = first_blank or line + 1 + j
+                    rows += j
+                elif first_blank is None:
+                    rows += nl.size
+                line += nl.size
+            if at_end:
+                return rows
+
+
 def _open_csv(p: Path, fs: float | None) -> RecordingSource:
+    import csv
+
     import pandas as pd
 
+    with open(p, encoding="utf-8", errors="replace", newline="") as fh:
+        header = next(csv.reader([fh.readline()]), [])
+    n_rows = _csv_rows(p, len(header))
     try:
         head = pd.read_csv(p, nrows=64, skipinitialspace=True)
     except pd.errors.EmptyDataError as e:
-        raise InputError(f"Recording {str(p)!r} is empty.") from e
-    if head.shape[0] < 2:
-        raise InputError(f"Recording {str(p)!r} has fewer than 2 data rows.")
+        raise _fail(p, "the file is empty.") from e
+    if n_rows < 2:
+        raise _fail(p, f"has {n_rows} data row(s); at least 2 are needed (fewer than 2 rows).")
     labels = [str(c) for c in head.columns]
     parsed = [_split_unit(c) for c in labels]
     time_i = next((i for i, (n, _) in enumerate(parsed) if n.lower() in _TIME_NAMES), None)
     if time_i is None and fs is None:
-        raise InputError(f"Recording {str(p)!r} has no time column (named 'time' or 't'); give the sample rate fs.")
+        raise _fail(p, "has no time column (named 'time' or 't'); give the sample rate fs.")
+    extra: dict[str, Any] = {}
     if time_i is not None and fs is None:
-        t = pd.to_numeric(head.iloc[:, time_i], errors="coerce").to_numpy(dtype=float)
-        dt = np.diff(t)
-        if not np.all(np.isfinite(dt)) or np.median(dt) <= 0:
-            raise InputError(f"Time column {labels[time_i]!r} of {str(p)!r} is not numeric and increasing.")
-        fs = 1.0 / float(np.median(dt))
-    with open(p, "rb") as fh:
-        n_lines = sum(chunk.count(b"\n") for chunk in iter(lambda: fh.read(1 << 24), b""))
-        fh.seek(-1, 2)
-        last = fh.read(1)
-    n_samples = n_lines - 1 + (0 if last == b"\n" else 1)
+        label = f"time column {labels[time_i]!r}"
+        col = head.iloc[:, time_i]
+        t = pd.to_numeric(col, errors="coerce").to_numpy(dtype=float)
+        if np.isnan(t).any():
+            i = int(np.argmax(np.isnan(t)))
+            raise _fail(p, f"{label} has a non-numeric value {col.iloc[i]!r} at line {i + 2}.")
+        dt = _head_interval(p, label, t, lambda k: f"line {k + 2}")
+        fs = 1.0 / dt
+        extra.update(time_column=labels[time_i], time_axis=(label, dt))
     channels, units, columns = [], {}, {}
     for i, (name, unit) in enumerate(parsed):
         if i == time_i:
@@ -397,14 +645,19 @@ def _open_csv(p: Path, fs: float | None) -> RecordingSource:
         units[name] = unit
         columns[name] = labels[i]
     if not channels:
-        raise InputError(f"Recording {str(p)!r} has only a time column and no data channel.")
-    return RecordingSource(p, "csv", float(fs), n_samples, tuple(channels), units, {}, {"columns": columns})
+        raise _fail(p, "has only a time column and no data channel.")
+    return RecordingSource(p, "csv", float(fs), n_rows, tuple(channels), units, {}, {"columns": columns, **extra})
 
 
 def _open_wav(p: Path, fs: float | None) -> RecordingSource:
     from scipy.io import wavfile
 
-    rate, raw = wavfile.read(p, mmap=True)
+    try:
+        rate, raw = wavfile.read(p, mmap=True)
+    except ValueError as e:
+        if "mmap length is greater than file size" not in str(e):
+            raise
+        raise _fail(p, "is truncated: its header announces more samples than the file holds.") from e
     n_ch = 1 if raw.ndim == 1 else raw.shape[1]
     if np.issubdtype(raw.dtype, np.integer):
         info = np.iinfo(raw.dtype)
@@ -412,8 +665,16 @@ def _open_wav(p: Path, fs: float | None) -> RecordingSource:
     else:
         full = 1.0
     chans = tuple(f"ch{i}" for i in range(n_ch))
-    return RecordingSource(p, "wav", float(fs or rate), raw.shape[0], chans, dict.fromkeys(chans, ""), {},
+    rate = fs or _file_rate(p, rate, "sample rate (WAV header)")
+    return RecordingSource(p, "wav", float(rate), raw.shape[0], chans, dict.fromkeys(chans, ""), {},
                            {"full_scale": full})
+
+
+#: Seconds per unit of a netCDF time coordinate (CF ``units``: ``"s"``, ``"milliseconds"``, ``"seconds since ..."``).
+_TIME_UNITS = {"s": 1.0, "sec": 1.0, "second": 1.0, "seconds": 1.0, "ms": 1e-3, "millisecond": 1e-3,
+               "milliseconds": 1e-3, "us": 1e-6, "microsecond": 1e-6, "microseconds": 1e-6, "ns": 1e-9,
+               "nanosecond": 1e-9, "nanoseconds": 1e-9, "min": 60.0, "minute": 60.0, "minutes": 60.0,
+               "h": 3600.0, "hour": 3600.0, "hours": 3600.0, "d": 86400.0, "day": 86400.0, "days": 86400.0}
 
 
 def _open_netcdf(p: Path, fs: float | None) -> RecordingSource:
@@ -427,23 +688,37 @@ def _open_netcdf(p: Path, fs: float | None) -> RecordingSource:
         coords = set(f.dimensions)
         for v in variables.values():
             coords.update(_attr_str(v.attrs.get("coordinates", "")).split())
-        names = [n for n, v in variables.items()
-                 if n not in coords and v.ndim == 1 and np.issubdtype(v.dtype, np.number)]
+        one_d = [n for n, v in variables.items() if n not in coords and v.ndim == 1]
+        names = [n for n in one_d if np.issubdtype(variables[n].dtype, np.number)]
         if not names:
-            raise InputError(f"Recording {str(p)!r} has no 1-D numeric variable.")
+            raise _fail(p, "has no 1-D numeric variable.")
         dim = variables[names[0]].dimensions[0]
         names = [n for n in names if variables[n].dimensions == (dim,)]
+        other = {n: f"values of dtype {variables[n].dtype}" for n in one_d if n not in names}
         n_samples = int(f.dimensions[dim].size)
+        extra: dict[str, Any] = {"dim": dim, "synthetic": bool(f.attrs.get("synthetic", 0)), "non_numeric": other}
         if fs is None:
-            if "fs" in f.attrs:
-                fs = validate_fs(f.attrs["fs"], "fs attribute")
-            elif dim in variables and n_samples > 1:
-                t = np.asarray(variables[dim][:64], dtype=float)
-                fs = 1.0 / float(np.median(np.diff(t)))
+            if dim in variables and n_samples > 1:
+                tv = variables[dim]
+                tunits = _attr_str(tv.attrs.get("units", "s")).split(" since ")[0].strip().lower() or "s"
+                scale = _TIME_UNITS.get(tunits)
+                if scale is None:
+                    raise _fail(p, f"time coordinate {dim!r} has units {tunits!r}; use seconds, or give fs.")
+                label = f"time coordinate {dim!r}"
+                dt = _head_interval(p, label, np.asarray(tv[:64], dtype=float) * scale, _sample_where)
+                if "fs" in f.attrs:  # both: the attribute sets the rate, the coordinate must agree
+                    rate = _file_rate(p, f.attrs["fs"], "fs attribute")
+                    if abs(dt * rate - 1) > 1e-3:
+                        raise _fail(p, f"its fs attribute ({rate:.9g} Hz) and its {label} (steps of {dt:.6g} s, "
+                                       f"{1 / dt:.9g} Hz) disagree; give fs.")
+                    dt = 1.0 / rate
+                fs = 1.0 / dt
+                extra.update(time_axis=(label, dt), time_scale=scale)
+            elif "fs" in f.attrs:
+                fs = _file_rate(p, f.attrs["fs"], "fs attribute")
             else:
-                raise InputError(f"Recording {str(p)!r} has no 'fs' attribute or time coordinate; give fs.")
+                raise _fail(p, "has no 'fs' attribute or time coordinate; give fs.")
         units = {n: _attr_str(variables[n].attrs.get("units", "")) for n in names}
-        extra = {"dim": dim, "synthetic": bool(f.attrs.get("synthetic", 0))}
         return RecordingSource(p, "netcdf", float(fs), n_samples, tuple(names), units, {}, extra)
 
 
@@ -451,66 +726,135 @@ def _attr_str(value: Any) -> str:
     return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
 
 
+@contextlib.contextmanager
+def _quiet_logger(package: str) -> Iterator[list[str]]:
+    """Collect (instead of printing) what ``package`` logs through its own console handler (nptdms has one)."""
+    seen: list[str] = []
+
+    def keep(record: logging.LogRecord) -> bool:
+        if record.name.split(".")[0] == package:
+            seen.append(record.getMessage())
+            return False
+        return True
+
+    handlers = {h for name, lg in logging.Logger.manager.loggerDict.items()
+                if name.split(".")[0] == package and isinstance(lg, logging.Logger) for h in lg.handlers}
+    for h in handlers:
+        h.addFilter(keep)
+    try:
+        yield seen
+    finally:
+        for h in handlers:
+            h.removeFilter(keep)
+
+
 def _open_tdms(p: Path, fs: float | None) -> RecordingSource:
     from nptdms import TdmsFile
 
-    with TdmsFile.open(p) as f:
+    with open(p, "rb") as fh:
+        if fh.read(4) != b"TDSm":
+            raise _fail(p, "is not a TDMS file: it does not start with the 'TDSm' lead-in tag.")
+    with _quiet_logger("nptdms") as said, TdmsFile.open(p) as f:
         synthetic = bool(int(f.properties.get("synthetic", 0) or 0))
-        chans, units, lengths, incs = [], {}, [], []
+        chans, units, lengths, incs, other = [], {}, {}, {}, {}
         for g in f.groups():
             for c in g.channels():
                 name = f"{g.name}/{c.name}"
+                if c.dtype is None or np.dtype(c.dtype).kind not in "biuf":
+                    other[name] = "text" if c.dtype is None or np.dtype(c.dtype).kind in "OSU" else \
+                        f"values of dtype {c.dtype}"
+                    continue
                 chans.append(name)
                 units[name] = str(c.properties.get("unit_string", ""))
-                lengths.append(len(c))
+                lengths[name] = len(c)
                 if "wf_increment" in c.properties:
-                    incs.append(float(c.properties["wf_increment"]))
+                    incs[name] = c.properties["wf_increment"]
+    truncated = [m for m in said if "less data than expected" in m or "incomplete" in m or "multiple of" in m]
+    if truncated:
+        raise _fail(p, f"is truncated (nptdms: {truncated[0]})")
     if not chans:
-        raise InputError(f"Recording {str(p)!r} has no channel.")
-    if len(set(lengths)) != 1:
-        raise InputError(f"Channels of {str(p)!r} have different lengths {sorted(set(lengths))}.")
+        raise _fail(p, "has no numeric channel" + (f" (text: {', '.join(map(repr, other))})." if other else "."))
+    if len(set(lengths.values())) != 1:
+        raise _fail(p, f"its channels have different lengths ({', '.join(f'{n}: {k}' for n, k in lengths.items())}"
+                       " samples); give channels of one sample rate.")
     if fs is None:
         if not incs:
-            raise InputError(f"Recording {str(p)!r} has no wf_increment property; give fs.")
-        fs = 1.0 / validate_positive("wf_increment", incs[0])
-    return RecordingSource(p, "tdms", float(fs), lengths[0], tuple(chans), units, {}, {"synthetic": synthetic})
+            raise _fail(p, "has no wf_increment property (the sample interval); give fs.")
+        rates = {n: _file_rate(p, v, f"wf_increment of channel {n!r}", interval=True) for n, v in incs.items()}
+        if max(rates.values()) > min(rates.values()) * (1 + 1e-9):
+            raise _fail(p, "its channels have different sample intervals "
+                           f"({', '.join(f'{n}: {incs[n]!r} s' for n in incs)}).")
+        fs = next(iter(rates.values()))
+    extra = {"synthetic": synthetic, "non_numeric": other}
+    return RecordingSource(p, "tdms", float(fs), lengths[chans[0]], tuple(chans), units, {}, extra)
 
 
-def _open_mdf4(p: Path, fs: float | None) -> RecordingSource:
+@contextlib.contextmanager
+def _mdf(p: Path):
+    """``asammdf.MDF(p)``, closed after use; a file it cannot open is one line, without asammdf's
+    'Exception ignored in __del__' noise from the half-built object."""
     try:
         from asammdf import MDF
     except ImportError as e:
         raise InputError("Reading MDF4 needs asammdf: pip install 'squealkit[daq]'.") from e
-    with MDF(p) as mdf:
+    hook = sys.unraisablehook
+
+    def quiet(u: Any) -> None:
+        if str(getattr(u.object, "__module__", "") or type(u.object).__module__).startswith("asammdf"):
+            return
+        hook(u)
+
+    sys.unraisablehook = quiet
+    try:
+        try:
+            mdf = MDF(p)
+        except Exception as e:
+            msg = f"could not be read as MDF4 (a damaged or truncated file?): {_library_error(e)}"
+            e.__traceback__ = None  # frees the half-built object now, while its noise is filtered
+            del e
+            gc.collect()
+            raise _fail(p, msg) from None
+    finally:
+        sys.unraisablehook = hook
+    with mdf:
+        yield mdf
+
+
+def _open_mdf4(p: Path, fs: float | None) -> RecordingSource:
+    with _mdf(p) as mdf:
         where: dict[str, tuple[int, int]] = {}
         units: dict[str, str] = {}
-        n_samples, rate = None, None
+        other: dict[str, str] = {}
+        n_samples, head = None, None
         for gi, group in enumerate(mdf.groups):
             for ci, ch in enumerate(group.channels):
                 if ch.name in where or ch.name.lower() in _TIME_NAMES or ci == mdf.masters_db.get(gi):
                     continue
-                sig = mdf.get(group=gi, index=ci, raw=True) if n_samples is None else None
-                if sig is not None:
-                    n_samples = len(sig.timestamps)
-                    rate = float(np.round(1.0 / float(np.median(np.diff(sig.timestamps[:64]))), 6))
+                kind = int(getattr(ch, "data_type", 0))
+                # numeric data types: MDF4 0-5 (integers, floats); MDF3 all but 7 (string) and 8 (bytes)
+                if (kind > 5) if str(mdf.version).startswith("4") else kind in (7, 8):
+                    other[ch.name] = f"text or bytes (MDF data type {kind})"
+                    continue
+                if n_samples is None:
+                    n_samples = int(group.channel_group.cycles_nr)
+                    sig = next(mdf.iter_get(ch.name, group=gi, index=ci))
+                    head = (ch.name, np.asarray(sig.timestamps[:64], dtype=float))
                 where[ch.name] = (gi, ci)
                 units[ch.name] = str(ch.unit)
         synthetic = "SYNTHETIC" in str(mdf.header.comment)
-    if not where or n_samples is None:
-        raise InputError(f"Recording {str(p)!r} has no channel.")
-    counts = {n: int(mdf_len) for n, mdf_len in _mdf_lengths(p, where).items()}
+        counts = {n: int(mdf.groups[g].channel_group.cycles_nr) for n, (g, _) in where.items()}
+    if not where or n_samples is None or head is None:
+        raise _fail(p, "has no numeric channel" + (f" (text: {', '.join(map(repr, other))})." if other else "."))
     if len(set(counts.values())) != 1:
-        raise InputError(f"Channels of {str(p)!r} have different lengths {sorted(set(counts.values()))}; "
-                         "give channels of one sample rate.")
-    return RecordingSource(p, "mdf4", float(fs or rate), n_samples, tuple(where), units, {},
-                           {"where": where, "synthetic": synthetic})
-
-
-def _mdf_lengths(p: Path, where: Mapping[str, tuple[int, int]]) -> dict[str, int]:
-    from asammdf import MDF
-
-    with MDF(p) as mdf:
-        return {n: int(mdf.groups[g].channel_group.cycles_nr) for n, (g, _) in where.items()}
+        raise _fail(p, f"its channels have different lengths ({', '.join(f'{n}: {k}' for n, k in counts.items())} "
+                       "samples); give channels of one sample rate.")
+    extra: dict[str, Any] = {"where": where, "synthetic": synthetic, "non_numeric": other}
+    if fs is None:
+        label = f"time axis of channel {head[0]!r}"
+        dt = _head_interval(p, label, head[1], _sample_where)
+        fs = float(np.round(1.0 / dt, 6))
+        extra["time_axis"] = (label, dt)
+    return RecordingSource(p, "mdf4", float(fs), n_samples, tuple(where), units, {}, extra)
 
 
 def _open_uff(p: Path, fs: float | None) -> RecordingSource:
@@ -518,11 +862,16 @@ def _open_uff(p: Path, fs: float | None) -> RecordingSource:
         import pyuff
     except ImportError as e:
         raise InputError("Reading UFF needs pyuff: pip install 'squealkit[daq]'.") from e
+    with open(p, "rb") as fh:  # every universal dataset ends with a line "    -1": a file cut short does not
+        fh.seek(max(0, p.stat().st_size - 256))
+        tail = fh.read().split()
+    if not tail or tail[-1] != b"-1":
+        raise _fail(p, "is truncated: it does not end with a dataset's closing '-1' line.")
     uff = pyuff.UFF(str(p))
     types = list(uff.get_set_types())
     sets: dict[str, int] = {}
     units: dict[str, str] = {}
-    lengths, incs, synthetic = [], [], False
+    lengths, incs, synthetic = {}, {}, False
     for i, t in enumerate(types):
         if int(t) != 58:
             continue
@@ -532,15 +881,26 @@ def _open_uff(p: Path, fs: float | None) -> RecordingSource:
             name = f"{name}_{i}"
         sets[name] = i
         units[name] = str(d.get("ordinate_axis_units_lab", "")).strip()
-        lengths.append(int(d["num_pts"]))
-        incs.append(float(d["abscissa_inc"]))
+        lengths[name] = int(d["num_pts"])
+        if int(d.get("abscissa_spacing", 1)) != 1:
+            raise _fail(p, "its abscissa is uneven (abscissa_spacing 0); squealkit reads equally sampled time "
+                           "histories.", channel=name)
+        incs[name] = d["abscissa_inc"]
         synthetic |= "SYNTHETIC" in str(d.get("id2", ""))
     if not sets:
-        raise InputError(f"Recording {str(p)!r} has no dataset 58 (function at nodal DOF).")
-    if len(set(lengths)) != 1:
-        raise InputError(f"Channels of {str(p)!r} have different lengths {sorted(set(lengths))}.")
-    return RecordingSource(p, "uff", float(fs or 1.0 / validate_positive("abscissa_inc", incs[0])), lengths[0],
-                           tuple(sets), units, {}, {"sets": sets, "synthetic": synthetic})
+        raise _fail(p, "has no dataset 58 (function at nodal DOF).")
+    if len(set(lengths.values())) != 1:
+        raise _fail(p, f"its channels have different lengths ({', '.join(f'{n}: {k}' for n, k in lengths.items())} "
+                       "samples); give channels of one sample rate.")
+    if fs is None:
+        rates = {n: _file_rate(p, v, f"abscissa_inc of channel {n!r}", interval=True) for n, v in incs.items()}
+        if max(rates.values()) > min(rates.values()) * (1 + 1e-9):
+            raise _fail(p, "its channels have different sample intervals "
+                           f"({', '.join(f'{n}: {incs[n]!r} s' for n in incs)}).")
+        fs = next(iter(rates.values()))
+    first = next(iter(sets))
+    return RecordingSource(p, "uff", float(fs), lengths[first], tuple(sets), units, {},
+                           {"sets": sets, "synthetic": synthetic})
 
 
 def recording_dataset(
