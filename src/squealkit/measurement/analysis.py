@@ -26,7 +26,7 @@ from .. import __version__
 from .._threads import thread_limit
 from .._validation import InputError, validate_fs, validate_positive
 from .criteria import SquealCriteria, band_weighted_signal, exponential_average, squeal_criteria
-from .events import SquealEvent, link_components, tonal_components
+from .events import DEFAULT_MIN_TNR_DB, SquealEvent, link_components, tonal_components, tone_to_noise_ratio
 from .filters import lowpass, lowpass_decimated
 from .readers import DEFAULT_BLOCK, RecordingSource, open_recording
 from .runout import revolution_frequency, surface_speed
@@ -42,7 +42,14 @@ _LOBE = 2
 
 @dataclass(frozen=True)
 class AnalysisSettings:
-    """Criteria and processing settings of :func:`analyze_recording` (all SI / Hz / s)."""
+    """Criteria and processing settings of :func:`analyze_recording` (all SI / Hz / s).
+
+    ``min_tnr_db`` is the tonality a component needs to count as squeal: its tone-to-noise
+    ratio [dB] over the masking noise in its critical band
+    (:func:`~squealkit.measurement.events.tone_to_noise_ratio`; default 8 dB, the ECMA-418-1
+    criterion for a prominent tone at or above 1 kHz). None: every peak above the threshold
+    counts (then loud broadband noise reads as squeal).
+    """
 
     rpm: float
     radius: float
@@ -61,6 +68,7 @@ class AnalysisSettings:
     pulses_per_rev: int = 1
     tacho_level: float | None = None
     angle_unit: str = "deg"
+    min_tnr_db: float | None = DEFAULT_MIN_TNR_DB
 
     @property
     def band(self) -> tuple[float, float]:
@@ -90,6 +98,9 @@ class AnalysisSettings:
             raise InputError(f"Parameter band={self.band!r}: upper edge must lie below fs/2 = {fs / 2:g} Hz.")
         if not (isinstance(self.nperseg, int) and self.nperseg >= 16):
             raise InputError(f"Parameter nperseg={self.nperseg!r} must be a whole number >= 16.")
+        if self.min_tnr_db is not None and not (isinstance(self.min_tnr_db, int | float)
+                                                 and math.isfinite(self.min_tnr_db)):
+            raise InputError(f"Parameter min_tnr_db={self.min_tnr_db!r} must be a finite number [dB] or None.")
         if not (isinstance(self.hop, int) and 1 <= self.hop <= self.nperseg):
             raise InputError(f"Parameter hop={self.hop!r} must be a whole number in [1, nperseg].")
         return self
@@ -179,6 +190,7 @@ class MeasurementResult:
             "settings": {
                 "rpm": self.settings.rpm, "radius_m": self.settings.radius, "band_hz": list(self.settings.band),
                 "threshold_dba": self.settings.threshold_dba, "min_duration_s": self.settings.min_duration,
+                "min_tnr_db": self.settings.min_tnr_db,
             },
         }
 
@@ -643,7 +655,9 @@ def _frame_components(plan: _Plan, s: AnalysisSettings, win: _Window, sp: _Spect
     (:func:`~squealkit.measurement.events.tonal_components`). Each component's frequency is
     then refined from its phase advance over the main lobe (unbiased for growing and decaying
     squeal, where the two-bin ratio is not), where the tone is in the frame itself (a quarter of
-    its time-weighted power), not only remembered. Appends to ``acc.comp_*`` and sums the loud
+    its time-weighted power), not only remembered. A component counts only when it is tonal:
+    its tone-to-noise ratio in the time-weighted spectrum reaches ``s.min_tnr_db``
+    (:func:`~squealkit.measurement.events.tone_to_noise_ratio`). Appends to ``acc.comp_*`` and sums the loud
     frames' spectra and cross spectra (``acc.mic_spec_sum``, ``acc.mic_cross_sum``).
 
     Parameters
@@ -667,9 +681,13 @@ def _frame_components(plan: _Plan, s: AnalysisSettings, win: _Window, sp: _Spect
     cross = sp.spec[loud] * np.conj(sp.spec_p[np.maximum(prev, 0)])
     cross[prev < 0] = 0
     acc.mic_cross_sum[lo:hi] += cross.sum(axis=0, dtype=np.complex128)
-    fr, ff, fl = tonal_components(pa_tw[loud], pa_tw[loud], lo, fs, n, s.threshold_dba,
-                                  scale=share_scale, half_width=plan.half_width)
+    ptw = pa_tw[loud]
+    fr, ff, fl = tonal_components(ptw, ptw, lo, fs, n, s.threshold_dba, scale=share_scale,
+                                  half_width=plan.half_width)
     kc = np.clip(np.rint(ff * (n / fs)).astype(np.intp) - lo, _LOBE, hi - lo - 1 - _LOBE)
+    if s.min_tnr_db is not None and fr.size:  # tonality: a peak in broadband noise is no squeal
+        tonal = tone_to_noise_ratio(ptw, fr, kc, ff, fs / n, half_width=_LOBE) >= s.min_tnr_db
+        fr, ff, fl, kc = fr[tonal], ff[tonal], fl[tonal], kc[tonal]
     lobe = kc[:, None] + np.arange(-_LOBE, _LOBE + 1)
     c = cross[fr[:, None], lobe].sum(axis=1, dtype=np.complex128)
     now = pa[loud[fr][:, None], lobe].sum(axis=1) >= 0.25 * pa_tw[loud[fr][:, None], lobe].sum(axis=1)
@@ -1029,7 +1047,8 @@ def _assemble(
         coords={"freq": ("freq", plan.freq, {"units": "Hz"})},
     )
     out_attrs = {"source": str(attrs.get("source", src.path)), "synthetic": bool(attrs.get("synthetic", False)),
-                 "max_tan_theta": acc.max_tan, "surface_speed": surface_speed(s.rpm, s.radius)}
+                 "max_tan_theta": acc.max_tan, "surface_speed": surface_speed(s.rpm, s.radius),
+                 "min_tnr_db": s.min_tnr_db}
     return MeasurementResult(
         squeal_frequency_hz=squeal_f, harmonics=tuple(harmonics), events=tuple(events), rising_fraction=rising,
         growth_slope_correlation=corr, peak_dba=peak, runout_phase_deg=phase, duration_s=plan.total / fs, fs=fs,
@@ -1092,7 +1111,9 @@ def analyze_recording(
         ``nperseg``, ``hop``, ``freq_tol``, ``n_angle_bins``, ``chunk_s``), and the rig's
         geometry: ``probe_offset_deg`` (the probe sits this far upstream of the pin, so it sees
         the surface that much rotation before the pin), ``acoustic_delay`` [s] (pin to
-        microphone) and ``polarity`` (-1: the probe reads the run-out reversed).
+        microphone) and ``polarity`` (-1: the probe reads the run-out reversed); and
+        ``min_tnr_db``, the tonality a squeal component needs (tone-to-noise ratio [dB], default
+        8 as ECMA-418-1 for a prominent tone; None: none).
 
     Returns
     -------
