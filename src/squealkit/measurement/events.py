@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from .spectral import P_REF, refine_peak
@@ -229,6 +230,64 @@ def tone_to_noise_ratio(
     return np.where((tone > 0) & np.isfinite(tnr), tnr, np.where(noise > 0, -np.inf, np.inf))
 
 
+@njit(cache=True, nogil=True)
+def _link_tracks(frame, freq, power, level, freq_tol, wait):  # pragma: no cover - compiled
+    """Track of each component (sorted by frame, then frequency), and each track's first and last
+    frame, power-weighted mean frequency and peak level. A compiled loop (the analysis' one
+    per-component step; nogil, so Dask worker threads run it side by side)."""
+    m = frame.size
+    track = np.empty(m, np.int64)
+    first = np.empty(m, np.int64)
+    last = np.empty(m, np.int64)
+    wsum = np.empty(m)
+    fsum = np.empty(m)
+    fmean = np.empty(m)
+    peak = np.empty(m)
+    open_ = np.empty(m, np.int64)  # open tracks in the order they opened
+    n_open = 0
+    n_tr = 0
+    for i in range(m):
+        fr = frame[i]
+        f = freq[i]
+        stale = False
+        for j in range(n_open):
+            if fr - last[open_[j]] > wait:
+                stale = True
+                break
+        if stale:  # close the tracks that have waited too long
+            kept = 0
+            for j in range(n_open):
+                if fr - last[open_[j]] <= wait:
+                    open_[kept] = open_[j]
+                    kept += 1
+            n_open = kept
+        best = -1
+        best_d = freq_tol
+        for j in range(n_open):
+            t = open_[j]
+            d = abs(fmean[t] - f)
+            if d <= best_d and last[t] != fr:
+                best = t
+                best_d = d
+        if best < 0:
+            best = n_tr
+            n_tr += 1
+            first[best] = fr
+            wsum[best] = 0.0
+            fsum[best] = 0.0
+            peak[best] = -np.inf
+            open_[n_open] = best
+            n_open += 1
+        last[best] = fr
+        wsum[best] += power[i]
+        fsum[best] += power[i] * f
+        fmean[best] = fsum[best] / wsum[best] if wsum[best] > 0 else f
+        if level[i] > peak[best]:
+            peak[best] = level[i]
+        track[i] = best
+    return track, first[:n_tr], last[:n_tr], fmean[:n_tr], peak[:n_tr]
+
+
 def link_components(
     frame: NDArray[np.intp], freq: NDArray[np.float64], level: NDArray[np.float64], power: NDArray[np.float64],
     frame_start_s: NDArray[np.float64], frame_len_s: float, *, freq_tol: float = 100.0, max_gap: int = 1,
@@ -241,42 +300,22 @@ def link_components(
     start) and, for each, the frames it covers (ascending) and its power in each of them.
     """
     order = np.lexsort((freq, frame))
-    # a track is a list [first, last, wsum, fsum, freq, peak, frames] (plain Python: this loop is
-    # the analysis' one per-component step)
-    open_tracks: list[list] = []
-    done: list[list] = []
-    wait = max_gap + 1
-    for fr, f, w, lev in zip(frame[order].tolist(), freq[order].tolist(), power[order].tolist(),
-                             level[order].tolist(), strict=True):
-        for tr in open_tracks:
-            if fr - tr[1] > wait:  # close the tracks that have waited too long
-                done.extend(t for t in open_tracks if fr - t[1] > wait)
-                open_tracks = [t for t in open_tracks if fr - t[1] <= wait]
-                break
-        best, best_d = None, freq_tol
-        for tr in open_tracks:
-            d = abs(tr[4] - f)
-            if d <= best_d and tr[1] != fr:
-                best, best_d = tr, d
-        if best is None:
-            best = [fr, fr, 0.0, 0.0, f, -np.inf, [], []]
-            open_tracks.append(best)
-        best[1] = fr
-        best[2] += w
-        best[3] += w * f
-        best[4] = best[3] / best[2] if best[2] > 0 else f
-        if lev > best[5]:
-            best[5] = lev
-        best[6].append(fr)
-        best[7].append(w)
-    done.extend(open_tracks)
+    fr_s = np.ascontiguousarray(frame[order], dtype=np.int64)
+    w_s = np.ascontiguousarray(power[order], dtype=np.float64)
+    track, first, last, f_mean, peak = _link_tracks(
+        fr_s, np.ascontiguousarray(freq[order], dtype=np.float64), w_s,
+        np.ascontiguousarray(level[order], dtype=np.float64), float(freq_tol), int(max_gap) + 1)
+    # each track's components in the order they joined it (ascending frames)
+    by_track = np.argsort(track, kind="stable")
+    bounds = np.searchsorted(track[by_track], np.arange(first.size + 1))
     events, frames, weights = [], [], []
-    for first, last, _, _, f_mean, peak, frs, ws in sorted(done, key=lambda t: (t[0], t[4])):
-        start = float(frame_start_s[first])
-        end = float(frame_start_s[last] + frame_len_s)
+    for t in np.lexsort((f_mean, first)).tolist():  # by start, then frequency
+        start = float(frame_start_s[first[t]])
+        end = float(frame_start_s[last[t]] + frame_len_s)
         if end - start + 1e-12 < min_duration:
             continue
-        events.append(SquealEvent(start, end, f_mean, peak))
-        frames.append(np.asarray(frs, dtype=np.intp))
-        weights.append(np.asarray(ws, dtype=np.float64))
+        sel = by_track[bounds[t]:bounds[t + 1]]
+        events.append(SquealEvent(start, end, float(f_mean[t]), float(peak[t])))
+        frames.append(fr_s[sel].astype(np.intp))
+        weights.append(w_s[sel])
     return events, frames, weights
