@@ -64,6 +64,56 @@ class SquealEvent:
         return {**asdict(self), "duration_s": self.duration_s}
 
 
+@njit(cache=True, nogil=True)
+def _lobe_peaks(pa, sc, thr, dyn):  # pragma: no cover - compiled
+    """:func:`tonal_components` for a Hann main lobe (half width 2), row by row, in one pass.
+
+    The same operations in the same order (and precision) as the array version: a bin k in
+    1..n-2 is a component where it is the largest of k-2..k+2 (within the band), its lobe
+    (k-2..k+2) scaled reaches ``thr``, it lies within the dynamic range of its row's largest,
+    and its own power (down to the valleys either side, two bins at most) scaled reaches ``thr``.
+    """
+    n_rows, n = pa.shape
+    frame = np.empty(n_rows * n, np.int64)
+    kk = np.empty(n_rows * n, np.int64)
+    own = np.empty(n_rows * n)
+    m = 0
+    for r in range(n_rows):
+        row = pa[r]
+        floor = row.max() * dyn
+        s = sc[r]
+        for k in range(1, n - 1):
+            c = row[k]
+            if c < row[k - 1] or c < row[k + 1] or c < floor:
+                continue
+            if k >= 2 and c < row[k - 2]:
+                continue
+            if k <= n - 3 and c < row[k + 2]:
+                continue
+            lobe = row[k]
+            lobe += row[k - 1]
+            if k >= 2:
+                lobe += row[k - 2]
+            lobe += row[k + 1]
+            if k + 2 < n:
+                lobe += row[k + 2]
+            if not lobe * s >= thr:
+                continue
+            p = np.float64(c)
+            for side in (1, -1):
+                for d in range(1, 3):
+                    j = k + side * d
+                    if j < 0 or j >= n or not row[j] <= row[j - side]:
+                        break
+                    p += row[j]
+            if p * s >= thr:
+                frame[m] = r
+                kk[m] = k
+                own[m] = p
+                m += 1
+    return frame[:m], kk[:m], own[:m]
+
+
 def tonal_components(
     power: NDArray[np.float64], power_a: NDArray[np.float64], lo: int, fs: float, nperseg: int,
     threshold_dba: float, *, scale: NDArray[np.float64] | None = None, half_width: int = 2,
@@ -98,17 +148,10 @@ def tonal_components(
     thr = P_REF**2 * 10 ** (threshold_dba / 10)
     pa = power_a
     sc = np.ones(pa.shape[0]) if scale is None else np.asarray(scale, dtype=np.float64)
-    if half_width <= 2:
-        lobe = pa.copy()  # sum over bins k-2..k+2 (the Hann main lobe), zero beyond the band
-        lobe[:, 1:] += pa[:, :-1]
-        lobe[:, 2:] += pa[:, :-2]
-        lobe[:, :-1] += pa[:, 1:]
-        lobe[:, :-2] += pa[:, 2:]
-        # local maxima over k-2..k+2 among bins 1..n-2 (the band's edge bins never count)
-        c = pa[:, 1:-1]
-        is_max = (c >= pa[:, :-2]) & (c >= pa[:, 2:]) & (lobe[:, 1:-1] * sc[:, None] >= thr)
-        is_max[:, 1:] &= c[:, 1:] >= pa[:, :-3]
-        is_max[:, :-1] &= c[:, :-1] >= pa[:, 3:]
+    if half_width <= 2:  # the Hann main lobe: one compiled pass over the spectra
+        dyn = np.asarray(10 ** (-_DYNAMIC_RANGE_DB / 10), dtype=pa.dtype)[()]
+        frame, k, own = _lobe_peaks(np.ascontiguousarray(pa), np.ascontiguousarray(sc), thr, dyn)
+        return _refined(power, frame, k, own, sc, lo, fs, nperseg)
     else:
         from scipy.ndimage import maximum_filter1d
 
@@ -135,7 +178,11 @@ def tonal_components(
             going &= inside & (pa[frame, jj] <= pa[frame, np.clip(j - side, 0, pa.shape[1] - 1)])
             own += np.where(going, pa[frame, jj], 0.0)
     keep = own * sc[frame] >= thr
-    frame, k, own = frame[keep], k[keep], own[keep]
+    return _refined(power, frame[keep], k[keep], own[keep], sc, lo, fs, nperseg)
+
+
+def _refined(power, frame, k, own, sc, lo, fs, nperseg):
+    """Refined frequency [Hz] and level [dB(A)] of the components at ``(frame, k)`` of power ``own``."""
     if frame.size:
         mag3 = np.sqrt(power[frame[:, None], k[:, None] + np.array([-1, 0, 1])])
         freq = (np.atleast_1d(refine_peak(mag3, np.ones(k.size, np.intp))) - 1 + k + lo) * fs / nperseg
