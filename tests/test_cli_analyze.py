@@ -70,7 +70,8 @@ def test_plots_written(files, tmp_path):
     res = invoke(["analyze", str(files / "rising.nc"), *ARGS, "--plot", str(tmp_path / "figs")])
     assert res.exit_code == 0, res.output
     names = sorted(p.name for p in (tmp_path / "figs").iterdir())
-    assert "rising_polar.png" in names and "rising_spectrogram.png" in names and len(names) == 7
+    assert "rising_polar.png" in names and "rising_spectrogram.png" in names and len(names) == 8
+    assert "rising_event_phase.png" in names  # the run-out phase of each event (issue #14)
 
 
 def test_csv_without_time_column_with_fs(tmp_path):

@@ -264,3 +264,20 @@ def test_tonality_setting_checked(rising):
     rec, _ = rising
     with pytest.raises(InputError, match="min_tnr_db"):
         analyze_recording(rec, min_tnr_db=float("nan"), **KW)
+
+
+def test_event_phase_plot_places_each_event_at_its_runout_phase(rising):
+    # issue #14 "run-out phase of the events": one point per event at (its phase, its peak level)
+    from matplotlib.figure import Figure
+
+    from squealkit.plotting.measurement import event_phase_plot
+
+    _, res = rising
+    ax = Figure().add_subplot(projection="polar")
+    fig = event_phase_plot(res, ax=ax)
+    assert fig is ax.figure
+    theta, r = ax.collections[0].get_offsets().T
+    assert np.allclose(theta, np.radians([e.runout_phase_deg for e in res.events]))
+    assert np.allclose(r, [e.peak_dba for e in res.events])
+    quiet = analyze_recording(synthetic_recording(duration=0.5, seed=3, squeal_on="none"), **KW)
+    assert not event_phase_plot(quiet).axes[0].collections  # no events: no points, a note instead

@@ -240,5 +240,6 @@ def _write_plots(src, res, mic: str, displacement: str, stem: Path, max_seconds:
                             {n: src.units.get(n, "") for n in names},
                             {"synthetic": int(bool(res.attrs.get("synthetic")))})
     figs = mp.measurement_figures(rec, res, mic=names[0], displacement=names[1])
+    figs["event_phase"] = mp.event_phase_plot(res)  # every event's place on the disc
     for key, fig in figs.items():
         save_figure(fig, stem.parent / f"{stem.name}_{key}.png")
