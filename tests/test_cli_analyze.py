@@ -70,7 +70,8 @@ def test_plots_written(files, tmp_path):
     res = invoke(["analyze", str(files / "rising.nc"), *ARGS, "--plot", str(tmp_path / "figs")])
     assert res.exit_code == 0, res.output
     names = sorted(p.name for p in (tmp_path / "figs").iterdir())
-    assert "rising_polar.png" in names and "rising_spectrogram.png" in names and len(names) == 7
+    assert "rising_polar.png" in names and "rising_spectrogram.png" in names and len(names) == 8
+    assert "rising_event_phase.png" in names  # the run-out phase of each event (issue #14)
 
 
 def test_csv_without_time_column_with_fs(tmp_path):
@@ -187,3 +188,22 @@ def test_setup_corner_and_user_band_named_in_text(files):
     res = invoke(["analyze", str(files / "rising.nc"), *ARGS, "--band", "1000:5000", "--json"])
     crit = json.loads(res.output)["criteria"]
     assert crit["setup"] == "user" and crit["band_hz"] == [1000.0, 5000.0] and "user band" in crit["name"]
+
+
+def test_white_noise_is_not_squeal_from_the_cli(tmp_path):
+    # issue #15: white noise at 10 Pa RMS was "squeal 3164.6 Hz, 2305 events"; now tonality is required
+    # (tone-to-noise ratio >= 8 dB, ECMA-418-1), and --min-tnr-db sets it (-100: any peak, the old reading)
+    import xarray as xr
+
+    rng = np.random.default_rng(0)
+    n = 24000
+    rec = xr.Dataset({"mic": ("time", 10 * rng.standard_normal(n), {"units": "Pa"}),
+                      "displacement": ("time", 1e-6 * rng.standard_normal(n), {"units": "m"})}, attrs={"fs": 48000.0})
+    f = tmp_path / "noise.nc"
+    rec.to_netcdf(f, engine="h5netcdf")
+    out = json.loads(invoke(["analyze", str(f), *ARGS, "--json"]).output)
+    assert out["squeal"] is False and out["peak_dba"] > 100 and out["settings"]["min_tnr_db"] == 8.0
+    old = json.loads(invoke(["analyze", str(f), *ARGS, "--json", "--min-tnr-db", "-100"]).output)
+    assert old["squeal"] is True and old["n_events"] > 50
+    bad = invoke(["analyze", str(f), *ARGS, "--min-tnr-db", "nan"])
+    assert bad.exit_code == 2 and "min_tnr_db" in bad.output and "Traceback" not in bad.output

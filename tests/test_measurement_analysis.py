@@ -9,10 +9,13 @@ import itertools
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from squealkit import InputError
 from squealkit.io import load_dataset, save_dataset
 from squealkit.measurement import a_weighting_db, analyze_recording, synthetic_recording, synthetic_source
+from squealkit.measurement.events import critical_bandwidth
 
 KW = dict(mic="mic", displacement="displacement", rpm=900.0, radius=0.05)
 
@@ -198,3 +201,83 @@ def test_campaign_summary_occurrence_and_frequencies(rising, falling):
     assert len(summ.frequencies) == 1 and summ.frequencies[0]["n_recordings"] == 2
     assert summ.frequencies[0]["frequency_hz"] == pytest.approx(2388.0, abs=2.0)
     assert summ.to_csv().count("\n") == 2 + 1 + 3  # two comment lines, header, three rows
+
+
+# -- Tonality (issue #15: white noise at 10 Pa RMS read as "squeal 3164.6 Hz, 2305 events") ---------
+# A component counts as squeal only when it is a prominent tone: its tone-to-noise ratio over the
+# masking noise in its critical band reaches 8 dB, the ECMA-418-1 (ECMA-74 annex D) criterion for
+# a prominent discrete tone at or above 1 kHz.
+
+def _noise_recording(mic, seed, fs=48000.0):
+    import xarray as xr
+
+    disp = 1e-6 * np.random.default_rng(seed + 1).standard_normal(mic.size)
+    return xr.Dataset({"mic": ("time", mic, {"units": "Pa"}), "displacement": ("time", disp, {"units": "m"})},
+                      attrs={"fs": fs})
+
+
+def _white(rms, seed, n=48000):
+    return rms * np.random.default_rng(seed).standard_normal(n)
+
+
+@settings(max_examples=6, deadline=None, derandomize=True)
+@given(rms=st.floats(1.0, 300.0), seed=st.integers(0, 2**32 - 1))
+def test_white_noise_is_not_squeal(rms, seed):
+    # 0.5 s of white noise from 94 to 144 dB: loud enough for 70 dB(A), and no tone in it
+    res = analyze_recording(_noise_recording(_white(rms, seed, n=24000), seed), **KW)
+    assert res.events == () and res.squeal_frequency_hz is None
+    assert res.attrs["min_tnr_db"] == 8.0 and res.to_dict()["settings"]["min_tnr_db"] == 8.0
+
+
+def test_white_noise_at_10_pa_is_loud_enough_that_only_tonality_rejects_it():
+    rec = _noise_recording(_white(10.0, 0), 0)
+    res = analyze_recording(rec, **KW)
+    assert res.peak_dba > 100 and not res.squeal  # 10 Pa RMS: 114 dB, far above 70 dB(A)
+    assert len(analyze_recording(rec, min_tnr_db=None, **KW).events) > 100  # the old reading
+
+
+@pytest.mark.parametrize("freq", [2388.0, 7000.0])
+@pytest.mark.parametrize(("tnr_db", "squeal"), [(10.0, True), (3.0, False)])
+def test_tone_in_noise_is_squeal_when_prominent(freq, tnr_db, squeal):
+    # a tone tnr_db above the white noise in its critical band (ECMA-418-1: 25 + 75 (1 + 1.4 (f/kHz)^2)^0.69 Hz
+    # wide): 1 Pa RMS noise over 0-24 kHz has 1/24000 Pa^2 per Hz, so the tone's power is
+    # 10^(tnr/10) x bandwidth / 24000 Pa^2 (2388 Hz: 86 dB; both far above 70 dB(A))
+    fs, n = 48000.0, 48000
+    t = np.arange(n) / fs
+    power = 10 ** (tnr_db / 10) * float(critical_bandwidth(freq)) / (fs / 2)
+    mic = _white(1.0, 3) + np.sqrt(2 * power) * np.sin(2 * np.pi * freq * t)
+    res = analyze_recording(_noise_recording(mic, 3), **KW)
+    assert res.squeal is squeal
+    if squeal:
+        assert len(res.events) == 1 and abs(res.squeal_frequency_hz - freq) < 0.5
+
+
+def test_tonality_keeps_the_synthetic_events(rising):
+    # the paper-like recording's squeal is 50 dB above its noise: the requirement removes nothing
+    rec, res = rising
+    plain = analyze_recording(rec, min_tnr_db=None, **KW)
+    assert plain.events == res.events and len(res.events) == len(rec.attrs["truth_event_starts_s"])
+    assert plain.squeal_frequency_hz == res.squeal_frequency_hz
+
+
+def test_tonality_setting_checked(rising):
+    rec, _ = rising
+    with pytest.raises(InputError, match="min_tnr_db"):
+        analyze_recording(rec, min_tnr_db=float("nan"), **KW)
+
+
+def test_event_phase_plot_places_each_event_at_its_runout_phase(rising):
+    # issue #14 "run-out phase of the events": one point per event at (its phase, its peak level)
+    from matplotlib.figure import Figure
+
+    from squealkit.plotting.measurement import event_phase_plot
+
+    _, res = rising
+    ax = Figure().add_subplot(projection="polar")
+    fig = event_phase_plot(res, ax=ax)
+    assert fig is ax.figure
+    theta, r = ax.collections[0].get_offsets().T
+    assert np.allclose(theta, np.radians([e.runout_phase_deg for e in res.events]))
+    assert np.allclose(r, [e.peak_dba for e in res.events])
+    quiet = analyze_recording(synthetic_recording(duration=0.5, seed=3, squeal_on="none"), **KW)
+    assert not event_phase_plot(quiet).axes[0].collections  # no events: no points, a note instead

@@ -137,6 +137,11 @@ class CampaignStore:
 
         Rows of applications no longer in the matrix stay in the file but out of the summary
         and the report (an application taken out of the matrix no longer counts, nor fails).
+
+        Parameters
+        ----------
+        applications : sequence of str
+            The application ids of the current test matrix.
         """
         self.con.execute("CREATE OR REPLACE TEMP TABLE in_matrix (application VARCHAR)")
         if applications:

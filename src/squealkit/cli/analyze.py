@@ -49,6 +49,9 @@ def _pairs(option: str, items: tuple[str, ...]) -> dict[str, str]:
 @click.option("--polarity", type=click.Choice(["1", "-1"]), default="1", show_default=True,
               help="-1 when the probe reads the run-out reversed.")
 @criteria_options
+@click.option("--min-tnr-db", type=float, default=8.0, show_default=True,
+              help="Tonality a squeal component needs: its tone-to-noise ratio [dB] over the noise in its "
+              "critical band (ECMA-418-1 prominent tone: 8). Broadband noise stays below 0.")
 @click.option("--fs", type=float, default=None, help="Sample rate [Hz] for a CSV without time column.")
 @click.option("--scale", "scales", multiple=True, metavar="CHANNEL=FACTOR",
               help="File value -> physical unit factor per channel (e.g. WAV full scale in Pa). Repeatable.")
@@ -67,7 +70,8 @@ def _pairs(option: str, items: tuple[str, ...]) -> dict[str, str]:
 def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float | None, radius: float,
             tacho: str | None, tacho_kind: str, pulses_per_rev: int, probe_offset_deg: float, acoustic_delay: float,
             polarity: str, setup: str | None,
-            band: str | None, threshold_dba: float, time_weighting: str, min_duration: float, fs: float | None,
+            band: str | None, threshold_dba: float, time_weighting: str, min_duration: float, min_tnr_db: float,
+            fs: float | None,
             scales: tuple[str, ...], units: tuple[str, ...], as_json: bool, plot_dir: Path | None,
             out_path: Path | None, summary_path: Path | None, scheduler: str | None) -> None:
     """Find squeal in rig recordings and relate it to the disc run-out (paper §5).
@@ -101,7 +105,8 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float | N
     crit = criteria_from_options(setup, band, threshold_dba, time_weighting, min_duration)
     crit_kw = dict(setup=crit.setup if crit.setup != "user" else None, band=crit.band,
                    threshold_dba=crit.threshold_dba, time_weighting=crit.time_weighting, min_duration=crit.min_duration,
-                   probe_offset_deg=probe_offset_deg, acoustic_delay=acoustic_delay, polarity=int(polarity))
+                   probe_offset_deg=probe_offset_deg, acoustic_delay=acoustic_delay, polarity=int(polarity),
+                   min_tnr_db=min_tnr_db)
     if tacho is not None:
         crit_kw.update(tacho=int(tacho) if tacho.isdigit() else tacho, tacho_kind=tacho_kind,
                        pulses_per_rev=pulses_per_rev)
@@ -240,5 +245,6 @@ def _write_plots(src, res, mic: str, displacement: str, stem: Path, max_seconds:
                             {n: src.units.get(n, "") for n in names},
                             {"synthetic": int(bool(res.attrs.get("synthetic")))})
     figs = mp.measurement_figures(rec, res, mic=names[0], displacement=names[1])
+    figs["event_phase"] = mp.event_phase_plot(res)  # every event's place on the disc
     for key, fig in figs.items():
         save_figure(fig, stem.parent / f"{stem.name}_{key}.png")

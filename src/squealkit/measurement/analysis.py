@@ -13,7 +13,7 @@ import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import xarray as xr
@@ -26,7 +26,7 @@ from .. import __version__
 from .._threads import thread_limit
 from .._validation import InputError, validate_fs, validate_positive
 from .criteria import SquealCriteria, band_weighted_signal, exponential_average, squeal_criteria
-from .events import SquealEvent, link_components, tonal_components
+from .events import DEFAULT_MIN_TNR_DB, SquealEvent, link_components, tonal_components, tone_to_noise_ratio
 from .filters import lowpass, lowpass_decimated
 from .readers import DEFAULT_BLOCK, RecordingSource, open_recording
 from .runout import revolution_frequency, surface_speed
@@ -79,6 +79,12 @@ class AnalysisSettings:
         Trigger level of the pulses (default: halfway between the first block's extremes).
     angle_unit : {"deg", "rad", "rev"}, default "deg"
         Unit of an angle tacho channel.
+    min_tnr_db : float or None, default 8.0
+        The tonality a component needs to count as squeal: its tone-to-noise ratio [dB] over
+        the masking noise in its critical band
+        (:func:`~squealkit.measurement.events.tone_to_noise_ratio`; 8 dB is the ECMA-418-1
+        criterion for a prominent tone at or above 1 kHz). None: every peak above the
+        threshold counts (then loud broadband noise reads as squeal).
     """
 
     rpm: float
@@ -98,6 +104,7 @@ class AnalysisSettings:
     pulses_per_rev: int = 1
     tacho_level: float | None = None
     angle_unit: str = "deg"
+    min_tnr_db: float | None = DEFAULT_MIN_TNR_DB
 
     @property
     def band(self) -> tuple[float, float]:
@@ -144,6 +151,9 @@ class AnalysisSettings:
             raise InputError(f"Parameter band={self.band!r}: upper edge must lie below fs/2 = {fs / 2:g} Hz.")
         if not (isinstance(self.nperseg, int) and self.nperseg >= 16):
             raise InputError(f"Parameter nperseg={self.nperseg!r} must be a whole number >= 16.")
+        if self.min_tnr_db is not None and not (isinstance(self.min_tnr_db, int | float)
+                                                 and math.isfinite(self.min_tnr_db)):
+            raise InputError(f"Parameter min_tnr_db={self.min_tnr_db!r} must be a finite number [dB] or None.")
         if not (isinstance(self.hop, int) and 1 <= self.hop <= self.nperseg):
             raise InputError(f"Parameter hop={self.hop!r} must be a whole number in [1, nperseg].")
         return self
@@ -267,6 +277,7 @@ class MeasurementResult:
             "settings": {
                 "rpm": self.settings.rpm, "radius_m": self.settings.radius, "band_hz": list(self.settings.band),
                 "threshold_dba": self.settings.threshold_dba, "min_duration_s": self.settings.min_duration,
+                "min_tnr_db": self.settings.min_tnr_db,
             },
         }
 
@@ -384,6 +395,754 @@ def _windows(
         raise InputError(f"Recording ended after {buf_end} of {total} samples.")
 
 
+# -- The analysis in steps ------------------------------------------------------------------------
+# analyze_recording reads the recording, fixes the framing (_plan), then streams it in windows
+# (a core plus margins both sides). Each window goes through the filter step (the A-weighted band
+# level, _band_level; the run-out, _runout_signals), the spectral step (_frame_spectra) and the
+# tonal components (_frame_components), and leaves compact per-frame, per-revolution and per-angle
+# features in the accumulators (_Accumulators). At the end the components become events
+# (_squeal_events), the squeal's lines and statistics are read from them (_squeal_lines,
+# _runout_statistics), each event is placed on the disc (_runout_link), and the labelled result is
+# assembled (_assemble).
+
+
+def _open_source(recording: Any, fs: float | None) -> tuple[Any, dict[str, Any]]:
+    """The block source of a recording and its attributes (source name, synthetic or not).
+
+    Parameters
+    ----------
+    recording : path, xarray.Dataset or RecordingSource
+        As for :func:`analyze_recording`; anything with ``iter_blocks`` (e.g. a synthetic
+        source) is used as it is.
+    fs : float or None
+        Sample rate [Hz] where the recording does not carry one.
+
+    Returns
+    -------
+    src : RecordingSource-like
+        Has ``fs``, ``n_samples``, ``path``, ``resolve`` and ``iter_blocks``.
+    attrs : dict
+        ``source`` and ``synthetic`` (all of a Dataset's attributes).
+    """
+    if isinstance(recording, xr.Dataset):
+        return _DatasetSource(recording, fs), dict(recording.attrs)
+    if isinstance(recording, RecordingSource):
+        return recording, {"source": str(recording.path), "synthetic": recording.synthetic}
+    if hasattr(recording, "iter_blocks"):  # e.g. a SyntheticSource
+        return recording, {"source": str(recording.path), "synthetic": recording.fmt == "synthetic"}
+    src = open_recording(recording, fs=fs)
+    return src, {"source": str(src.path), "synthetic": src.synthetic}
+
+
+def _disc_rotation(src: Any, tacho: str | int | None, rpm: float | None, options: dict[str, Any]) -> tuple[Any, float]:
+    """The disc's position against time, from the tacho channel or the constant speed.
+
+    Parameters
+    ----------
+    src : RecordingSource-like
+        The recording (the tacho channel is read from it block by block).
+    tacho : str, int or None
+        Tacho channel, or None for a constant speed.
+    rpm : float or None
+        Constant disc speed [rpm] (used without a tacho).
+    options : dict
+        The analysis options; ``tacho_kind``, ``pulses_per_rev``, ``tacho_level`` and
+        ``angle_unit`` apply to the tacho.
+
+    Returns
+    -------
+    rotation : DiscAngle or ConstantSpeed
+        Has ``turns(t)``, ``rev_per_s(t)`` and ``time_at(turns)``.
+    rpm : float
+        The speed [rpm] (with a tacho: the mean speed over the recording).
+    """
+    fs = float(src.fs)
+    if tacho is not None:
+        tk = {k: options[k] for k in ("tacho_kind", "pulses_per_rev", "tacho_level", "angle_unit") if k in options}
+        rotation = read_tacho(src, tacho, kind=tk.get("tacho_kind", "pulses"),
+                              pulses_per_rev=tk.get("pulses_per_rev", 1), level=tk.get("tacho_level"),
+                              angle_unit=tk.get("angle_unit", "deg"))
+        span = src.n_samples / fs
+        return rotation, 60.0 * float(rotation.turns(span) - rotation.turns(0.0)) / span  # mean speed
+    if rpm is None:
+        raise InputError("Give the disc speed rpm, or a tacho channel.")
+    return ConstantSpeed(validate_positive("rpm", rpm)), rpm
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """The framing of one recording's analysis: frames, band bins, run-out grid and windows.
+
+    Frame ``m`` covers samples ``[m hop, m hop + n)``; its "interval" (for energy sums and the
+    level) is ``[m hop + half, m hop + half + hop)``. The run-out is analysed on every ``dec``-th
+    sample (``fs_d = fs / dec``). Windows have a core of ``core`` samples and ``margin`` samples
+    either side.
+    """
+
+    fs: float
+    total: int
+    n: int
+    hop: int
+    n_frames: int
+    half: int
+    freq: NDArray[np.float64]
+    lo: int
+    hi: int
+    w_a: NDArray[np.float64]
+    w_a32: NDArray[np.float32]
+    win32: NDArray[np.float32]
+    pscale: float
+    thr_power: float
+    half_width: int
+    n_threads: int
+    core: int
+    margin: int
+    dec: int
+    fs_d: float
+    f_rev: float
+    f_macro: float
+    off_turns: float
+    a_frames: float
+    rev0: int
+    n_rev: int
+    nb: int
+
+
+def _plan(s: AnalysisSettings, fs: float, total: int, rotation: Any) -> _Plan:
+    """Fix the framing of the analysis of ``total`` samples at ``fs`` (and check it is possible).
+
+    Parameters
+    ----------
+    s : AnalysisSettings
+        Validated settings.
+    fs : float
+        Sample rate [Hz].
+    total : int
+        Samples in the recording.
+    rotation : DiscAngle or ConstantSpeed
+        The disc's rotation (its slowest speed sets how far back the margins reach).
+
+    Returns
+    -------
+    _Plan
+    """
+    if total < s.nperseg:
+        raise InputError(f"Recording has {total} samples, fewer than one analysis frame ({s.nperseg}).")
+    f_rev = revolution_frequency(s.rpm)
+    n, hop = s.nperseg, s.hop
+    freq = np.fft.rfftfreq(n, 1 / fs)
+    lo, hi = int(np.searchsorted(freq, s.band[0])), int(np.searchsorted(freq, s.band[1], side="right"))
+    if hi - lo < 5:
+        raise InputError(f"Band {s.band} Hz holds fewer than 5 bins of {fs / n:g} Hz; widen it or raise nperseg.")
+    w_a = 10 ** (a_weighting_db(freq[lo:hi]) / 10)
+    win = signal.windows.hann(n, sym=False)
+    # the slowest speed decides how far the probe's view of the pin's surface lies back in time
+    t_span = np.linspace(0.0, total / fs, 257)
+    f_min = max(float(np.min(rotation.rev_per_s(t_span))), 1e-3 * f_rev)
+    lag = s.acoustic_delay + abs(s.probe_offset_deg) / 360.0 / f_min
+    # run-out is analysed at fs / dec, dec a divisor of hop with fs / dec >= 4 lowpass_freq
+    dec = max(d for d in range(1, hop + 1) if hop % d == 0 and fs / d >= 4 * s.lowpass_freq)
+    f_macro = (s.macro_orders + 0.5) * f_rev
+    if f_macro >= s.lowpass_freq:
+        raise InputError(f"macro_orders={s.macro_orders} at {s.rpm:g} rpm puts the macro corner ({f_macro:g} Hz) "
+                         f"above lowpass_freq={s.lowpass_freq:g} Hz.")
+    rev0 = math.floor(float(rotation.turns(0.0)))  # revolutions count from the first mark (or t = 0)
+    return _Plan(
+        fs=fs, total=total, n=n, hop=hop, n_frames=(total - n) // hop + 1, half=(n - hop) // 2, freq=freq,
+        lo=lo, hi=hi, w_a=w_a, w_a32=w_a.astype(np.float32), win32=win.astype(np.float32),
+        pscale=2.0 / (n * float(np.sum(win**2))), thr_power=P_REF**2 * 10 ** (s.threshold_dba / 10),
+        half_width=max(2, int(0.5 * s.freq_tol * n / fs)),  # bins of a tonal component either side
+        n_threads=thread_limit(),  # FFT threads: this process's share (one on a one-thread Dask worker)
+        core=max(hop, round(s.chunk_s * fs / hop) * hop),
+        margin=max(n, int(0.25 * fs), int(4 * fs / ((s.macro_orders + 0.5) * f_rev)), int(lag * fs) + n),
+        dec=dec, fs_d=fs / dec, f_rev=f_rev, f_macro=f_macro, off_turns=s.probe_offset_deg / 360.0,
+        a_frames=math.exp(-hop / fs / s.criteria.time_constant_s), rev0=rev0,
+        n_rev=math.floor(float(rotation.turns((total - 1) / fs))) - rev0 + 1, nb=s.n_angle_bins,
+    )
+
+
+@dataclass
+class _Accumulators:
+    """What the windows leave behind: per-frame features, tonal components, per-revolution and
+    per-angle sums, and the time-weighting states carried from one window to the next."""
+
+    level: NDArray[np.float64]  # Fast (time-weighted) band mean square: max over each frame's interval
+    leq: NDArray[np.float64]  # the frame's own A-weighted band level [dB(A)] (Hann window)
+    ridge_f: NDArray[np.float64]
+    e_tot: NDArray[np.float64]
+    e_rise: NDArray[np.float64]
+    slope_f: NDArray[np.float64]
+    frame_turns: NDArray[np.float64]  # disc position under the pin when each frame pair's sound left it
+    spec_state: NDArray[np.float64]  # time-weighted A-weighted power spectrum (band bins)
+    mic_spec_sum: NDArray[np.float64]  # summed over loud frames, band bins only
+    mic_cross_sum: NDArray[np.complex128]  # X_m conj(X_m-1) summed likewise
+    rev_max: NDArray[np.float64]  # sro, macro, micro per revolution
+    rev_min: NDArray[np.float64]
+    ang_q: NDArray[np.float64]
+    ang_macro: NDArray[np.float64]
+    ang_cnt: NDArray[np.float64]
+    ang_e: NDArray[np.float64]
+    ang_ecnt: NDArray[np.float64]
+    comp_frame: list[NDArray] = field(default_factory=lambda: [np.empty(0, np.intp)])
+    comp_freq: list[NDArray] = field(default_factory=lambda: [np.empty(0)])
+    comp_level: list[NDArray] = field(default_factory=lambda: [np.empty(0)])
+    comp_pow: list[NDArray] = field(default_factory=lambda: [np.empty(0)])
+    comp_cross: list[NDArray] = field(default_factory=lambda: [np.empty(0, np.complex128)])
+    laf_state: float = 0.0  # time-weighted mean square carried from core to core
+    laf_max: float = 0.0
+    max_tan: float = 0.0
+
+    @classmethod
+    def empty(cls, plan: _Plan) -> _Accumulators:
+        """Accumulators for ``plan``, before the first window."""
+        nf, nb = plan.n_frames, plan.nb
+        return cls(
+            level=np.full(nf, -np.inf), leq=np.empty(nf), ridge_f=np.empty(nf), e_tot=np.empty(nf),
+            e_rise=np.empty(nf), slope_f=np.empty(nf), frame_turns=np.zeros(nf),
+            spec_state=np.zeros(plan.hi - plan.lo), mic_spec_sum=np.zeros(plan.freq.size),
+            mic_cross_sum=np.zeros(plan.freq.size, np.complex128),
+            rev_max=np.full((3, plan.n_rev), -np.inf), rev_min=np.full((3, plan.n_rev), np.inf),
+            ang_q=np.zeros(nb), ang_macro=np.zeros(nb), ang_cnt=np.zeros(nb), ang_e=np.zeros(nb),
+            ang_ecnt=np.zeros(nb),
+        )
+
+
+@dataclass(frozen=True)
+class _Window:
+    """Where one window lies: its core ``[c0, c1)`` (samples), its first sample ``w0``, the frames
+    ``[f0, f1)`` that start in the core, and the run-out grid (every ``dec``-th sample from ``g0``,
+    a multiple of ``dec``, so all windows share one grid; ``o = g0 - w0``). ``ci`` is the core on
+    the window's grid; frame ``f0 + j``'s interval is grid samples ``[a[j], b[j])``."""
+
+    c0: int
+    c1: int
+    w0: int
+    f0: int
+    f1: int
+    o: int
+    g0: int
+    ci: slice
+    a: NDArray[np.intp]
+    b: NDArray[np.intp]
+
+    @classmethod
+    def at(cls, plan: _Plan, c0: int, c1: int, w0: int) -> _Window:
+        """The window of core ``[c0, c1)`` starting at sample ``w0``."""
+        hop, dec = plan.hop, plan.dec
+        f0 = -(-c0 // hop)
+        f1 = min(plan.n_frames, (c1 - 1) // hop + 1)
+        o = (-w0) % dec
+        g0 = w0 + o
+        ci = slice(-(-(c0 - g0) // dec), -(-(c1 - g0) // dec))
+        a = -(-(np.arange(f0, f1) * hop + plan.half - g0) // dec)
+        return cls(c0, c1, w0, f0, f1, o, g0, ci, a, a + hop // dec)
+
+
+def _band_level(plan: _Plan, s: AnalysisSettings, win: _Window, p: NDArray, acc: _Accumulators) -> NDArray:
+    """Filter step for the microphone: A-weighted band mean square on the run-out grid, and the level.
+
+    The IEC 61672-1 time weighting runs from the previous core's state through this core and
+    on into the margin (for the frames ending there); each frame's level is the maximum over
+    its interval (``acc.level``, mean square), the recording's peak is kept in ``acc.laf_max``.
+
+    Parameters
+    ----------
+    plan : _Plan
+    s : AnalysisSettings
+    win : _Window
+    p : ndarray
+        The window's sound pressure [Pa].
+    acc : _Accumulators
+        Updated in place.
+
+    Returns
+    -------
+    ndarray
+        A-weighted band mean square [Pa^2] on the window's run-out grid.
+    """
+    dec, ci = plan.dec, win.ci
+    pw = band_weighted_signal(p[win.o:], plan.fs, s.band, workers=plan.n_threads)
+    m_full = pw.size // dec
+    ms = np.zeros(-(-(p.size - win.o) // dec))
+    ms[:m_full] = np.square(pw[:m_full * dec], dtype=np.float32).reshape(-1, dec).mean(axis=1, dtype=np.float64)
+    laf = exponential_average(ms[ci.start:], dec / plan.fs, s.criteria.time_constant_s, initial=acc.laf_state)
+    if ci.stop > ci.start:
+        acc.laf_state = float(laf[ci.stop - ci.start - 1])
+        acc.laf_max = max(acc.laf_max, float(laf[:ci.stop - ci.start].max()))
+    if win.f1 > win.f0:
+        acc.level[win.f0:win.f1] = np.maximum.reduceat(laf[:win.b[-1] - ci.start], win.a - ci.start)
+    return ms
+
+
+class _Spectra(NamedTuple):
+    """Band bins of the Hann frames of one window (single precision).
+
+    ``spec_p`` holds frames ``[fp, f1)`` (one before the core's first, for the phase advance);
+    ``spec``, ``pb`` (power per bin [Pa^2]), ``pa`` (A-weighted) and ``pa_tw`` (``pa`` time
+    weighted over frames) hold frames ``[f0, f1)``.
+    """
+
+    fp: int
+    spec_p: NDArray[np.complex64]
+    spec: NDArray[np.complex64]
+    pb: NDArray[np.float32]
+    pa: NDArray[np.float32]
+    pa_tw: NDArray
+
+
+def _frame_spectra(plan: _Plan, win: _Window, p: NDArray, acc: _Accumulators) -> _Spectra:
+    """Spectral step: Hann frames of the frames starting in the core, band bins only.
+
+    Single precision (7 digits) is enough for levels, peaks and their refinement. Writes each
+    frame's A-weighted level (``leq``), strongest line (``ridge_f``) and band power
+    (``e_tot``) into ``acc``, and the A-weighted spectrum time weighted like the level
+    (exponential over frames, same time constant; state carried in ``acc.spec_state``).
+
+    Parameters
+    ----------
+    plan : _Plan
+    win : _Window
+        Must hold at least one frame (``f1 > f0``).
+    p : ndarray
+        The window's sound pressure [Pa].
+    acc : _Accumulators
+        Updated in place.
+
+    Returns
+    -------
+    _Spectra
+    """
+    n, hop, w0, f0, f1 = plan.n, plan.hop, win.w0, win.f0, win.f1
+    # frames [fp, f1): one before the core's first (its samples lie in the margin), so
+    # every frame but the recording's first has its predecessor for the phase advance
+    fp = max(f0 - 1, 0)
+    seg = p[fp * hop - w0: (f1 - 1) * hop + n - w0]
+    frames_ = np.lib.stride_tricks.sliding_window_view(seg.astype(np.float32), n)[::hop]
+    spec_p = sp_fft.rfft(frames_ * plan.win32, axis=-1, workers=plan.n_threads)[:, plan.lo:plan.hi]
+    spec = spec_p[f0 - fp:]  # frames [f0, f1)
+    pb = spec.real**2
+    pb += spec.imag**2
+    pb *= np.float32(plan.pscale)  # [Pa^2] per bin
+    pa = pb * plan.w_a32
+    lev = pa.sum(axis=1, dtype=np.float64)
+    acc.leq[f0:f1] = 10 * np.log10(np.maximum(lev, 1e-300) / P_REF**2)
+    acc.ridge_f[f0:f1] = (_refine_rows(pb, np.argmax(pa, axis=1)) + plan.lo) * plan.fs / n
+    # a component's level is the frame's Fast level times its share of the time-weighted spectrum,
+    # so each tone's level is what the meter shows, split by what the meter has heard
+    pa_tw, acc.spec_state = _time_weight_rows(pa, plan.a_frames, acc.spec_state)
+    # band mean square per frame (Hann frames at 50 % overlap sum to the signal energy)
+    acc.e_tot[f0:f1] = pb.sum(axis=1, dtype=np.float64)
+    return _Spectra(fp, spec_p, spec, pb, pa, pa_tw)
+
+
+def _frame_components(plan: _Plan, s: AnalysisSettings, win: _Window, sp: _Spectra, acc: _Accumulators) -> None:
+    """Tonal components of the loud frames (level at or above the threshold), with their frequencies.
+
+    Components (and their coarse frequency) come from the time-weighted spectrum
+    (:func:`~squealkit.measurement.events.tonal_components`). Each component's frequency is
+    then refined from its phase advance over the main lobe (unbiased for growing and decaying
+    squeal, where the two-bin ratio is not), where the tone is in the frame itself (a quarter of
+    its time-weighted power), not only remembered. A component counts only when it is tonal:
+    its tone-to-noise ratio in the time-weighted spectrum reaches ``s.min_tnr_db``
+    (:func:`~squealkit.measurement.events.tone_to_noise_ratio`). Appends to ``acc.comp_*`` and sums the loud
+    frames' spectra and cross spectra (``acc.mic_spec_sum``, ``acc.mic_cross_sum``).
+
+    Parameters
+    ----------
+    plan : _Plan
+    s : AnalysisSettings
+    win : _Window
+    sp : _Spectra
+        The window's frame spectra.
+    acc : _Accumulators
+        Updated in place.
+    """
+    f0, f1, lo, hi, n, fs = win.f0, win.f1, plan.lo, plan.hi, plan.n, plan.fs
+    loud = np.flatnonzero(acc.level[f0:f1] >= plan.thr_power)
+    if not loud.size:
+        return
+    pa, pa_tw, pb = sp.pa, sp.pa_tw, sp.pb
+    share_scale = acc.level[f0:f1][loud] / np.maximum(pa_tw[loud].sum(axis=1, dtype=np.float64), 1e-300)
+    # phase advance of every band bin from the previous frame (zero for frame 0)
+    prev = loud + (f0 - sp.fp - 1)
+    cross = sp.spec[loud] * np.conj(sp.spec_p[np.maximum(prev, 0)])
+    cross[prev < 0] = 0
+    acc.mic_cross_sum[lo:hi] += cross.sum(axis=0, dtype=np.complex128)
+    ptw = pa_tw[loud]
+    fr, ff, fl = tonal_components(ptw, ptw, lo, fs, n, s.threshold_dba, scale=share_scale,
+                                  half_width=plan.half_width)
+    kc = np.clip(np.rint(ff * (n / fs)).astype(np.intp) - lo, _LOBE, hi - lo - 1 - _LOBE)
+    if s.min_tnr_db is not None and fr.size:  # tonality: a peak in broadband noise is no squeal
+        tonal = tone_to_noise_ratio(ptw, fr, kc, ff, fs / n, half_width=_LOBE) >= s.min_tnr_db
+        fr, ff, fl, kc = fr[tonal], ff[tonal], fl[tonal], kc[tonal]
+    lobe = kc[:, None] + np.arange(-_LOBE, _LOBE + 1)
+    c = cross[fr[:, None], lobe].sum(axis=1, dtype=np.complex128)
+    now = pa[loud[fr][:, None], lobe].sum(axis=1) >= 0.25 * pa_tw[loud[fr][:, None], lobe].sum(axis=1)
+    ff = np.where((prev[fr] >= 0) & now, phase_advance_freq(c, ff, fs, plan.hop), ff)
+    # weights of the event's mean frequency: |c| (the cross power of the frame pair), so
+    # a pair whose earlier frame is still in the noise (squeal onset) counts little
+    wc = np.where(prev[fr] >= 0, np.abs(c) * plan.pscale, pb[loud[fr][:, None], lobe].sum(axis=1))
+    acc.comp_frame.append(loud[fr] + f0)
+    acc.comp_freq.append(ff)
+    acc.comp_level.append(fl)
+    acc.comp_pow.append(wc)
+    acc.comp_cross.append(np.where(prev[fr] >= 0, c, 0))
+    acc.mic_spec_sum[lo:hi] += pb[loud].sum(axis=0, dtype=np.float64)
+
+
+class _Runout(NamedTuple):
+    """The window's run-out on its grid: SRO, macro and micro run-out [m], grid times ``t_d``
+    [s], the incline under the probe and under the pin (``tan_t``, at the sound's source)."""
+
+    sro: NDArray[np.float64]
+    macro: NDArray[np.float64]
+    micro: NDArray[np.float64]
+    t_d: NDArray[np.float64]
+    tan_probe: NDArray[np.float64]
+    tan_t: NDArray[np.float64]
+
+
+def _runout_signals(plan: _Plan, s: AnalysisSettings, win: _Window, q: NDArray, rotation: Any) -> _Runout:
+    """Filter step for the probe: run-out on the grid, split into macro and micro, and its incline.
+
+    The zero-phase Butterworth low-pass at ``lowpass_freq`` (paper Fig. 12) runs at
+    ``fs / dec`` after linear-phase anti-alias FIRs that pass up to 1.5 ``lowpass_freq`` and
+    remove, 80 dB down, whatever would fold below it; so the corner keeps its meaning
+    (:func:`~squealkit.measurement.filters.lowpass_decimated`). The incline is
+    ``dq / (r dphi)`` (paper eq. 11 with ``v = r dphi/dt`` at the actual speed).
+
+    Parameters
+    ----------
+    plan : _Plan
+    s : AnalysisSettings
+    win : _Window
+    q : ndarray
+        The window's probe displacement [m].
+    rotation : DiscAngle or ConstantSpeed
+
+    Returns
+    -------
+    _Runout
+    """
+    fs, dec = plan.fs, plan.dec
+    sro = lowpass_decimated(q[win.o:], s.lowpass_freq, fs, dec)
+    if s.polarity < 0:
+        sro = -sro
+    macro = lowpass(sro, plan.f_macro, plan.fs_d, order=2)
+    micro = sro - macro
+    t_d = (win.g0 + np.arange(sro.size) * dec) / fs
+    # (a speed extrapolated past the last tacho mark of a stop is held above 1/1000 of the mean)
+    rps = np.maximum(rotation.rev_per_s(t_d), 1e-3 * plan.f_rev)
+    tan_probe = np.gradient(sro) * plan.fs_d / (2 * math.pi * s.radius * rps)
+    # incline under the pin when the sound heard at t_d left it: emitted at t_d - acoustic_delay,
+    # from the surface the probe saw probe_offset earlier in rotation
+    if s.acoustic_delay or plan.off_turns:
+        t_src = rotation.time_at(rotation.turns(t_d - s.acoustic_delay) - plan.off_turns)
+        tan_t = np.interp(t_src, t_d, tan_probe)
+    else:
+        tan_t = tan_probe
+    return _Runout(sro, macro, micro, t_d, tan_probe, tan_t)
+
+
+def _accumulate_runout(
+    plan: _Plan, s: AnalysisSettings, win: _Window, ro: _Runout, ms: NDArray, rotation: Any, acc: _Accumulators
+) -> None:
+    """Tie the window's sound to its run-out: per frame, per revolution and per disc angle.
+
+    Per frame: the share of the band energy on rising run-out (``e_rise``), the mean incline
+    (``slope_f``) and the disc position under the pin when its sound left it
+    (``frame_turns``); per revolution: run-out extremes; per angle bin: mean run-out and
+    band energy. All in ``acc``.
+
+    Parameters
+    ----------
+    plan : _Plan
+    s : AnalysisSettings
+    win : _Window
+    ro : _Runout
+        The window's run-out.
+    ms : ndarray
+        A-weighted band mean square on the same grid (zero-phase: nothing shifted).
+    rotation : DiscAngle or ConstantSpeed
+    acc : _Accumulators
+        Updated in place.
+    """
+    f0, f1, ci, hop, n, fs, nb = win.f0, win.f1, win.ci, plan.hop, plan.n, plan.fs, plan.nb
+    size = ro.sro.size
+    cs_e, cs_r, cs_t = np.zeros((3, size + 1))  # cumulative sums from 0
+    np.cumsum(ms, out=cs_e[1:])
+    np.cumsum(np.where(ro.tan_t > 0, ms, 0.0), out=cs_r[1:])
+    np.cumsum(ro.tan_t, out=cs_t[1:])
+    if f1 > f0:
+        a, b = win.a, win.b
+        e_int = cs_e[b] - cs_e[a]
+        share = np.divide(cs_r[b] - cs_r[a], e_int, out=np.full(e_int.shape, 0.5), where=e_int > 0)
+        acc.e_rise[f0:f1] = acc.e_tot[f0:f1] * share
+        acc.slope_f[f0:f1] = (cs_t[b] - cs_t[a]) / (b - a)
+    # the probe sees disc position turns + probe offset (angle 0: the first mark, under the pin)
+    turns = rotation.turns(ro.t_d[ci]) + plan.off_turns
+    rev = np.floor(turns).astype(np.int64) - plan.rev0
+    rev = np.clip(rev, 0, plan.n_rev - 1)
+    starts = np.concatenate([[0], np.flatnonzero(np.diff(rev)) + 1])
+    r = rev[starts]  # distinct revolutions of this core; the next core may continue the last one
+    for j, sig in enumerate((ro.sro[ci], ro.macro[ci], ro.micro[ci])):
+        acc.rev_max[j, r] = np.maximum(acc.rev_max[j, r], np.maximum.reduceat(sig, starts))
+        acc.rev_min[j, r] = np.minimum(acc.rev_min[j, r], np.minimum.reduceat(sig, starts))
+    abin = ((turns % 1.0) * nb).astype(np.int64) % nb
+    acc.ang_q += np.bincount(abin, ro.sro[ci], nb)
+    acc.ang_macro += np.bincount(abin, ro.macro[ci], nb)
+    acc.ang_cnt += np.bincount(abin, minlength=nb)
+    acc.max_tan = max(acc.max_tan, float(np.max(np.abs(ro.tan_probe[ci]))))
+    if f1 > f0:  # the disc position under the pin when the frame's sound left it
+        centre = rotation.turns((np.arange(f0, f1) * hop + n / 2) / fs - s.acoustic_delay)
+        # the component weights are cross powers of a frame and its predecessor: centred half a hop earlier
+        acc.frame_turns[f0:f1] = rotation.turns((np.arange(f0, f1) * hop + (n - hop) / 2) / fs - s.acoustic_delay)
+        fb = ((centre % 1.0) * nb).astype(np.int64) % nb
+        acc.ang_e += np.bincount(fb, acc.e_tot[f0:f1], nb)
+        acc.ang_ecnt += np.bincount(fb, minlength=nb)
+
+
+def _squeal_events(
+    plan: _Plan, s: AnalysisSettings, acc: _Accumulators
+) -> tuple[list[SquealEvent], list[NDArray[np.intp]], list[NDArray[np.float64]]]:
+    """Events step: link the tonal components of successive frames into events (VDA 303 tracks).
+
+    Parameters
+    ----------
+    plan : _Plan
+    s : AnalysisSettings
+    acc : _Accumulators
+        After the last window.
+
+    Returns
+    -------
+    events, frames, weights
+        As :func:`~squealkit.measurement.events.link_components`.
+    """
+    frame_start = np.arange(plan.n_frames) * plan.hop / plan.fs
+    return link_components(
+        np.concatenate(acc.comp_frame), np.concatenate(acc.comp_freq), np.concatenate(acc.comp_level),
+        np.concatenate(acc.comp_pow), frame_start + plan.half / plan.fs, plan.hop / plan.fs,
+        freq_tol=s.freq_tol, min_duration=s.min_duration,
+    )
+
+
+def _squeal_lines(plan: _Plan, acc: _Accumulators, in_ev: NDArray[np.bool_]) -> tuple[float, list[dict[str, float]]]:
+    """The dominant squeal frequency and its harmonics 2-5, from the loud frames' spectra.
+
+    The dominant line's phase advance is taken over its own components only: the main lobe of
+    another squeal line less than two bins away must not pull it (VDA 303: several
+    frequencies). Each harmonic's frequency comes from the two-bin ratio, then its phase
+    advance over all loud frames.
+
+    Parameters
+    ----------
+    plan : _Plan
+    acc : _Accumulators
+        After the last window (with at least one event).
+    in_ev : ndarray of bool, shape (n_frames,)
+        Frames inside an event.
+
+    Returns
+    -------
+    squeal_frequency_hz : float
+    harmonics : list of dict
+        ``order``, ``frequency_hz``, ``level_db``.
+    """
+    fs, n, hop, lo, hi = plan.fs, plan.n, plan.hop, plan.lo, plan.hi
+    spec_sum = acc.mic_spec_sum
+    comp_f, comp_c = np.concatenate(acc.comp_freq), np.concatenate(acc.comp_cross)
+    mag = np.sqrt(spec_sum)
+    k0 = lo + int(np.argmax(spec_sum[lo:hi] * plan.w_a))
+    squeal_f = float(refine_peak(mag, k0)) * fs / n
+    c_line = comp_c[np.abs(comp_f - squeal_f) < 0.5 * fs / n].sum()
+    if c_line != 0:
+        squeal_f = float(phase_advance_freq(c_line, squeal_f, fs, hop))
+    n_loud_ev = max(int(in_ev.sum()), 1)
+    harmonics: list[dict[str, float]] = []
+    for h in range(2, 6):
+        kh = round(h * squeal_f * n / fs)
+        if kh + 3 >= hi:
+            break
+        kk = kh - 2 + int(np.argmax(spec_sum[kh - 2:kh + 3]))
+        p_h = spec_sum[kk - 2:kk + 3].sum() / n_loud_ev
+        f_h = float(refine_peak(mag, kk)) * fs / n  # then its phase advance over all loud frames
+        f_h = float(phase_advance_freq(acc.mic_cross_sum[kk - _LOBE:kk + _LOBE + 1].sum(), f_h, fs, hop))
+        harmonics.append({"order": h, "frequency_hz": f_h,
+                          "level_db": float(10 * np.log10(max(p_h, 1e-300) / P_REF**2))})
+    return squeal_f, harmonics
+
+
+def _in_events(n_frames: int, ev_frames: list[NDArray[np.intp]]) -> NDArray[np.bool_]:
+    """Whether each frame lies between the first and last frame of some event.
+
+    Parameters
+    ----------
+    n_frames : int
+    ev_frames : list of ndarray
+        Each event's frames (ascending).
+
+    Returns
+    -------
+    ndarray of bool, shape (n_frames,)
+    """
+    cover = np.zeros(n_frames + 1, np.int64)  # +1 at each event's first frame, -1 after its last
+    np.add.at(cover, np.array([fr[0] for fr in ev_frames]), 1)
+    np.add.at(cover, np.array([fr[-1] for fr in ev_frames]) + 1, -1)
+    return np.cumsum(cover[:-1]) > 0
+
+
+def _runout_statistics(
+    plan: _Plan, s: AnalysisSettings, acc: _Accumulators, in_ev: NDArray[np.bool_]
+) -> tuple[float | None, float | None]:
+    """The rising fraction and the growth/run-out-slope correlation of a recording with squeal.
+
+    Parameters
+    ----------
+    plan : _Plan
+    s : AnalysisSettings
+    acc : _Accumulators
+        After the last window.
+    in_ev : ndarray of bool, shape (n_frames,)
+        Frames inside an event.
+
+    Returns
+    -------
+    rising_fraction : float or None
+        Share of the band energy during events on rising run-out.
+    growth_slope_correlation : float or None
+        Pearson correlation of the envelope's growth rate with the SRO slope over the frames
+        within 20 dB of the threshold (None where either does not vary).
+    """
+    tot = float(acc.e_tot[in_ev].sum())
+    rising = float(acc.e_rise[in_ev].sum() / tot) if tot > 0 else None
+    with np.errstate(divide="ignore"):
+        ln_e = np.log(np.maximum(acc.e_tot, 1e-300))
+    growth = np.gradient(ln_e) * 0.5 * plan.fs / plan.hop
+    sel = acc.leq >= s.threshold_dba - 20
+    corr = None
+    if sel.sum() > 3 and np.std(growth[sel]) > 0 and np.std(acc.slope_f[sel]) > 0:
+        corr = float(np.corrcoef(growth[sel], acc.slope_f[sel])[0, 1])
+    return rising, corr
+
+
+def _runout_link(
+    plan: _Plan, acc: _Accumulators, events: list[SquealEvent], ev_frames: list[NDArray[np.intp]],
+    ev_weights: list[NDArray[np.float64]],
+) -> tuple[float | None, list[SquealEvent]]:
+    """Run-out link step: where on the disc the squeal sounds, relative to the macro run-out's crest.
+
+    The squeal energy's circular mean disc angle against the macro run-out's crest (both in the
+    disc's frame); each event's own place from its component's power per frame at the frame's
+    disc angle.
+
+    Parameters
+    ----------
+    plan : _Plan
+    acc : _Accumulators
+        After the last window.
+    events, ev_frames, ev_weights
+        As from :func:`_squeal_events`.
+
+    Returns
+    -------
+    runout_phase_deg : float or None
+        None without events or angle data.
+    events : list of SquealEvent
+        With ``runout_phase_deg`` set.
+    """
+    if not (events and acc.ang_ecnt.any() and acc.ang_cnt.any()):
+        return None, events
+    nb = plan.nb
+    angle_c = (np.arange(nb) + 0.5) * 2 * math.pi / nb
+    e_mean = np.divide(acc.ang_e, acc.ang_ecnt, out=np.zeros(nb), where=acc.ang_ecnt > 0)
+    z = np.sum(e_mean * np.exp(1j * angle_c))
+    q_mean = np.divide(acc.ang_macro, acc.ang_cnt, out=np.full(nb, -np.inf), where=acc.ang_cnt > 0)
+    crest = angle_c[int(np.argmax(q_mean))]
+    phase = float(np.degrees(np.angle(z * np.exp(-1j * crest))))
+    rot = np.exp(-1j * crest)
+    events = [replace(e, runout_phase_deg=float(np.degrees(np.angle(
+                  np.sum(w * np.exp(2j * math.pi * acc.frame_turns[fr])) * rot))))
+              for e, fr, w in zip(events, ev_frames, ev_weights, strict=True)]
+    return phase, events
+
+
+def _assemble(
+    plan: _Plan, s: AnalysisSettings, acc: _Accumulators, rotation: Any, src: Any, attrs: dict[str, Any], *,
+    events: list[SquealEvent], squeal_f: float | None, harmonics: list[dict[str, float]],
+    rising: float | None, corr: float | None, phase: float | None,
+) -> MeasurementResult:
+    """Result step: label the accumulated features (frames, revolutions, angles, spectrum).
+
+    Parameters
+    ----------
+    plan, s, acc
+        The analysis after its last window.
+    rotation : DiscAngle or ConstantSpeed
+        For the frames' disc speed.
+    src : RecordingSource-like
+        For the source's name.
+    attrs : dict
+        The recording's attributes.
+    events, squeal_f, harmonics, rising, corr, phase
+        From the events and run-out link steps.
+
+    Returns
+    -------
+    MeasurementResult
+    """
+    fs, n, hop, nb = plan.fs, plan.n, plan.hop, plan.nb
+    level = 10 * np.log10(np.maximum(acc.level, 1e-300) / P_REF**2)
+    peak = float(10 * np.log10(max(acc.laf_max, 1e-300) / P_REF**2))
+    t_frames = np.arange(plan.n_frames) * hop / fs + n / 2 / fs
+    frames = xr.Dataset(
+        {
+            "level_dba": ("time", level, {"units": "dB(A)", "long_name":
+                                          f"L_A{s.criteria.time_weighting[0].upper()} {s.band[0]:g}-{s.band[1]:g} Hz "
+                                          "(max over the frame's interval)"}),
+            "leq_dba": ("time", acc.leq, {"units": "dB(A)", "long_name": "A-weighted band level of the Hann frame"}),
+            "ridge_freq": ("time", acc.ridge_f, {"units": "Hz", "long_name": "strongest line in the band"}),
+            "band_power": ("time", acc.e_tot, {"units": "Pa^2", "long_name": "mean square in the band (Hann frame)"}),
+            "rising_power": ("time", acc.e_rise, {"units": "Pa^2",
+                                                  "long_name": "band_power x share on rising run-out"}),
+            "tan_theta": ("time", acc.slope_f, {"units": "1", "long_name": "mean SRO slope tan(theta)"}),
+            "rpm": ("time", 60.0 * rotation.rev_per_s(t_frames), {"units": "rpm", "long_name": "disc speed"}),
+        },
+        coords={"time": ("time", t_frames, {"units": "s", "long_name": "frame centre"})},
+    )
+    revs = np.flatnonzero(np.isfinite(acc.rev_max[0]))
+    revolutions = xr.Dataset(
+        {f"{k}_p2p": ("revolution", acc.rev_max[j, revs] - acc.rev_min[j, revs], {"units": "m"})
+         for j, k in enumerate(("sro", "macro", "micro"))},
+        coords={"revolution": ("revolution", revs.astype(np.int64))},
+    )
+    angle = (np.arange(nb) + 0.5) * 2 * math.pi / nb
+    with np.errstate(divide="ignore", invalid="ignore"):
+        polar = xr.Dataset(
+            {
+                "angle_sro": ("angle", acc.ang_q / acc.ang_cnt, {"units": "m", "long_name": "mean SRO at angle"}),
+                "angle_macro": ("angle", acc.ang_macro / acc.ang_cnt, {"units": "m"}),
+                "angle_level_db": ("angle", 10 * np.log10(acc.ang_e / acc.ang_ecnt / P_REF**2),
+                                   {"units": "dB", "long_name": "mean squeal-band level at angle"}),
+            },
+            coords={"angle": ("angle", angle, {"units": "rad", "long_name": "disc angle from recording start"})},
+        )
+    n_loud = max(1, int((level >= s.threshold_dba).sum()))
+    spectrum = xr.Dataset(
+        {"mic_power_squeal": ("freq", acc.mic_spec_sum / n_loud, {"units": "Pa^2",
+                                                                   "long_name": "mean during squeal"})},
+        coords={"freq": ("freq", plan.freq, {"units": "Hz"})},
+    )
+    out_attrs = {"source": str(attrs.get("source", src.path)), "synthetic": bool(attrs.get("synthetic", False)),
+                 "max_tan_theta": acc.max_tan, "surface_speed": surface_speed(s.rpm, s.radius),
+                 "min_tnr_db": s.min_tnr_db}
+    return MeasurementResult(
+        squeal_frequency_hz=squeal_f, harmonics=tuple(harmonics), events=tuple(events), rising_fraction=rising,
+        growth_slope_correlation=corr, peak_dba=peak, runout_phase_deg=phase, duration_s=plan.total / fs, fs=fs,
+        settings=s, frames=frames, revolutions=revolutions, polar=polar, spectrum=spectrum, attrs=out_attrs,
+    )
+
+
 def analyze_recording(
     recording: str | Path | xr.Dataset | RecordingSource,
     *,
@@ -439,7 +1198,9 @@ def analyze_recording(
         ``nperseg``, ``hop``, ``freq_tol``, ``n_angle_bins``, ``chunk_s``), and the rig's
         geometry: ``probe_offset_deg`` (the probe sits this far upstream of the pin, so it sees
         the surface that much rotation before the pin), ``acoustic_delay`` [s] (pin to
-        microphone) and ``polarity`` (-1: the probe reads the run-out reversed).
+        microphone) and ``polarity`` (-1: the probe reads the run-out reversed); and
+        ``min_tnr_db``, the tonality a squeal component needs (tone-to-noise ratio [dB], default
+        8 as ECMA-418-1 for a prominent tone; None: none).
 
     Returns
     -------
@@ -453,31 +1214,11 @@ def analyze_recording(
     >>> abs(res.squeal_frequency_hz - 2388.0) < 5 and res.rising_fraction > 0.8
     True
     """
-    if isinstance(recording, xr.Dataset):
-        src: Any = _DatasetSource(recording, fs)
-        attrs = dict(recording.attrs)
-    elif isinstance(recording, RecordingSource):
-        src, attrs = recording, {"source": str(recording.path), "synthetic": recording.synthetic}
-    elif hasattr(recording, "iter_blocks"):  # e.g. a SyntheticSource
-        src, attrs = recording, {"source": str(recording.path), "synthetic": recording.fmt == "synthetic"}
-    else:
-        src = open_recording(recording, fs=fs)
-        attrs = {"source": str(src.path), "synthetic": src.synthetic}
+    src, attrs = _open_source(recording, fs)
     crit = squeal_criteria(setup, band=band, threshold_dba=threshold_dba, time_weighting=time_weighting,
                            min_duration=min_duration)
     fs_ = float(src.fs)
-    rotation: Any
-    if tacho is not None:
-        tk = {k: options[k] for k in ("tacho_kind", "pulses_per_rev", "tacho_level", "angle_unit") if k in options}
-        rotation = read_tacho(src, tacho, kind=tk.get("tacho_kind", "pulses"),
-                              pulses_per_rev=tk.get("pulses_per_rev", 1), level=tk.get("tacho_level"),
-                              angle_unit=tk.get("angle_unit", "deg"))
-        span = src.n_samples / fs_
-        rpm = 60.0 * float(rotation.turns(span) - rotation.turns(0.0)) / span  # mean speed
-    elif rpm is None:
-        raise InputError("Give the disc speed rpm, or a tacho channel.")
-    else:
-        rotation = ConstantSpeed(validate_positive("rpm", rpm))
+    rotation, rpm = _disc_rotation(src, tacho, rpm, options)
     try:
         s = AnalysisSettings(rpm=rpm, radius=radius, criteria=crit, **options)
     except TypeError as e:
@@ -486,307 +1227,29 @@ def analyze_recording(
     mic_n, disp_n = src.resolve(mic), src.resolve(displacement)
     if mic_n == disp_n:
         raise InputError(f"The microphone and displacement channels are the same ({mic_n!r}).")
-    total = src.n_samples
-    if total < s.nperseg:
-        raise InputError(f"Recording has {total} samples, fewer than one analysis frame ({s.nperseg}).")
-    f_rev = revolution_frequency(s.rpm)
-    v = surface_speed(s.rpm, s.radius)
-    n, hop = s.nperseg, s.hop
-    freq = np.fft.rfftfreq(n, 1 / fs_)
-    lo, hi = int(np.searchsorted(freq, s.band[0])), int(np.searchsorted(freq, s.band[1], side="right"))
-    if hi - lo < 5:
-        raise InputError(f"Band {s.band} Hz holds fewer than 5 bins of {fs_ / n:g} Hz; widen it or raise nperseg.")
-    w_a = 10 ** (a_weighting_db(freq[lo:hi]) / 10)
-    win = signal.windows.hann(s.nperseg, sym=False)
-    win32 = win.astype(np.float32)
-    w_a32 = w_a.astype(np.float32)
-    pscale = 2.0 / (s.nperseg * float(np.sum(win**2)))
-    thr_power = P_REF**2 * 10 ** (s.threshold_dba / 10)
-    n_threads = thread_limit()  # FFT threads: this process's share (one on a one-thread Dask worker)
-    half_width = max(2, int(0.5 * s.freq_tol * n / fs_))  # bins of a tonal component either side
-    # the Fast level is compared and stored as mean square until the end
-    core = max(hop, round(s.chunk_s * fs_ / hop) * hop)
-    # the slowest speed decides how far the probe's view of the pin's surface lies back in time
-    t_span = np.linspace(0.0, total / fs_, 257)
-    f_min = max(float(np.min(rotation.rev_per_s(t_span))), 1e-3 * f_rev)
-    lag = s.acoustic_delay + abs(s.probe_offset_deg) / 360.0 / f_min
-    margin = max(n, int(0.25 * fs_), int(4 * fs_ / ((s.macro_orders + 0.5) * f_rev)), int(lag * fs_) + n)
-    off_turns = s.probe_offset_deg / 360.0
-    n_frames = (total - n) // hop + 1
-    half = (n - hop) // 2  # frame "interval" [start + half, start + half + hop) for energy sums
-    # run-out is analysed at fs / dec, dec a divisor of hop with fs / dec >= 4 lowpass_freq
-    dec = max(d for d in range(1, hop + 1) if hop % d == 0 and fs_ / d >= 4 * s.lowpass_freq)
-    fs_d = fs_ / dec
-    f_macro = (s.macro_orders + 0.5) * f_rev
-    if f_macro >= s.lowpass_freq:
-        raise InputError(f"macro_orders={s.macro_orders} at {s.rpm:g} rpm puts the macro corner ({f_macro:g} Hz) "
-                         f"above lowpass_freq={s.lowpass_freq:g} Hz.")
-
-    level = np.full(n_frames, -np.inf)  # Fast (time-weighted) level: max over each frame's interval
-    leq = np.empty(n_frames)  # the frame's own A-weighted band level (Hann window)
-    laf_state = 0.0  # time-weighted mean square carried from core to core
-    laf_max = 0.0
-    spec_state = np.zeros(hi - lo)  # time-weighted A-weighted power spectrum carried likewise
-    a_frames = math.exp(-hop / fs_ / s.criteria.time_constant_s)
-    a_tw = s.criteria.time_constant_s
-    ridge_f = np.empty(n_frames)
-    e_tot = np.empty(n_frames)
-    e_rise = np.empty(n_frames)
-    slope_f = np.empty(n_frames)
-    comp_frame: list[NDArray] = [np.empty(0, np.intp)]
-    comp_freq: list[NDArray] = [np.empty(0)]
-    comp_level: list[NDArray] = [np.empty(0)]
-    comp_pow: list[NDArray] = [np.empty(0)]
-    comp_cross: list[NDArray] = [np.empty(0, np.complex128)]
-    mic_spec_sum = np.zeros(freq.size)  # summed over loud frames, band bins only
-    mic_cross_sum = np.zeros(freq.size, np.complex128)  # X_m conj(X_m-1) summed likewise
-    rev0 = math.floor(float(rotation.turns(0.0)))  # revolutions count from the first mark (or t = 0)
-    n_rev = math.floor(float(rotation.turns((total - 1) / fs_))) - rev0 + 1
-    rev_max = np.full((3, n_rev), -np.inf)  # sro, macro, micro per revolution
-    rev_min = np.full((3, n_rev), np.inf)
-    nb = s.n_angle_bins
-    ang_q = np.zeros(nb)
-    ang_macro = np.zeros(nb)
-    ang_cnt = np.zeros(nb)
-    ang_e = np.zeros(nb)
-    ang_ecnt = np.zeros(nb)
-    max_tan = 0.0
-    frame_turns = np.zeros(n_frames)  # disc position under the pin when each frame pair's sound left it
-
+    plan = _plan(s, fs_, src.n_samples, rotation)
+    acc = _Accumulators.empty(plan)
     # an in-memory recording is one block (windows are views of it); files are read block by block
-    block = total if isinstance(src, _DatasetSource) else max(core, DEFAULT_BLOCK)
-    for c0, c1, w0, data in _windows(src, [mic_n, disp_n], core, margin, block):
+    block = plan.total if isinstance(src, _DatasetSource) else max(plan.core, DEFAULT_BLOCK)
+    for c0, c1, w0, data in _windows(src, [mic_n, disp_n], plan.core, plan.margin, block):
+        win = _Window.at(plan, c0, c1, w0)
         p, q = data[mic_n], data[disp_n]
-        f0 = -(-c0 // hop)
-        f1 = min(n_frames, (c1 - 1) // hop + 1)
-        # the run-out grid: every dec-th sample, from g0 (a multiple of dec: one grid for all cores)
-        o = (-w0) % dec
-        g0 = w0 + o
-        ci = slice(-(-(c0 - g0) // dec), -(-(c1 - g0) // dec))
-        # A-weighted band mean square on the grid, time weighted (IEC 61672-1) from the state of the
-        # previous core on, through this core and on into the margin (for the frames ending there)
-        pw = band_weighted_signal(p[o:], fs_, s.band, workers=n_threads)
-        m_full = pw.size // dec
-        ms = np.zeros(-(-(p.size - o) // dec))
-        ms[:m_full] = np.square(pw[:m_full * dec], dtype=np.float32).reshape(-1, dec).mean(axis=1, dtype=np.float64)
-        laf = exponential_average(ms[ci.start:], dec / fs_, a_tw, initial=laf_state)
-        if ci.stop > ci.start:
-            laf_state = float(laf[ci.stop - ci.start - 1])
-            laf_max = max(laf_max, float(laf[:ci.stop - ci.start].max()))
-        if f1 > f0:
-            a = -(-(np.arange(f0, f1) * hop + half - g0) // dec)
-            b = a + hop // dec
-            level[f0:f1] = np.maximum.reduceat(laf[:b[-1] - ci.start], a - ci.start)
-        # frames [f0, f1) start inside the core; their samples lie in the window
-        if f1 > f0:
-            # frames [fp, f1): one before the core's first (its samples lie in the margin), so
-            # every frame but the recording's first has its predecessor for the phase advance
-            fp = max(f0 - 1, 0)
-            seg = p[fp * hop - w0: (f1 - 1) * hop + n - w0]
-            frames_ = np.lib.stride_tricks.sliding_window_view(seg.astype(np.float32), n)[::hop]
-            # single precision (7 digits) for the framed spectra: levels, peaks and their refinement
-            spec_p = sp_fft.rfft(frames_ * win32, axis=-1, workers=n_threads)[:, lo:hi]
-            spec = spec_p[f0 - fp:]  # frames [f0, f1)
-            pb = spec.real**2
-            pb += spec.imag**2
-            pb *= np.float32(pscale)  # [Pa^2] per bin
-            pa = pb * w_a32
-            lev = pa.sum(axis=1, dtype=np.float64)
-            leq[f0:f1] = 10 * np.log10(np.maximum(lev, 1e-300) / P_REF**2)
-            ridge_f[f0:f1] = (_refine_rows(pb, np.argmax(pa, axis=1)) + lo) * fs_ / n
-            # the A-weighted spectrum time weighted like the level (exponential over frames, same time
-            # constant): a component's level is the frame's Fast level times its share of this spectrum,
-            # so each tone's level is what the meter shows, split by what the meter has heard
-            pa_tw, spec_state = _time_weight_rows(pa, a_frames, spec_state)
-            loud = np.flatnonzero(level[f0:f1] >= thr_power)
-            share_scale = level[f0:f1][loud] / np.maximum(pa_tw[loud].sum(axis=1, dtype=np.float64), 1e-300)
-            if loud.size:
-                # phase advance of every band bin from the previous frame (zero for frame 0)
-                prev = loud + (f0 - fp - 1)
-                cross = spec[loud] * np.conj(spec_p[np.maximum(prev, 0)])
-                cross[prev < 0] = 0
-                mic_cross_sum[lo:hi] += cross.sum(axis=0, dtype=np.complex128)
-                # components (and their coarse frequency) from the time-weighted spectrum
-                fr, ff, fl = tonal_components(pa_tw[loud], pa_tw[loud], lo, fs_, n, s.threshold_dba,
-                                              scale=share_scale, half_width=half_width)
-                # each component's frequency from its phase advance over the main lobe (unbiased
-                # for growing and decaying squeal, where the two-bin ratio is not), where the tone is
-                # in the frame itself (a quarter of its time-weighted power), not only remembered
-                kc = np.clip(np.rint(ff * (n / fs_)).astype(np.intp) - lo, _LOBE, hi - lo - 1 - _LOBE)
-                lobe = kc[:, None] + np.arange(-_LOBE, _LOBE + 1)
-                c = cross[fr[:, None], lobe].sum(axis=1, dtype=np.complex128)
-                now = pa[loud[fr][:, None], lobe].sum(axis=1) >= 0.25 * pa_tw[loud[fr][:, None], lobe].sum(axis=1)
-                ff = np.where((prev[fr] >= 0) & now, phase_advance_freq(c, ff, fs_, hop), ff)
-                # weights of the event's mean frequency: |c| (the cross power of the frame pair), so
-                # a pair whose earlier frame is still in the noise (squeal onset) counts little
-                wc = np.where(prev[fr] >= 0, np.abs(c) * pscale, pb[loud[fr][:, None], lobe].sum(axis=1))
-                comp_frame.append(loud[fr] + f0)
-                comp_freq.append(ff)
-                comp_level.append(fl)
-                comp_pow.append(wc)
-                comp_cross.append(np.where(prev[fr] >= 0, c, 0))
-                mic_spec_sum[lo:hi] += pb[loud].sum(axis=0, dtype=np.float64)
-            # band mean square per frame (Hann frames at 50 % overlap sum to the signal energy)
-            e_tot[f0:f1] = pb.sum(axis=1, dtype=np.float64)
-        # run-out on every dec-th sample (fs / dec >= 4 lowpass_freq): the zero-phase Butterworth
-        # low-pass at lowpass_freq (paper Fig. 12), run at fs / dec after linear-phase anti-alias
-        # FIRs that pass up to 1.5 lowpass_freq and remove, 80 dB down, whatever would fold below
-        # it; so the corner keeps its meaning (lowpass_decimated; tests compare the full rate)
-        sro = lowpass_decimated(q[o:], s.lowpass_freq, fs_, dec)
-        if s.polarity < 0:
-            sro = -sro
-        macro = lowpass(sro, f_macro, fs_d, order=2)
-        micro = sro - macro
-        # incline under the probe, dq / (r dphi) (paper eq. 11 with v = r dphi/dt at the actual speed)
-        t_d = (g0 + np.arange(sro.size) * dec) / fs_
-        # (a speed extrapolated past the last tacho mark of a stop is held above 1/1000 of the mean)
-        rps = np.maximum(rotation.rev_per_s(t_d), 1e-3 * f_rev)
-        tan_probe = np.gradient(sro) * fs_d / (2 * math.pi * s.radius * rps)
-        # incline under the pin when the sound heard at t_d left it: emitted at t_d - acoustic_delay,
-        # from the surface the probe saw probe_offset earlier in rotation
-        if s.acoustic_delay or off_turns:
-            t_src = rotation.time_at(rotation.turns(t_d - s.acoustic_delay) - off_turns)
-            tan_t = np.interp(t_src, t_d, tan_probe)
-        else:
-            tan_t = tan_probe
-        # A-weighted sound energy in the squeal band on the run-out grid (zero-phase: nothing shifted)
-        e_d = ms
-        cs_e, cs_r, cs_t = np.zeros((3, sro.size + 1))  # cumulative sums from 0
-        np.cumsum(e_d, out=cs_e[1:])
-        np.cumsum(np.where(tan_t > 0, e_d, 0.0), out=cs_r[1:])
-        np.cumsum(tan_t, out=cs_t[1:])
-        if f1 > f0:
-            e_int = cs_e[b] - cs_e[a]
-            share = np.divide(cs_r[b] - cs_r[a], e_int, out=np.full(e_int.shape, 0.5), where=e_int > 0)
-            e_rise[f0:f1] = e_tot[f0:f1] * share
-            slope_f[f0:f1] = (cs_t[b] - cs_t[a]) / (b - a)
-        # the probe sees disc position turns + probe offset (angle 0: the first mark, under the pin)
-        turns = rotation.turns(t_d[ci]) + off_turns
-        rev = np.floor(turns).astype(np.int64) - rev0
-        rev = np.clip(rev, 0, n_rev - 1)
-        starts = np.concatenate([[0], np.flatnonzero(np.diff(rev)) + 1])
-        r = rev[starts]  # distinct revolutions of this core; the next core may continue the last one
-        for j, sig in enumerate((sro[ci], macro[ci], micro[ci])):
-            rev_max[j, r] = np.maximum(rev_max[j, r], np.maximum.reduceat(sig, starts))
-            rev_min[j, r] = np.minimum(rev_min[j, r], np.minimum.reduceat(sig, starts))
-        abin = ((turns % 1.0) * nb).astype(np.int64) % nb
-        ang_q += np.bincount(abin, sro[ci], nb)
-        ang_macro += np.bincount(abin, macro[ci], nb)
-        ang_cnt += np.bincount(abin, minlength=nb)
-        max_tan = max(max_tan, float(np.max(np.abs(tan_probe[ci]))))
-        if f1 > f0:  # the disc position under the pin when the frame's sound left it
-            centre = rotation.turns((np.arange(f0, f1) * hop + n / 2) / fs_ - s.acoustic_delay)
-            # the component weights are cross powers of a frame and its predecessor: centred half a hop earlier
-            frame_turns[f0:f1] = rotation.turns((np.arange(f0, f1) * hop + (n - hop) / 2) / fs_ - s.acoustic_delay)
-            fb = ((centre % 1.0) * nb).astype(np.int64) % nb
-            ang_e += np.bincount(fb, e_tot[f0:f1], nb)
-            ang_ecnt += np.bincount(fb, minlength=nb)
+        ms = _band_level(plan, s, win, p, acc)
+        if win.f1 > win.f0:
+            _frame_components(plan, s, win, _frame_spectra(plan, win, p, acc), acc)
+        _accumulate_runout(plan, s, win, _runout_signals(plan, s, win, q, rotation), ms, rotation, acc)
         if progress is not None:
-            progress(c1, total)
+            progress(c1, plan.total)
 
-    cf, comp_f, comp_c = np.concatenate(comp_frame), np.concatenate(comp_freq), np.concatenate(comp_cross)
-    frame_start = np.arange(n_frames) * hop / fs_
-    events, ev_frames, ev_weights = link_components(
-        cf, comp_f, np.concatenate(comp_level), np.concatenate(comp_pow),
-        frame_start + half / fs_, hop / fs_, freq_tol=s.freq_tol, min_duration=s.min_duration,
-    )
+    events, ev_frames, ev_weights = _squeal_events(plan, s, acc)
     squeal_f: float | None = None
     harmonics: list[dict[str, float]] = []
     rising: float | None = None
     corr: float | None = None
     if events:
-        cover = np.zeros(n_frames + 1, np.int64)  # +1 at each event's first frame, -1 after its last
-        np.add.at(cover, np.array([fr[0] for fr in ev_frames]), 1)
-        np.add.at(cover, np.array([fr[-1] for fr in ev_frames]) + 1, -1)
-        in_ev = np.cumsum(cover[:-1]) > 0
-        tot = float(e_tot[in_ev].sum())
-        rising = float(e_rise[in_ev].sum() / tot) if tot > 0 else None
-        mag = np.sqrt(mic_spec_sum)
-        k0 = lo + int(np.argmax(mic_spec_sum[lo:hi] * w_a))
-        # the dominant line's phase advance over its own components only: the main lobe of another
-        # squeal line less than two bins away must not pull it (VDA 303: several frequencies)
-        squeal_f = float(refine_peak(mag, k0)) * fs_ / n
-        c_line = comp_c[np.abs(comp_f - squeal_f) < 0.5 * fs_ / n].sum()
-        if c_line != 0:
-            squeal_f = float(phase_advance_freq(c_line, squeal_f, fs_, hop))
-        for h in range(2, 6):
-            kh = round(h * squeal_f * n / fs_)
-            if kh + 3 >= hi:
-                break
-            kk = kh - 2 + int(np.argmax(mic_spec_sum[kh - 2:kh + 3]))
-            p_h = mic_spec_sum[kk - 2:kk + 3].sum() / max(int(in_ev.sum()), 1)
-            f_h = float(refine_peak(mag, kk)) * fs_ / n  # then its phase advance over all loud frames
-            f_h = float(phase_advance_freq(mic_cross_sum[kk - _LOBE:kk + _LOBE + 1].sum(), f_h, fs_, hop))
-            harmonics.append({"order": h, "frequency_hz": f_h,
-                              "level_db": float(10 * np.log10(max(p_h, 1e-300) / P_REF**2))})
-        # growth rate of the squeal envelope against the SRO slope, over the frames near squeal
-        with np.errstate(divide="ignore"):
-            ln_e = np.log(np.maximum(e_tot, 1e-300))
-        growth = np.gradient(ln_e) * 0.5 * fs_ / hop
-        sel = leq >= s.threshold_dba - 20
-        if sel.sum() > 3 and np.std(growth[sel]) > 0 and np.std(slope_f[sel]) > 0:
-            corr = float(np.corrcoef(growth[sel], slope_f[sel])[0, 1])
-
-    phase: float | None = None
-    if events and ang_ecnt.any() and ang_cnt.any():
-        # squeal energy's circular mean angle against the macro run-out's crest (both in the disc's frame)
-        angle_c = (np.arange(nb) + 0.5) * 2 * math.pi / nb
-        e_mean = np.divide(ang_e, ang_ecnt, out=np.zeros(nb), where=ang_ecnt > 0)
-        z = np.sum(e_mean * np.exp(1j * angle_c))
-        q_mean = np.divide(ang_macro, ang_cnt, out=np.full(nb, -np.inf), where=ang_cnt > 0)
-        crest = angle_c[int(np.argmax(q_mean))]
-        phase = float(np.degrees(np.angle(z * np.exp(-1j * crest))))
-        # each event's own place on the disc: its component's power per frame at the frame's disc angle
-        rot = np.exp(-1j * crest)
-        events = [replace(e, runout_phase_deg=float(np.degrees(np.angle(
-                      np.sum(w * np.exp(2j * math.pi * frame_turns[fr])) * rot))))
-                  for e, fr, w in zip(events, ev_frames, ev_weights, strict=True)]
-    level = 10 * np.log10(np.maximum(level, 1e-300) / P_REF**2)
-    peak = float(10 * np.log10(max(laf_max, 1e-300) / P_REF**2))
-    t_frames = frame_start + n / 2 / fs_
-    frames = xr.Dataset(
-        {
-            "level_dba": ("time", level, {"units": "dB(A)", "long_name":
-                                          f"L_A{s.criteria.time_weighting[0].upper()} {s.band[0]:g}-{s.band[1]:g} Hz "
-                                          "(max over the frame's interval)"}),
-            "leq_dba": ("time", leq, {"units": "dB(A)", "long_name": "A-weighted band level of the Hann frame"}),
-            "ridge_freq": ("time", ridge_f, {"units": "Hz", "long_name": "strongest line in the band"}),
-            "band_power": ("time", e_tot, {"units": "Pa^2", "long_name": "mean square in the band (Hann frame)"}),
-            "rising_power": ("time", e_rise, {"units": "Pa^2", "long_name": "band_power x share on rising run-out"}),
-            "tan_theta": ("time", slope_f, {"units": "1", "long_name": "mean SRO slope tan(theta)"}),
-            "rpm": ("time", 60.0 * rotation.rev_per_s(t_frames), {"units": "rpm", "long_name": "disc speed"}),
-        },
-        coords={"time": ("time", t_frames, {"units": "s", "long_name": "frame centre"})},
-    )
-    revs = np.flatnonzero(np.isfinite(rev_max[0]))
-    revolutions = xr.Dataset(
-        {f"{k}_p2p": ("revolution", rev_max[j, revs] - rev_min[j, revs], {"units": "m"})
-         for j, k in enumerate(("sro", "macro", "micro"))},
-        coords={"revolution": ("revolution", revs.astype(np.int64))},
-    )
-    angle = (np.arange(nb) + 0.5) * 2 * math.pi / nb
-    with np.errstate(divide="ignore", invalid="ignore"):
-        polar = xr.Dataset(
-            {
-                "angle_sro": ("angle", ang_q / ang_cnt, {"units": "m", "long_name": "mean SRO at angle"}),
-                "angle_macro": ("angle", ang_macro / ang_cnt, {"units": "m"}),
-                "angle_level_db": ("angle", 10 * np.log10(ang_e / ang_ecnt / P_REF**2),
-                                   {"units": "dB", "long_name": "mean squeal-band level at angle"}),
-            },
-            coords={"angle": ("angle", angle, {"units": "rad", "long_name": "disc angle from recording start"})},
-        )
-    n_loud = max(1, int((level >= s.threshold_dba).sum()))
-    spectrum = xr.Dataset(
-        {
-            "mic_power_squeal": ("freq", mic_spec_sum / n_loud, {"units": "Pa^2", "long_name": "mean during squeal"}),
-        },
-        coords={"freq": ("freq", freq, {"units": "Hz"})},
-    )
-    attrs = {"source": str(attrs.get("source", src.path)), "synthetic": bool(attrs.get("synthetic", False)),
-             "max_tan_theta": max_tan, "surface_speed": v}
-    return MeasurementResult(
-        squeal_frequency_hz=squeal_f, harmonics=tuple(harmonics), events=tuple(events), rising_fraction=rising,
-        growth_slope_correlation=corr, peak_dba=peak, runout_phase_deg=phase, duration_s=total / fs_, fs=fs_,
-        settings=s,
-        frames=frames, revolutions=revolutions, polar=polar, spectrum=spectrum, attrs=attrs,
-    )
+        in_ev = _in_events(plan.n_frames, ev_frames)
+        squeal_f, harmonics = _squeal_lines(plan, acc, in_ev)
+        rising, corr = _runout_statistics(plan, s, acc, in_ev)
+    phase, events = _runout_link(plan, acc, events, ev_frames, ev_weights)
+    return _assemble(plan, s, acc, rotation, src, attrs, events=events, squeal_f=squeal_f, harmonics=harmonics,
+                     rising=rising, corr=corr, phase=phase)

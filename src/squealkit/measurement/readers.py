@@ -424,17 +424,13 @@ class RecordingSource:
                 start += take
 
     def _blocks_uff(self, names: list[str], block: int, with_time: bool):
-        import pyuff
-
-        # a UFF 58 function is one record: read each wanted channel's record once (only those)
-        uff = pyuff.UFF(str(self.path))
-        data = {n: np.asarray(uff.read_sets(self._extra["sets"][n])["data"]) for n in names}
-        for n, d in data.items():
-            if d.shape != (self.n_samples,):
-                raise _fail(self.path, f"holds {d.size} values where its header announces {self.n_samples}; the "
-                                       "record is truncated or damaged.", channel=n)
+        # a UFF 58 function is one record per channel: each wanted record is read block by block
+        # from its place in the file (pyuff would parse a whole record, and read the whole file to
+        # find the records), so memory stays bounded by the block
+        records = _uff_records(self.path)
+        streams = {n: _uff58_samples(self.path, records[self._extra["sets"][n]], block) for n in names}
         for start in range(0, self.n_samples, block):
-            yield start, {n: d[start:start + block] for n, d in data.items()}
+            yield start, {n: next(s) for n, s in streams.items()}
 
     def _blocks_tdms(self, names: list[str], block: int, with_time: bool):
         from nptdms import TdmsFile
@@ -443,6 +439,71 @@ class RecordingSource:
             chans = {n: f[n.split("/")[0]][n.split("/", 1)[1]] for n in names}
             for start in range(0, self.n_samples, block):
                 yield start, {n: c[start:start + block] for n, c in chans.items()}
+
+
+def _uff_records(path: Path, chunk: int = 1 << 22) -> list[tuple[int, int]]:
+    """Byte ranges ``[start, end)`` of a universal file's records, found chunk by chunk.
+
+    A record lies between two delimiter lines ``    -1`` (followed by a line end, or blanks to
+    column 80), as pyuff finds them; record ``i`` is pyuff's data set ``i``.
+    """
+    marks: list[int] = []
+    buf, base = b"", 0  # buf starts at file offset base
+    with open(path, "rb") as fh:
+        while True:
+            data = fh.read(chunk)
+            buf += data
+            keep, last = None, -1
+            i = buf.find(b"    -1")
+            while i != -1:
+                if data and i + 80 > len(buf):  # the mark's line may go on in the next chunk
+                    keep = i
+                    break
+                rest = buf[i + 6:i + 80]
+                if not rest or rest[:1] in (b"\n", b"\r") or rest == b" " * 74:
+                    marks.append(base + i)
+                last = i
+                i = buf.find(b"    -1", i + 1)
+            if not data:
+                break
+            keep = max(len(buf) - 85, last + 1) if keep is None else keep
+            buf, base = buf[keep:], base + keep
+    return [(marks[k], marks[k + 1]) for k in range(0, len(marks) - 1, 2)]
+
+
+def _uff58_samples(path: Path, record: tuple[int, int], block: int) -> Iterator[NDArray[np.float64]]:
+    """Samples of one UFF 58 record (real, evenly spaced; ASCII or binary 58b), ``block`` at a time."""
+    with open(path, "rb") as fh:
+        fh.seek(record[0])
+        head = [fh.readline() for _ in range(13)]  # "    -1", the 58 line, 11 header lines
+        ord_type, n_pts, even = int(head[8][:10]), int(head[8][10:20]), int(head[8][20:30])
+        if ord_type not in (2, 4) or not even:
+            raise InputError(f"UFF 58 record of {str(path)!r}: only real, evenly sampled functions are "
+                             f"recordings (ordinate type {ord_type}, even spacing {even}).")
+        binary = head[1][6:7].lower() == b"b"
+        if binary:  # raw floats after the header
+            dtype = np.dtype(f"{'<' if int(head[1][7:13]) == 1 else '>'}f{4 if ord_type == 2 else 8}")
+            avail = (record[1] - fh.tell()) // dtype.itemsize  # samples before the closing "    -1"
+        width, per_line = (13, 6) if ord_type == 2 else (20, 4)  # 6E13.5 or 4E20.12 per line
+        carry = np.empty(0)
+        for done in range(0, n_pts, block):
+            m = min(block, n_pts - done)
+            if binary:
+                v = np.frombuffer(fh.read(max(0, min(m, avail - done)) * dtype.itemsize), dtype=dtype).astype(float)
+            else:  # whole lines, the values past this block carried to the next
+                need = m - carry.size
+                lines = [fh.readline() for _ in range(max(0, -(-need // per_line)))]
+                text = b"".join(ln.rstrip(b"\r\n").ljust(per_line * width) for ln in lines)
+                fields = np.frombuffer(text, dtype=f"S{width}")[:n_pts - done - carry.size]
+                try:
+                    v = np.concatenate([carry, fields.astype(np.float64)])
+                except ValueError as e:
+                    raise InputError(f"UFF 58 record of {str(path)!r} has a sample that is not a number: "
+                                     f"{e}") from e
+                v, carry = v[:m], v[m:]
+            if v.size < m:
+                raise InputError(f"UFF 58 record of {str(path)!r} ends after {done + v.size} of {n_pts} samples.")
+            yield v
 
 
 def _scales_for(channels: Sequence[str], scale: Mapping[str, float] | Sequence[float] | float | None) -> dict:

@@ -13,6 +13,7 @@ import xarray as xr
 
 __all__ = [
     "band_vs_pressure_plot",
+    "event_phase_plot",
     "level_plot",
     "measurement_figures",
     "polar_plot",
@@ -251,6 +252,64 @@ def polar_plot(result: Any, ax: Any = None):
         ax.plot(ang, lo + (sro - np.nanmin(sro)) / span * (hi - lo), "--", label="run-out (scaled)")
     ax.legend(loc="lower left", fontsize="small")
     ax.set_title("Level against disc angle" + _tag(result))
+    return fig
+
+
+def event_phase_plot(result: Any, ax: Any = None):
+    """Run-out phase of each squeal event: where on the disc it sounds, relative to the run-out crest.
+
+    A polar plot with the macro run-out's crest at the top and angles growing clockwise (the
+    disc's sense of rotation, as in the campaign report): each event is a point at its
+    ``runout_phase_deg``, at a radius of its peak level and coloured by its frequency; a line
+    from the centre marks the recording's ``runout_phase_deg`` (all the squeal energy).
+    Negative angles lie before the crest, on the rising run-out.
+
+    Parameters
+    ----------
+    result : MeasurementResult
+        From :func:`~squealkit.measurement.analyze_recording`.
+    ax : matplotlib.projections.polar.PolarAxes, optional
+        Draw here (a polar axes); default: a new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Examples
+    --------
+    >>> from squealkit.measurement import analyze_recording, synthetic_recording
+    >>> res = analyze_recording(synthetic_recording(duration=1.0, seed=1), mic="mic",
+    ...                         displacement="displacement", rpm=900, radius=0.05)
+    >>> fig = event_phase_plot(res)
+    """
+    if ax is None:
+        fig = _figure(figsize=(5.5, 5.0))
+        ax = fig.add_subplot(projection="polar")
+    fig = ax.figure
+    ax.set_theta_zero_location("N")
+    ax.set_theta_direction(-1)
+    ev = [e for e in result.events if e.runout_phase_deg is not None]
+    if ev:
+        theta = np.radians([e.runout_phase_deg for e in ev])
+        level = np.array([e.peak_dba for e in ev])
+        sc = ax.scatter(theta, level, c=[e.frequency_hz for e in ev], cmap="viridis", s=28, edgecolors="k",
+                        linewidths=0.4, zorder=3)
+        fig.colorbar(sc, ax=ax, pad=0.1, shrink=0.7, label="event frequency [Hz]")
+        lo = min(float(level.min()), result.settings.threshold_dba) - 3.0
+        ax.set_ylim(lo, float(level.max()) + 3.0)
+        if result.runout_phase_deg is not None:
+            ph = np.radians(result.runout_phase_deg)
+            ax.plot([ph, ph], [lo, float(level.max()) + 3.0], color="C3", lw=1.5,
+                    label=f"all squeal: {result.runout_phase_deg:+.0f} deg")
+            ax.legend(loc="lower left", fontsize="small", bbox_to_anchor=(-0.1, -0.12))
+        ax.set_rlabel_position(157.5)
+    else:
+        ax.text(0.5, 0.5, "no squeal events", transform=ax.transAxes, ha="center", va="center")
+    ticks = np.arange(-135, 181, 45)
+    ax.set_xticks(np.radians(ticks % 360), [f"{t:+d}" if t not in (0, 180) else f"{t}" for t in ticks])
+    ax.set_thetalim(0.0, 2 * np.pi)  # the whole disc, whatever the events cover
+    ax.set_title(f"Run-out phase of the {len(ev)} events (crest at 0 deg; radius: peak dB(A))" + _tag(result),
+                 fontsize=9)
     return fig
 
 
