@@ -21,10 +21,11 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
+from threadpoolctl import threadpool_limits
 
 from .. import __version__
 from .._validation import InputError, validate_finite, validate_positive
-from .harmonic_balance import HBProblem, LimitCycle, SecondOrderSystem, _Basis, _newton, contact_system, solve_fixed_p
+from .harmonic_balance import HBProblem, LimitCycle, SecondOrderSystem, _newton, contact_system, solve_fixed_p
 from .hopf import HopfPoint, hopf_point
 
 __all__ = [
@@ -40,46 +41,83 @@ __all__ = [
 FLOQUET_TOL = 1e-7
 
 
-def _expm_batch(X: NDArray) -> NDArray:
-    """Matrix exponentials of a stack (..., m, m): scaling and squaring with a degree-12 Taylor
-    polynomial (norm scaled below 1/2: truncation below 1e-16 relative), all in batched matmuls."""
-    norm = float(np.abs(X).sum(axis=-2).max()) if X.size else 0.0
-    sq = max(0, math.ceil(math.log2(norm / 0.5))) if norm > 0.5 else 0
-    Y = X / 2.0**sq
-    eye = np.broadcast_to(np.eye(X.shape[-1]), X.shape)
-    out = eye.copy()
-    for k in range(12, 0, -1):  # Horner: I + Y/1 (I + Y/2 (I + ...))
-        out = eye + (Y @ out) / k
-    for _ in range(sq):
-        out = out @ out
-    return out
+#: RK4 step of the monodromy integration: ``dt`` times the largest rate of the variational matrix
+#: (local error ~ 0.1^5 / 120 per step: ~3e-5 over a period of the paper's model, below the
+#: harmonic-balance cycle's own error, which the trivial multiplier's distance from 1 shows).
+_FLOQUET_STEP = 0.1
 
 
-def floquet_multipliers(system: SecondOrderSystem, cycle: LimitCycle, *, n_floquet: int = 1024) -> NDArray:
-    """Floquet multipliers (2n,) of a cycle, largest modulus first, trivial one removed last.
+def _sample(Z: NDArray, n_samples: int) -> NDArray:
+    """The Fourier series ``[a_0, a_1..a_H, b_1..b_H]`` (2H+1, n) at ``tau_j = 2 pi j / n_samples``
+    (n_samples > 2H), by inverse real FFT."""
+    H = (Z.shape[0] - 1) // 2
+    c = np.zeros((n_samples // 2 + 1, Z.shape[1]), complex)
+    c[0] = Z[0]
+    c[1:H + 1] = 0.5 * (Z[1:H + 1] - 1j * Z[H + 1:])
+    return np.fft.irfft(c, n_samples, axis=0, norm="forward")
 
-    The monodromy matrix is the product over ``n_floquet`` sub-intervals of
-    ``expm(A(t_j + dt/2) dt)`` with ``A`` the variational matrix along the cycle
-    (exponential midpoint rule, second order in ``dt``). Returns all 2n multipliers sorted
-    with the one nearest 1 (the trivial multiplier) last.
-    """
+
+def _variational(system: SecondOrderSystem, cycle: LimitCycle, n_samples: int) -> NDArray:
+    """The variational matrix ``A(t)`` (n_samples, 2n, 2n) along the cycle at ``t_j = j T / n_samples``."""
     n = system.n_dof
-    N = int(n_floquet)
-    b = _Basis.make(cycle.harmonics, 2 * N)
-    X = (b.E @ cycle.coefficients)[1::2]  # midpoints of the N sub-intervals
-    Xd = cycle.omega * (b.dE @ cycle.coefficients)[1::2]
+    Z = cycle.coefficients
+    H = cycle.harmonics
+    k = np.arange(1, H + 1)[:, None]
+    X = _sample(Z, n_samples)
+    Xd = cycle.omega * _sample(np.r_[np.zeros((1, n)), k * Z[H + 1:], -k * Z[1:H + 1]], n_samples)  # a_k' = k b_k
     _, dfdx, dfdv, _ = system.force(X, Xd, cycle.p)
     Minv = np.linalg.inv(system.M)
-    A = np.zeros((N, 2 * n, 2 * n))
+    A = np.zeros((n_samples, 2 * n, 2 * n))
     A[:, :n, n:] = np.eye(n)
     A[:, n:, :n] = Minv @ (dfdx - system.K)
     A[:, n:, n:] = Minv @ (dfdv - system.C)
-    Phi = _expm_batch(A * (2 * math.pi / cycle.omega / N))
-    while Phi.shape[0] > 1:  # ordered product Phi_{N-1} ... Phi_1 Phi_0, pairwise
-        if Phi.shape[0] % 2:
-            Phi = np.concatenate([Phi, np.eye(2 * n)[None]], axis=0)
-        Phi = Phi[1::2] @ Phi[0::2]
-    rho = np.linalg.eigvals(Phi[0])
+    return A
+
+
+def floquet_steps(system: SecondOrderSystem, cycle: LimitCycle, A: NDArray | None = None) -> int:
+    """RK4 steps per period for :func:`floquet_multipliers`: ``T rho / 0.1`` (a multiple of 16, at least 64),
+    with ``rho`` the largest of ``sqrt(|M^-1 (K - df/dx)|)`` and ``|M^-1 (C - df/dv)|``
+    (Frobenius norms) over 64 instants of the cycle: the fastest rate of the variational system."""
+    n = system.n_dof
+    A = _variational(system, cycle, 64) if A is None else A
+    stiff = np.sqrt(np.linalg.norm(A[:, n:, :n], axis=(1, 2)).max())
+    damp = np.linalg.norm(A[:, n:, n:], axis=(1, 2)).max()
+    rho = max(float(stiff), float(damp), cycle.omega)
+    return 16 * max(4, math.ceil(2 * math.pi / cycle.omega * rho / _FLOQUET_STEP / 16))
+
+
+def floquet_multipliers(system: SecondOrderSystem, cycle: LimitCycle, *, n_floquet: int | None = None) -> NDArray:
+    """Floquet multipliers (2n,) of a cycle by the monodromy matrix, largest modulus first,
+    the trivial one last.
+
+    The monodromy matrix integrates the variational equations ``Phi' = A(t) Phi`` over one
+    period with ``n_floquet`` classical RK4 steps (compiled; default :func:`floquet_steps`),
+    ``A(t)`` from the harmonic-balance solution and the force's analytic derivatives.
+
+    Parameters
+    ----------
+    system : SecondOrderSystem
+        The equations the cycle solves.
+    cycle : LimitCycle
+        The periodic solution.
+    n_floquet : int, optional
+        RK4 steps per period.
+
+    Returns
+    -------
+    ndarray, shape (2n,), complex
+        All 2n multipliers, sorted by decreasing modulus, with the one nearest 1 (the
+        trivial multiplier, the phase shift along the cycle) moved last.
+    """
+    from . import _kernels
+
+    S = floquet_steps(system, cycle) if n_floquet is None else int(n_floquet)
+    if S < 1:
+        raise InputError(f"Parameter n_floquet={n_floquet!r} must be an integer >= 1.")
+    A = _variational(system, cycle, 2 * S)
+    A = np.concatenate([A, A[:1]], axis=0)  # A(T) = A(0)
+    Phi = _kernels.monodromy_rk4(A, 2 * math.pi / cycle.omega / S)
+    rho = np.linalg.eigvals(Phi)
     i = int(np.argmin(np.abs(rho - 1.0)))
     rest = np.delete(rho, i)
     rest = rest[np.argsort(-np.abs(rest))]
@@ -120,7 +158,7 @@ def continue_branch(
     step: float | None = None,
     max_points: int = 400,
     amplitude_start: float = 0.05,
-    n_floquet: int = 1024,
+    n_floquet: int | None = None,
     max_amplitude: float = 1e3,
     max_turn: float = 0.3,
 ) -> Branch:
@@ -156,6 +194,15 @@ def continue_branch(
     lo, hi = (float(v) for v in p_range)
     if not hi > lo:
         raise InputError(f"Parameter range {p_range!r} must be increasing.")
+    # small dense solves (n_u ~ 60-130): BLAS threads only wait for each other on shared cores
+    with threadpool_limits(1, user_api="blas"):
+        return _continue(system, hopf, lo, hi, harmonics=harmonics, step=step, max_points=max_points,
+                         amplitude_start=amplitude_start, n_floquet=n_floquet, max_amplitude=max_amplitude,
+                         max_turn=max_turn)
+
+
+def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_start, n_floquet, max_amplitude,
+              max_turn) -> Branch:
     H = int(harmonics)
     n = system.n_dof
     dp_nom = (hi - lo) / 50 if step is None else validate_positive("step", step)
@@ -178,9 +225,9 @@ def continue_branch(
         r, J = prob.residual(z)
         row = np.zeros(n_u + 2)
         row[ia] = 1.0
-        return np.r_[r, z[ia] - a_fix], np.vstack([J, row])
+        return np.append(r, z[ia] - a_fix), np.vstack([J, row])
 
-    y, _, nr = _newton(fun_amp, y)
+    y, _, nr, _ = _newton(fun_amp, y)
     if not nr <= 1e-8:
         raise InputError(f"No limit cycle found next to the Hopf point (residual {nr:.3g}).")
 
@@ -196,7 +243,9 @@ def continue_branch(
 
     r, J = prob.residual(y)
     t = tangent(J, None)
-    ys, ts = [y], [t]
+    ys, ts, nrs = [y], [t], [float(np.linalg.norm(r))]
+    e_last = np.zeros(n_u + 2)
+    e_last[-1] = 1.0
     h = 1.0
     reason = "max_points"
     while len(ys) < max_points:
@@ -205,17 +254,18 @@ def continue_branch(
 
         def fun(z, y_pred=y_pred, tw=tw):
             r, J = prob.residual(z)
-            return np.r_[r, tw @ (z - y_pred)], np.vstack([J, tw])
+            return np.append(r, tw @ (z - y_pred)), np.vstack([J, tw])
 
-        z, it, nr = _newton(fun, y_pred, max_iter=12)
+        z, it, nr, Jc = _newton(fun, y_pred, max_iter=12)
         if not (nr <= 1e-8 and np.all(np.isfinite(z))):
             h *= 0.5
             if h < 1e-4:
                 reason = "corrector_failed"
                 break
             continue
-        r, J = prob.residual(z)
-        t_new = tangent(J, ts[-1])
+        # the tangent at z: [J; t_prev W^2] t = e_last, with the corrector's final (bordered) Jacobian
+        t_new = np.linalg.solve(Jc, e_last)
+        t_new /= np.linalg.norm(t_new * W)
         if (t_new * W * W) @ ts[-1] < math.cos(max_turn) and h > 1e-3:
             h *= 0.5  # the branch turns sharply (a fold, contact loss setting in): smaller steps
             continue
@@ -228,18 +278,19 @@ def continue_branch(
             if nr_e <= 1e-8:
                 ys.append(y_e)
                 ts.append(t_new)
+                nrs.append(nr_e)
             reason = "left_range"
             break
         ys.append(z)
         ts.append(t_new)
+        nrs.append(nr)
         h = min(h * (1.5 if it <= 4 else 1.0 if it <= 7 else 0.6), 1.0)
         if np.abs(z[:n_u]).max() > max_amplitude:
             reason = "max_amplitude"
             break
     cycles = []
     mult = []
-    for y_i in ys:
-        r = float(np.linalg.norm(prob.residual(y_i)[0]))
+    for y_i, r in zip(ys, nrs, strict=True):
         c = prob.cycle(y_i, residual=r)
         cycles.append(c)
         mult.append(floquet_multipliers(system, c, n_floquet=n_floquet))
@@ -275,7 +326,7 @@ def limit_cycle_branch(
     harmonics: int = 10,
     n_points: int = 50,
     max_points: int | None = None,
-    n_floquet: int = 1024,
+    n_floquet: int | None = None,
     check_harmonics: bool = True,
 ) -> xr.Dataset:
     """Squeal limit cycles of a squealkit model over friction, from the Hopf point (harmonic balance).
@@ -361,7 +412,7 @@ def limit_cycle_branch_slope(
     harmonics: int = 10,
     n_points: int = 50,
     max_points: int | None = None,
-    n_floquet: int = 1024,
+    n_floquet: int | None = None,
     check_harmonics: bool = True,
     scan: int = 81,
 ) -> xr.Dataset:
@@ -427,10 +478,11 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
         # at the Hopf point itself a piecewise-linear law has cycles of any small amplitude
         # (a vertical start): the check is made where the parameter has moved off it
         moved = [c for c in cyc if abs(c.p - br.hopf.p) > 1e-6 * max(1.0, abs(br.hopf.p))]
-        for c in moved[::5]:
-            c2 = harmonic_balance(system, c.p, omega=c.omega, guess=c.coefficients, harmonics=2 * harmonics,
-                                  check_harmonics=False)
-            changes.append(float(np.max(np.abs(c2.amplitude - c.amplitude)) / np.max(c2.amplitude)))
+        with threadpool_limits(1, user_api="blas"):
+            for c in moved[::5]:
+                c2 = harmonic_balance(system, c.p, omega=c.omega, guess=c.coefficients, harmonics=2 * harmonics,
+                                      check_harmonics=False)
+                changes.append(float(np.max(np.abs(c2.amplitude - c.amplitude)) / np.max(c2.amplitude)))
         change = max(changes) if changes else float("nan")
     kind, kind_from = _onset_kind(br.hopf, p, br.stable)
     fold_mu = [float(p[i]) for i in br.folds]
