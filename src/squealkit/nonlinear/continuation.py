@@ -37,6 +37,8 @@ __all__ = [
     "limit_cycle_summary",
 ]
 
+#: How the Floquet multipliers of a branch's cycles are computed.
+STABILITY_METHODS = ("monodromy", "hill")
 #: A non-trivial Floquet multiplier above 1 + max(this, 3 |trivial multiplier - 1|) marks an unstable cycle.
 FLOQUET_TOL = 1e-7
 
@@ -161,6 +163,7 @@ def continue_branch(
     n_floquet: int | None = None,
     max_amplitude: float = 1e3,
     max_turn: float = 0.3,
+    stability: str = "monodromy",
 ) -> Branch:
     """Follow the limit cycles born at ``hopf`` by pseudo-arclength continuation.
 
@@ -186,6 +189,10 @@ def continue_branch(
         Stop when an amplitude exceeds this many ``length_scale``.
     max_turn : float
         Largest angle [rad] between consecutive tangents (the step is halved otherwise).
+    stability : {"monodromy", "hill"}
+        How each cycle's Floquet multipliers are computed: the monodromy matrix
+        (:func:`floquet_multipliers`) or Hill's method on the harmonic-balance Jacobian
+        (:func:`~squealkit.nonlinear.hill.hill_exponents`, symmetry criterion).
 
     Returns
     -------
@@ -194,15 +201,19 @@ def continue_branch(
     lo, hi = (float(v) for v in p_range)
     if not hi > lo:
         raise InputError(f"Parameter range {p_range!r} must be increasing.")
+    if stability not in STABILITY_METHODS:
+        raise InputError(f"Parameter stability={stability!r} must be one of {', '.join(map(repr, STABILITY_METHODS))}.")
     # small dense solves (n_u ~ 60-130): BLAS threads only wait for each other on shared cores
     with threadpool_limits(1, user_api="blas"):
         return _continue(system, hopf, lo, hi, harmonics=harmonics, step=step, max_points=max_points,
                          amplitude_start=amplitude_start, n_floquet=n_floquet, max_amplitude=max_amplitude,
-                         max_turn=max_turn)
+                         max_turn=max_turn, stability=stability)
 
 
 def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_start, n_floquet, max_amplitude,
-              max_turn) -> Branch:
+              max_turn, stability) -> Branch:
+    from .hill import hill_multipliers
+
     H = int(harmonics)
     n = system.n_dof
     dp_nom = (hi - lo) / 50 if step is None else validate_positive("step", step)
@@ -293,7 +304,8 @@ def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_st
     for y_i, r in zip(ys, nrs, strict=True):
         c = prob.cycle(y_i, residual=r)
         cycles.append(c)
-        mult.append(floquet_multipliers(system, c, n_floquet=n_floquet))
+        mult.append(hill_multipliers(system, c) if stability == "hill"
+                    else floquet_multipliers(system, c, n_floquet=n_floquet))
     mult_a = np.array(mult)
     # the trivial multiplier's distance from 1 measures the error of the cycle and of the
     # monodromy product: a non-trivial multiplier must exceed 1 by more than that to count
@@ -328,6 +340,7 @@ def limit_cycle_branch(
     max_points: int | None = None,
     n_floquet: int | None = None,
     check_harmonics: bool = True,
+    stability: str = "monodromy",
 ) -> xr.Dataset:
     """Squeal limit cycles of a squealkit model over friction, from the Hopf point (harmonic balance).
 
@@ -354,11 +367,15 @@ def limit_cycle_branch(
         Nominal number of points over the range (sets the arclength step).
     max_points : int, optional
         Largest number of points (default ``10 n_points``).
-    n_floquet : int
-        Sub-intervals of the monodromy product (stability).
+    n_floquet : int, optional
+        RK4 steps of the monodromy matrix per period (default: from the variational system's
+        fastest rate, :func:`floquet_steps`).
     check_harmonics : bool
         Re-solve every 5th point with 2H harmonics; the largest relative amplitude change
         is the attribute ``harmonics_change``.
+    stability : {"monodromy", "hill"}
+        Floquet multipliers by the monodromy matrix or by Hill's method (attribute
+        ``stability_method``).
 
     Returns
     -------
@@ -395,10 +412,10 @@ def limit_cycle_branch(
                          f"lies outside the friction range [{lo:g}, {hi:g}]; the branch starts there: widen the range.")
     hopf = hopf_point(system, crit.mu_critical)
     br = continue_branch(system, hopf, (lo, hi), harmonics=harmonics, step=(hi - lo) / (n_points - 1),
-                         max_points=max_points or 10 * n_points, n_floquet=n_floquet)
+                         max_points=max_points or 10 * n_points, n_floquet=n_floquet, stability=stability)
     return branch_dataset(system, br, harmonics=harmonics, check_harmonics=check_harmonics,
-                          attrs={"model": model.to_json(), "theta": theta, "theta_deg": math.degrees(theta),
-                                 "tan_theta": t, "speed": speed, "speed_units": "m/s",
+                          attrs={"model": model.to_json(), "stability_method": stability, "theta": theta,
+                                 "theta_deg": math.degrees(theta), "tan_theta": t, "speed": speed, "speed_units": "m/s",
                                  "contact": contact.describe(), "mu_range": [lo, hi]})
 
 
@@ -415,6 +432,7 @@ def limit_cycle_branch_slope(
     n_floquet: int | None = None,
     check_harmonics: bool = True,
     scan: int = 81,
+    stability: str = "monodromy",
 ) -> xr.Dataset:
     """Squeal limit cycles over the run-out slope tan(theta) at a fixed friction ``mu``.
 
@@ -430,7 +448,7 @@ def limit_cycle_branch_slope(
         Slope range ``(start, stop)``.
     mu : float
         Friction coefficient.
-    contact, speed, harmonics, n_points, max_points, n_floquet, check_harmonics
+    contact, speed, harmonics, n_points, max_points, n_floquet, check_harmonics, stability
         As for :func:`limit_cycle_branch`.
     scan : int
         Slopes scanned for the onset.
@@ -457,10 +475,13 @@ def limit_cycle_branch_slope(
     k = up[0]
     hopf = hopf_point(system, float(grid[k] - g[k] * (grid[k + 1] - grid[k]) / (g[k + 1] - g[k])))
     br = continue_branch(system, hopf, (lo, hi), harmonics=harmonics, step=(hi - lo) / (n_points - 1),
-                         max_points=max_points or 10 * n_points, n_floquet=n_floquet)
-    return branch_dataset(system, br, harmonics=harmonics, check_harmonics=check_harmonics,
-                          attrs={"model": model.to_json(), "mu": float(mu), "speed": speed, "speed_units": "m/s",
-                                 "contact": contact.describe(), "tan_theta_range": [lo, hi]})
+                         max_points=max_points or 10 * n_points, n_floquet=n_floquet, stability=stability)
+    ds = branch_dataset(system, br, harmonics=harmonics, check_harmonics=check_harmonics,
+                        attrs={"model": model.to_json(), "stability_method": stability, "mu": float(mu),
+                               "speed": speed, "speed_units": "m/s", "contact": contact.describe(),
+                               "tan_theta_range": [lo, hi], "hopf_theta_deg": math.degrees(math.atan(hopf.p))})
+    theta_deg = np.degrees(np.arctan(ds["tan_theta"].values))
+    return ds.assign_coords(theta_deg=("point", theta_deg, {"units": "deg", "long_name": "run-out incline theta"}))
 
 
 def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, check_harmonics: bool = True,
@@ -539,38 +560,65 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
 
 
 def limit_cycle_summary(ds: xr.Dataset) -> dict[str, object]:
-    """A :func:`limit_cycle_branch` result as plain Python (what ``squealkit limitcycle --json`` prints).
+    """A branch as plain Python (what ``squealkit limitcycle --json`` prints).
 
     Parameters
     ----------
     ds : xarray.Dataset
-        A result of :func:`limit_cycle_branch`.
+        A result of :func:`limit_cycle_branch` (over friction) or
+        :func:`limit_cycle_branch_slope` (over the run-out slope), optionally with
+        :func:`~squealkit.nonlinear.sound_level` added.
 
     Returns
     -------
     dict
-        ``mu`` (list), ``frequency_hz`` (list), ``amplitude`` (DOF name -> list of
+        ``parameter`` (``"mu"`` or ``"theta"``); ``mu`` (list over a friction branch, the fixed
+        value over a slope branch) and ``theta_deg`` (the fixed incline, or the list over a
+        slope branch); ``frequency_hz`` (list), ``amplitude`` (DOF name -> list of
         displacement amplitudes [m], half the peak-to-peak over one period), ``stable``
         (list of booleans), ``contact_loss_fraction`` (list), ``hopf`` (``mu``,
-        ``frequency_hz``, ``lyapunov_coefficient``, ``kind``, ``kind_from``), ``folds``
-        (list of mu), ``hysteresis_mu`` ([start, end] or []), ``harmonics``,
-        ``harmonics_change``, ``stop_reason``, ``theta_deg``, ``contact``.
+        ``frequency_hz``, ``lyapunov_coefficient``, ``kind``, ``kind_from``; and
+        ``theta_deg`` over a slope branch), ``folds`` (list of mu, or of theta_deg),
+        ``hysteresis_mu`` (or ``hysteresis_theta_deg``: [start, end] or []), ``harmonics``,
+        ``harmonics_change``, ``stability_method``, ``stop_reason``, ``contact``; with a
+        level: ``level_db`` (list, dB SPL re 20 uPa), ``level_dof``, ``level_from``.
     """
     a = ds.attrs
-    return {
-        "mu": [float(v) for v in ds["mu"].values],
+    over_theta = a.get("param") == "tan_theta"
+
+    def deg(t):
+        return [float(math.degrees(math.atan(float(v)))) for v in np.atleast_1d(t) if np.isfinite(v)]
+
+    hyst = [float(v) for v in np.atleast_1d(a["hysteresis_mu"]) if np.isfinite(v)]
+    out: dict[str, object] = {"parameter": "theta" if over_theta else "mu"}
+    if over_theta:
+        out["mu"] = float(a["mu"])
+        out["theta_deg"] = [float(v) for v in ds["theta_deg"].values]
+    else:
+        out["mu"] = [float(v) for v in ds["mu"].values]
+        out["theta_deg"] = float(a.get("theta_deg", 0.0))
+    hopf = {"mu": float(a["mu"]) if over_theta else float(a["hopf_mu"]),
+            "frequency_hz": float(a["hopf_frequency_hz"]),
+            "lyapunov_coefficient": float(a["lyapunov_coefficient"]), "kind": str(a["kind"]),
+            "kind_from": str(a["kind_from"])}
+    if over_theta:
+        hopf["theta_deg"] = float(math.degrees(math.atan(float(a["hopf_mu"]))))
+    out.update({
         "frequency_hz": [float(v) for v in ds["frequency_hz"].values],
         "amplitude": {str(d): [float(v) for v in ds["amplitude"].sel(dof=d).values] for d in ds["dof"].values},
         "stable": [bool(v) for v in ds["stable"].values],
         "contact_loss_fraction": [float(v) for v in ds["contact_loss_fraction"].values],
-        "hopf": {"mu": float(a["hopf_mu"]), "frequency_hz": float(a["hopf_frequency_hz"]),
-                 "lyapunov_coefficient": float(a["lyapunov_coefficient"]), "kind": str(a["kind"]),
-                 "kind_from": str(a["kind_from"])},
-        "folds": [float(v) for v in ds["fold_mu"].values],
-        "hysteresis_mu": [float(v) for v in np.atleast_1d(a["hysteresis_mu"]) if np.isfinite(v)],
+        "hopf": hopf,
+        "folds": deg(ds["fold_mu"].values) if over_theta else [float(v) for v in ds["fold_mu"].values],
+        ("hysteresis_theta_deg" if over_theta else "hysteresis_mu"): deg(hyst) if over_theta else hyst,
         "harmonics": int(a["harmonics"]),
         "harmonics_change": float(a["harmonics_change"]),
+        "stability_method": str(a.get("stability_method", "monodromy")),
         "stop_reason": str(a["stop_reason"]),
-        "theta_deg": float(a.get("theta_deg", 0.0)),
         "contact": str(a.get("contact", "")),
-    }
+    })
+    if "level_db" in ds:
+        out["level_db"] = [float(v) for v in ds["level_db"].values]
+        out["level_dof"] = str(a["level_dof"])
+        out["level_from"] = str(a["level_from"])
+    return out
