@@ -29,7 +29,8 @@ def limitcycle_plot(ds: xr.Dataset, *, fig=None):
 
     Stable cycles are solid, unstable ones dashed; the quiet state (amplitude 0) is solid
     below the Hopf point and dashed above it; the Hopf point is a black star, folds are
-    black crosses.
+    black crosses. A branch with ``level_db`` (:func:`squealkit.nonlinear.sound_level`)
+    shows the level on a secondary axis (black dash-dot).
 
     Parameters
     ----------
@@ -50,12 +51,17 @@ def limitcycle_plot(ds: xr.Dataset, *, fig=None):
     ax_a, ax_f = fig.subplots(2, 1, sharex=True, height_ratios=[2.0, 1.0])
     param = str(ds.attrs.get("param", "mu"))
     mu = ds[param].values
+    if param == "tan_theta" and "theta_deg" in ds.coords:  # over the incline: drawn in degrees
+        mu = ds["theta_deg"].values
     stable = ds["stable"].values.astype(bool)
     amp = ds["amplitude"].values * 1e6
     freq = ds["frequency_hz"].values
     mu_h = float(ds.attrs["hopf_mu"])
     pad = 0.05 * float(np.ptp(mu)) if mu.size > 1 else 0.0
     lo, hi = (float(v) for v in ds.attrs.get(f"{param}_range", [mu.min() - pad, mu.max() + pad]))
+    in_deg = param == "tan_theta" and "theta_deg" in ds.coords
+    if in_deg:
+        mu_h, lo, hi = (float(np.degrees(np.arctan(v))) for v in (mu_h, lo, hi))
     runs = _runs(stable)
     for j, dof in enumerate(ds["dof"].values):
         c = _COLORS[j % len(_COLORS)]
@@ -72,18 +78,31 @@ def limitcycle_plot(ds: xr.Dataset, *, fig=None):
     for i in np.flatnonzero(ds["fold"].values):
         ax_a.plot(np.full(amp.shape[1], mu[i]), amp[i], "kx", ms=9, mew=2, zorder=5)
         ax_f.plot([mu[i]], [freq[i]], "kx", ms=9, mew=2, zorder=5)
+    if "level_db" in ds:  # the sound level on a secondary axis (it is not a function of one amplitude alone)
+        ax_l = ax_a.twinx()
+        lev = ds["level_db"].values
+        for i0, i1 in runs:
+            ax_l.plot(mu[i0:i1 + 1], lev[i0:i1 + 1], ls=":" if not stable[i0] else "-.", color="k", lw=1.2)
+        ax_l.set_ylabel(f"level [dB SPL re 20 uPa], from {ds.attrs.get('level_dof', '')}")
+        finite = lev[np.isfinite(lev)]
+        if finite.size:
+            ax_l.set_ylim(max(finite.min(), finite.max() - 60) - 2, finite.max() + 3)
     kind = ds.attrs.get("kind", "")
     ax_a.set_title(f"Limit cycles by harmonic balance (H = {ds.attrs.get('harmonics')}): "
-                   f"Hopf at {param} = {mu_h:.4f}, {ds.attrs['hopf_frequency_hz']:.1f} Hz, {kind}", fontsize=10)
+                   f"Hopf at {'theta' if in_deg else param} = {mu_h:.4f}{' deg' if in_deg else ''}, "
+                   f"{ds.attrs['hopf_frequency_hz']:.1f} Hz, {kind}", fontsize=10)
     ax_a.set_ylabel("amplitude (half peak-to-peak) [um]")
     ax_f.set_ylabel("frequency [Hz]")
-    ax_f.set_xlabel({"mu": "friction coefficient mu", "tan_theta": "run-out slope tan(theta)"}.get(param, param))
+    ax_f.set_xlabel("run-out incline theta [deg] (at mu = " + f"{ds.attrs.get('mu', float('nan')):g})" if in_deg else
+                    {"mu": "friction coefficient mu", "tan_theta": "run-out slope tan(theta)"}.get(param, param))
     ax_f.set_xlim(lo, hi)
     handles = ax_a.get_legend_handles_labels()[0]
     handles += [Line2D([], [], color="0.3", ls="-", label="stable"),
                 Line2D([], [], color="0.3", ls="--", label="unstable"),
                 Line2D([], [], color="k", marker="*", ls="", ms=10, label="Hopf point"),
                 Line2D([], [], color="k", marker="x", ls="", ms=8, mew=2, label="fold")]
+    if "level_db" in ds:
+        handles.append(Line2D([], [], color="k", ls="-.", lw=1.2, label="level (right axis)"))
     ax_a.legend(handles=handles, loc="upper left", fontsize=8, ncol=2)
     for ax in (ax_a, ax_f):
         ax.grid(color="0.9")
