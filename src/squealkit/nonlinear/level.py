@@ -49,7 +49,8 @@ def read_transfer_csv(path: str | Path) -> tuple[NDArray[np.float64], NDArray[np
         text = path.read_text(encoding="utf-8", errors="strict")
     except (OSError, UnicodeDecodeError) as e:
         raise InputError(f"Cannot read the transfer file {str(path)!r}: {e}") from e
-    rows = []
+    rows: list[list[float]] = []
+    header = False
     for i, line in enumerate(text.splitlines(), 1):
         line = line.strip()
         if not line or line.startswith("#"):
@@ -59,8 +60,9 @@ def read_transfer_csv(path: str | Path) -> tuple[NDArray[np.float64], NDArray[np
         try:
             vals = [float(p) for p in parts[:2]]
         except ValueError:
-            if not rows and i <= 2:
-                continue  # a header
+            if not rows and not header:
+                header = True  # one line of column names
+                continue
             raise InputError(f"Transfer file {str(path)!r} line {i}: {line!r} is not two numbers "
                              "(frequency [Hz], |p/v| [Pa/(m/s)]).") from None
         if len(vals) < 2:
