@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-__all__ = ["limitcycle_plot", "limitcycle_signal_plot"]
+__all__ = ["how_loud_plot", "limitcycle_plot", "limitcycle_signal_plot"]
 
 _COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink")
 
@@ -153,4 +153,66 @@ def limitcycle_signal_plot(ds: xr.Dataset, point: int = -1, *, n_samples: int = 
     ax.set_ylabel("displacement about the mean [um]")
     ax.legend(fontsize=8)
     ax.grid(color="0.9")
+    return fig
+
+
+def how_loud_plot(branch: xr.Dataset, slope_branch: xr.Dataset, envelope: xr.DataArray, cycle: xr.DataArray, *,
+                  dof: str = "x1", fig=None):
+    """The report's "How loud" figure: limit-cycle amplitude over mu_e, and a run-out transient beside it.
+
+    Top: the amplitude of ``dof`` [um] over the effective friction ``mu_e = mu + tan(theta)``,
+    from a branch over friction on a flat disc and from a branch over the run-out slope at
+    one friction (stable solid, unstable dashed). Bottom: a transient's vibration envelope
+    [um] against time [ms] beside the limit-cycle amplitude at each instant's slope.
+
+    Parameters
+    ----------
+    branch : xarray.Dataset
+        :func:`squealkit.nonlinear.limit_cycle_branch` at theta = 0.
+    slope_branch : xarray.Dataset
+        :func:`squealkit.nonlinear.limit_cycle_branch_slope` (its ``mu`` attribute is the friction).
+    envelope : xarray.DataArray
+        The transient's envelope of ``dof`` [m] over ``time`` [s].
+    cycle : xarray.DataArray
+        The limit-cycle amplitude of ``dof`` [m] at each instant's slope, over ``time`` [s]
+        (0 where the quiet state is stable).
+    dof : str
+        The DOF drawn.
+    fig : matplotlib Figure, optional
+        Figure to draw into (cleared); a new one otherwise.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.figure import Figure
+
+    fig = fig or Figure(figsize=(7.5, 6.5), layout="constrained")
+    fig.clf()
+    ax_b, ax_t = fig.subplots(2, 1, height_ratios=[1.2, 1.0])
+    mu_fixed = float(slope_branch.attrs["mu"])
+    for ds, x, color, label in (
+        (branch, branch["mu"].values, "tab:blue", "flat disc, over mu"),
+        (slope_branch, mu_fixed + slope_branch["tan_theta"].values, "tab:red",
+         f"run-out at mu = {mu_fixed:g}, over mu + tan(theta)"),
+    ):
+        st = ds["stable"].values.astype(bool)
+        a = ds["amplitude"].sel(dof=dof).values * 1e6
+        for i0, i1 in _runs(st):
+            ax_b.plot(x[i0:i1 + 1], a[i0:i1 + 1], "-" if st[i0] else "--", color=color, lw=1.8)
+        ax_b.plot([], [], "-", color=color, label=label)
+    ax_b.plot([branch.attrs["hopf_mu"]], [0], "k*", ms=11, label="onset (Hopf point)")
+    ax_b.set_xlabel("effective friction mu_e = mu + tan(theta)")
+    ax_b.set_ylabel(f"{dof} amplitude [um]")
+    ax_b.legend(fontsize=8, loc="upper left")
+    t_ms = envelope["time"].values * 1e3
+    ax_t.plot(t_ms, envelope.values * 1e6, color="tab:gray", lw=1.0, label=f"transient: {dof} envelope (> 1 kHz)")
+    ax_t.plot(cycle["time"].values * 1e3, cycle.values * 1e6, "--", color="tab:red", lw=1.6,
+              label="limit cycle at the instant's slope")
+    ax_t.set_xlabel("time [ms]")
+    ax_t.set_ylabel(f"{dof} amplitude [um]")
+    ax_t.legend(fontsize=8, loc="upper right")
+    for ax in (ax_b, ax_t):
+        ax.grid(color="0.9")
+        ax.set_axisbelow(True)
     return fig
