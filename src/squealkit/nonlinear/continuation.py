@@ -3,13 +3,15 @@
 The branch starts on the onset mode at a small amplitude (the mode shape and frequency of
 the Hopf point, :mod:`squealkit.nonlinear.hopf`), where the parameter is solved for at a
 fixed amplitude, and is followed by pseudo-arclength continuation (predictor along the
-tangent, Newton corrector orthogonal to it, step adapted to the corrector's effort). A
-fold is where the parameter's component of the tangent changes sign. Each cycle's
-stability comes from its Floquet multipliers: the monodromy matrix of the variational
-equations along the harmonic-balance solution (a product of matrix exponentials over
-``n_floquet`` sub-intervals of the period); the trivial multiplier (near 1, the phase
-shift) is set aside, and its distance from 1 (the error of the truncated cycle and of the
-product) is the margin a multiplier must clear to call the cycle unstable.
+tangent, Newton corrector orthogonal to it, step adapted to the corrector's effort; the
+next tangent comes from the corrector's last bordered Jacobian). A fold is where the
+parameter's component of the tangent changes sign. Each cycle's stability comes from its
+Floquet multipliers: the monodromy matrix of the variational equations along the
+harmonic-balance solution (compiled classical RK4 over one period, the step set by the
+variational system's fastest rate), or Hill's method (:mod:`squealkit.nonlinear.hill`); the
+trivial multiplier (near 1, the phase shift) is set aside, and its distance from 1 (the
+error of the truncated cycle and of the integration) is the margin a multiplier must clear
+to call the cycle unstable.
 """
 
 from __future__ import annotations
@@ -183,8 +185,8 @@ def continue_branch(
         Largest number of points.
     amplitude_start : float
         First cycle's amplitude, in ``length_scale`` units, on the onset mode.
-    n_floquet : int
-        Sub-intervals of the monodromy product.
+    n_floquet : int, optional
+        RK4 steps of the monodromy matrix per period (default :func:`floquet_steps`).
     max_amplitude : float
         Stop when an amplitude exceeds this many ``length_scale``.
     max_turn : float
