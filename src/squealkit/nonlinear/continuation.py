@@ -503,8 +503,11 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
         moved = [c for c in cyc if abs(c.p - br.hopf.p) > 1e-6 * max(1.0, abs(br.hopf.p))]
         with threadpool_limits(1, user_api="blas"):
             for c in moved[::5]:
-                c2 = harmonic_balance(system, c.p, omega=c.omega, guess=c.coefficients, harmonics=2 * harmonics,
-                                      check_harmonics=False)
+                try:
+                    c2 = harmonic_balance(system, c.p, omega=c.omega, guess=c.coefficients,
+                                          harmonics=2 * harmonics, check_harmonics=False)
+                except InputError:  # next to a vertical start the fixed-parameter solve is ill-posed: skip it
+                    continue
                 changes.append(float(np.max(np.abs(c2.amplitude - c.amplitude)) / np.max(c2.amplitude)))
         change = max(changes) if changes else float("nan")
     kind, kind_from = _onset_kind(br.hopf, p, br.stable)

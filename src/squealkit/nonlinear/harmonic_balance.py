@@ -422,6 +422,8 @@ def _newton(fun, y0: NDArray, *, tol: float = 1e-10, max_iter: int = 30) -> tupl
             if (np.isfinite(n_new) and n_new < max(nr, 1e-300) * (1 - 1e-4 * lam)) or n_new <= tol:
                 break
             lam *= 0.5
+        else:  # no step along the Newton direction lowers the residual: stuck, give up now
+            return y, it, nr, J
         y, r, J, nr = y_new, r_new, J_new, n_new
         if nr <= tol or float(np.linalg.norm(lam * dy)) <= 1e-12 * max(1.0, float(np.linalg.norm(y))):
             return y, it, nr, J

@@ -156,7 +156,7 @@ def limitcycle_signal_plot(ds: xr.Dataset, point: int = -1, *, n_samples: int = 
     return fig
 
 
-def how_loud_plot(branch: xr.Dataset, slope_branch: xr.Dataset, envelope: xr.DataArray, cycle: xr.DataArray, *,
+def how_loud_plot(branch: xr.Dataset, slope_branch: xr.Dataset | None, envelope: xr.DataArray, cycle: xr.DataArray, *,
                   dof: str = "x1", fig=None):
     """The report's "How loud" figure: limit-cycle amplitude over mu_e, and a run-out transient beside it.
 
@@ -169,8 +169,9 @@ def how_loud_plot(branch: xr.Dataset, slope_branch: xr.Dataset, envelope: xr.Dat
     ----------
     branch : xarray.Dataset
         :func:`squealkit.nonlinear.limit_cycle_branch` at theta = 0.
-    slope_branch : xarray.Dataset
-        :func:`squealkit.nonlinear.limit_cycle_branch_slope` (its ``mu`` attribute is the friction).
+    slope_branch : xarray.Dataset or None
+        :func:`squealkit.nonlinear.limit_cycle_branch_slope` (its ``mu`` attribute is the friction);
+        None where the run-out starts no squeal.
     envelope : xarray.DataArray
         The transient's envelope of ``dof`` [m] over ``time`` [s].
     cycle : xarray.DataArray
@@ -190,12 +191,12 @@ def how_loud_plot(branch: xr.Dataset, slope_branch: xr.Dataset, envelope: xr.Dat
     fig = fig or Figure(figsize=(7.5, 6.5), layout="constrained")
     fig.clf()
     ax_b, ax_t = fig.subplots(2, 1, height_ratios=[1.2, 1.0])
-    mu_fixed = float(slope_branch.attrs["mu"])
-    for ds, x, color, label in (
-        (branch, branch["mu"].values, "tab:blue", "flat disc, over mu"),
-        (slope_branch, mu_fixed + slope_branch["tan_theta"].values, "tab:red",
-         f"run-out at mu = {mu_fixed:g}, over mu + tan(theta)"),
-    ):
+    curves = [(branch, branch["mu"].values, "tab:blue", "flat disc, over mu")]
+    if slope_branch is not None:
+        mu_fixed = float(slope_branch.attrs["mu"])
+        curves.append((slope_branch, mu_fixed + slope_branch["tan_theta"].values, "tab:red",
+                       f"run-out at mu = {mu_fixed:g}, over mu + tan(theta)"))
+    for ds, x, color, label in curves:
         st = ds["stable"].values.astype(bool)
         a = ds["amplitude"].sel(dof=dof).values * 1e6
         for i0, i1 in _runs(st):
