@@ -33,7 +33,7 @@ from ._options import build_model_from_options, check_output_suffix, emit_json, 
                    "(re 20 uPa) of each cycle from the velocity of --level-dof.")
 @click.option("--transfer", "transfer_path", type=click.Path(path_type=Path, dir_okay=False), default=None,
               metavar="FILE.csv",
-              help="Measured transfer |p/v| [Pa/(m/s)] against frequency [Hz] (two CSV columns), "
+              help="Measured transfer, the magnitude of p/v [Pa/(m/s)] against frequency [Hz] (two CSV columns), "
                    "interpolated at each harmonic of the cycle: the level in dB SPL instead of --radiation-factor.")
 @click.option("--level-dof", default=None, metavar="NAME",
               help="DOF whose velocity radiates (default the first DOF: the pin's x1).")
