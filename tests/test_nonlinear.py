@@ -12,6 +12,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from squealkit.nonlinear import SecondOrderSystem, harmonic_balance
@@ -352,3 +354,183 @@ def test_consistent_kinematics_hopf_point_matches_critical_friction():
     hopf = hopf_point(contact_system(model, tan_theta=math.tan(theta)), crit.mu_critical)
     assert hopf.p == pytest.approx(crit.mu_critical, rel=1e-5)
     assert hopf.frequency_hz == pytest.approx(crit.frequency_hz, rel=1e-6)
+
+
+def _vdp_system() -> SecondOrderSystem:
+    def force(x, v, e):
+        return e * (1 - x**2) * v, (-2 * e * x * v)[..., None], (e * (1 - x**2))[..., None], (1 - x**2) * v
+
+    return SecondOrderSystem(np.eye(1), np.zeros((1, 1)), np.eye(1), np.zeros(1), force, ("x",), "eps")
+
+
+def test_aft_jacobian_matches_finite_differences_of_the_residual():
+    # The FFT-assembled Jacobian of the AFT residual against central differences of the residual
+    # itself, at a random state of the paper's model with contact closed over the whole period (the
+    # contact law is smooth there): relative agreement ~1e-8 measured.
+    from squealkit.models import get_preset
+    from squealkit.nonlinear import contact_system
+    from squealkit.nonlinear.harmonic_balance import _Basis, hb_residual, n_time_samples
+
+    sys = contact_system(get_preset("lv2013"))
+    H = 4
+    b = _Basis.make(H, n_time_samples(H))
+    rng = np.random.default_rng(5)
+    Z = np.zeros((2 * H + 1, 3))
+    Z[0] = sys.static_equilibrium(0.5)
+    Z[1:] = 0.05 * sys.length_scale * rng.standard_normal((2 * H, 3))
+    omega = 2 * math.pi * 2380.0
+    _, JZ, Rw, _ = hb_residual(sys, b, Z, omega, 0.5)
+    h = 1e-4 * sys.length_scale
+    fd = np.empty_like(JZ)
+    for c in range(Z.size):
+        dZ = np.zeros(Z.size)
+        dZ[c] = h
+        dZ = dZ.reshape(Z.shape)
+        fd[:, c] = ((hb_residual(sys, b, Z + dZ, omega, 0.5, jacobian=False)
+                     - hb_residual(sys, b, Z - dZ, omega, 0.5, jacobian=False)) / (2 * h)).ravel()
+    assert np.allclose(JZ, fd, rtol=1e-6, atol=1e-7 * np.abs(JZ).max())
+    dw = 1e-6 * omega
+    fd_w = (hb_residual(sys, b, Z, omega + dw, 0.5, jacobian=False)
+            - hb_residual(sys, b, Z, omega - dw, 0.5, jacobian=False)) / (2 * dw)
+    assert np.allclose(Rw, fd_w, rtol=1e-6, atol=1e-7 * np.abs(Rw).max())
+
+
+@settings(max_examples=8, deadline=None)
+@given(eps=st.floats(0.05, 1.5), sort=st.sampled_from(["symmetry", "imaginary"]))
+def test_hill_exponents_of_van_der_pol_follow_liouville(eps, sort):
+    # Liouville: the sum of the Floquet exponents is the period mean of the divergence of the
+    # vector field, eps (1 - x^2); the trivial one is 0, so the other is that mean exactly.
+    from squealkit.nonlinear import floquet_multipliers, hill_exponents
+    from squealkit.nonlinear.harmonic_balance import _Basis
+
+    sys = _vdp_system()
+    guess = np.zeros((3, 1))
+    guess[1] = 2.0
+    lc = harmonic_balance(sys, eps, omega=1.0, guess=guess, harmonics=14, check_harmonics=False)
+    x = (_Basis.make(14, 512).E @ lc.coefficients)[:, 0]
+    mean_div = eps * np.mean(1 - x**2)
+    lam = hill_exponents(sys, lc, sort=sort)
+    assert abs(lam[-1]) < 1e-9 * eps  # the trivial exponent (phase shift)
+    assert lam[0].real == pytest.approx(mean_div, rel=1e-4)  # measured 1e-13 to eps = 1, 7e-6 at 1.5 (H = 14)
+    assert abs(lam[0].imag) < 1e-9
+    rho = floquet_multipliers(sys, lc)  # the monodromy matrix agrees (RK4: measured ~1e-6)
+    assert np.log(abs(rho[0])) * lc.omega / (2 * math.pi) == pytest.approx(mean_div, rel=1e-4)
+
+
+def test_hill_and_monodromy_agree_on_the_paper_model(paper_branch):
+    # Both methods on three cycles of the paper's branch (contact lost over part of the period):
+    # the same verdict, the largest exponents within the cycles' own error. The HB cycle with H = 10
+    # is not exact where the contact kinks: its trivial exponents sit 0.1-5 1/s off 0, and the two
+    # methods' largest exponents differ by up to 3.6 1/s of about -20 (measured).
+    from squealkit.nonlinear import contact_system, floquet_multipliers, hill_exponents
+
+    model, ds = paper_branch
+    sys = contact_system(model)
+    far = np.flatnonzero(ds.mu.values > ds.attrs["hopf_mu"] + 0.05)  # off the neutral vertical start
+    for i in far[[0, far.size // 2, -1]]:
+        lc = harmonic_balance(sys, float(ds.mu[i]), omega=float(ds.omega_rad_s[i]), guess=ds.coefficients[i].values,
+                              harmonics=10, check_harmonics=False)
+        T = 2 * math.pi / lc.omega
+        lam = hill_exponents(sys, lc)
+        lam_i = hill_exponents(sys, lc, sort="imaginary")
+        mono = np.log(floquet_multipliers(sys, lc).astype(complex)) / T
+        assert lam[0].real < 0 and mono[0].real < 0  # stable, as the branch says
+        assert bool(ds.stable[i])
+        assert lam[0].real == pytest.approx(mono[0].real, rel=0.25)
+        assert lam_i[0].real == pytest.approx(lam[0].real, rel=1e-6)
+        assert np.all(np.abs(lam_i.imag) <= lc.omega / 2 + 1e-6)  # the symmetric ones need not be
+
+
+def test_hill_stability_on_a_hard_onset_branch():
+    # The subcritical oscillator's branch (see the test above) with Hill's method: inner cycles
+    # unstable, outer stable, as the monodromy matrix says (Krylov-Bogoliubov averaging).
+    from squealkit.nonlinear import continue_branch
+
+    eps = 0.05
+
+    def force(x, v, beta):
+        h = eps * (beta + x**2 - x**4)
+        return h * v, (eps * (2 * x - 4 * x**3) * v)[..., None], h[..., None], eps * v
+
+    sys = SecondOrderSystem(np.eye(1), np.zeros((1, 1)), np.eye(1), np.zeros(1), force, ("x",), "beta")
+    hopf = hopf_point(sys, 0.01)
+    br = continue_branch(sys, hopf, (-0.3, 0.1), harmonics=5, step=0.02, stability="hill")
+    amp = np.array([c.amplitude[0] for c in br.cycles])
+    assert not br.stable[amp < 0.95].any() and br.stable[amp > 1.05].all()
+    with pytest.raises(ValueError, match="stability"):
+        continue_branch(sys, hopf, (-0.3, 0.1), stability="lyapunov")
+
+
+def test_sound_level_from_a_radiation_factor_and_a_transfer(paper_branch, tmp_path):
+    # p_rms = R v_rms with v_rms the RMS of the DOF's velocity over one period (sampled from the
+    # stored Fourier series here: Parseval's identity is the known answer); a flat transfer table
+    # equal to R gives the same level; dB SPL re 20 uPa.
+    from squealkit.nonlinear import read_transfer_csv, sound_level
+    from squealkit.nonlinear.harmonic_balance import _Basis
+
+    _, ds = paper_branch
+    out = sound_level(ds, radiation_factor=400.0, dof="y2")
+    i = -1
+    c = ds.coefficients.isel(point=i).sel(dof="y2").values
+    b = _Basis.make((c.size - 1) // 2, 1024)
+    v = float(ds.omega_rad_s[i]) * (b.dE @ c)
+    p_rms = 400.0 * np.sqrt(np.mean(v**2))
+    assert float(out.level_db[i]) == pytest.approx(20 * np.log10(p_rms / 20e-6), abs=1e-9)
+    assert out.level_db.attrs["units"] == "dB" and out.attrs["level_dof"] == "y2"
+    csv = tmp_path / "transfer.csv"
+    csv.write_text("frequency_hz,pa_per_m_s\n100,400\n50000,400\n")
+    flat = sound_level(ds, transfer=read_transfer_csv(csv), dof="y2")
+    assert np.allclose(flat.level_db.values[1:], out.level_db.values[1:], atol=1e-9)
+    csv.write_text("3000,400\n5000,400\n")
+    with pytest.raises(ValueError, match="outside the transfer's range"):
+        sound_level(ds, transfer=read_transfer_csv(csv))
+    with pytest.raises(ValueError, match="exactly one"):
+        sound_level(ds)
+
+
+def test_cli_limitcycle_over_theta_with_a_level(run, tmp_path):
+    import json
+
+    r = run("limitcycle", "--mu", "0.35", "--theta", "-4:6:6", "--harmonics", "4", "--radiation-factor", "400",
+            "--json")
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.output)
+    assert d["parameter"] == "theta" and d["mu"] == 0.35
+    assert len(d["theta_deg"]) == len(d["level_db"]) == len(d["stable"])
+    # the onset incline is where the damped critical friction equals 0.35 (eq. 6: the slope acts
+    # like friction); the branch test above checks it against critical_friction
+    assert 0 < d["hopf"]["theta_deg"] < 6 and d["theta_deg"][-1] == pytest.approx(6.0)
+    assert d["level_from"].startswith("radiation factor 400")
+    assert all(np.diff(d["level_db"][1:]) > -1e-9)  # louder as the incline grows past the onset
+    r = run("limitcycle", "--mu", "0.3:0.6:4", "--theta", "-4:6:6")
+    assert r.exit_code == 2 and "one friction value" in r.output
+    r = run("limitcycle", "--mu", "0.3:0.6:4", "--radiation-factor", "1", "--transfer", str(tmp_path / "t.csv"))
+    assert r.exit_code == 2 and "not both" in r.output
+    bad = tmp_path / "bad.csv"
+    bad.write_text("f,t\n1000,abc\n")
+    r = run("limitcycle", "--mu", "0.3:0.6:4", "--transfer", str(bad))
+    assert r.exit_code == 2 and "line 2" in r.output and "Traceback" not in r.output
+    r = run("limitcycle", "--mu", "0.3:0.6:4", "--radiation-factor", "1", "--level-dof", "z9")
+    assert r.exit_code == 2 and "--level-dof" in r.output
+
+
+def test_report_section_how_loud_is_written_from_its_numbers(tmp_path):
+    # The report's "How loud" section (quick): the onset is the damped critical friction, the limit
+    # cycle at the steepest Fig. 4 slope matches the flat disc's at the same mu + tan(theta) (eq. 6
+    # carried over to the cycles; measured 1.3 %), and every number quoted in the prose is the computed one.
+    from squealkit.models import get_preset
+    from squealkit.report.steps_nonlinear import nonlinear_step
+    from squealkit.stability import critical_friction
+
+    (tmp_path / "f").mkdir()
+    (tmp_path / "d").mkdir()
+    model = get_preset("lv2013")
+    sec = nonlinear_step(model, tmp_path / "f", tmp_path / "d", quick=True)
+    num = sec.numbers
+    assert num["hopf_mu"] == pytest.approx(critical_friction(model, 0.0, damped=True).mu_critical, rel=1e-5)
+    assert num["amplitude_steepest_slope"] == pytest.approx(num["amplitude_flat_same_mu_e"], rel=0.05)
+    text = " ".join(sec.paragraphs)
+    assert f"mu = {num['hopf_mu']:.4f}" in text and f"{num['amplitude_mu05'] * 1e6:.3f} um" in text
+    assert f"{100 * num['fig4_envelope_ratio']:.2g} %" in text
+    assert (tmp_path / "f" / "how_loud.png").stat().st_size > 10_000
+    assert {p.name for p in (tmp_path / "d").iterdir()} == set(sec.data)

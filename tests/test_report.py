@@ -61,8 +61,8 @@ def test_reproduce_numbers_match_the_paper(paper):
     assert "SYNTHETIC" in html
     verdicts = [c.agrees for s in paper.sections for c in s.comparisons]
     assert verdicts and all(verdicts)
-    assert [s.key for s in paper.sections] == ["parameters", "fig2", "critical", "transient", "beyond", "measurement",
-                                               "conclusions"]
+    assert [s.key for s in paper.sections] == ["parameters", "fig2", "critical", "transient", "beyond", "how_loud",
+                                               "measurement", "conclusions"]
 
 
 def test_beyond_the_paper_puts_both_kinematics_side_by_side(paper):

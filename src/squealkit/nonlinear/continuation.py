@@ -3,13 +3,15 @@
 The branch starts on the onset mode at a small amplitude (the mode shape and frequency of
 the Hopf point, :mod:`squealkit.nonlinear.hopf`), where the parameter is solved for at a
 fixed amplitude, and is followed by pseudo-arclength continuation (predictor along the
-tangent, Newton corrector orthogonal to it, step adapted to the corrector's effort). A
-fold is where the parameter's component of the tangent changes sign. Each cycle's
-stability comes from its Floquet multipliers: the monodromy matrix of the variational
-equations along the harmonic-balance solution (a product of matrix exponentials over
-``n_floquet`` sub-intervals of the period); the trivial multiplier (near 1, the phase
-shift) is set aside, and its distance from 1 (the error of the truncated cycle and of the
-product) is the margin a multiplier must clear to call the cycle unstable.
+tangent, Newton corrector orthogonal to it, step adapted to the corrector's effort; the
+next tangent comes from the corrector's last bordered Jacobian). A fold is where the
+parameter's component of the tangent changes sign. Each cycle's stability comes from its
+Floquet multipliers: the monodromy matrix of the variational equations along the
+harmonic-balance solution (compiled classical RK4 over one period, the step set by the
+variational system's fastest rate), or Hill's method (:mod:`squealkit.nonlinear.hill`); the
+trivial multiplier (near 1, the phase shift) is set aside, and its distance from 1 (the
+error of the truncated cycle and of the integration) is the margin a multiplier must clear
+to call the cycle unstable.
 """
 
 from __future__ import annotations
@@ -21,10 +23,11 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
+from threadpoolctl import threadpool_limits
 
 from .. import __version__
 from .._validation import InputError, validate_finite, validate_positive
-from .harmonic_balance import HBProblem, LimitCycle, SecondOrderSystem, _Basis, _newton, contact_system, solve_fixed_p
+from .harmonic_balance import HBProblem, LimitCycle, SecondOrderSystem, _newton, contact_system, solve_fixed_p
 from .hopf import HopfPoint, hopf_point
 
 __all__ = [
@@ -36,64 +39,89 @@ __all__ = [
     "limit_cycle_summary",
 ]
 
+#: How the Floquet multipliers of a branch's cycles are computed.
+STABILITY_METHODS = ("monodromy", "hill")
 #: A non-trivial Floquet multiplier above 1 + max(this, 3 |trivial multiplier - 1|) marks an unstable cycle.
 FLOQUET_TOL = 1e-7
 
 
-def _expm_batch(X: NDArray) -> NDArray:
-    """Matrix exponentials of a stack (..., m, m): scaling and squaring with a degree-12 Taylor
-    polynomial (norm scaled below 1/2: truncation below 1e-16 relative), all in batched matmuls."""
-    norm = float(np.abs(X).sum(axis=-2).max()) if X.size else 0.0
-    sq = max(0, math.ceil(math.log2(norm / 0.5))) if norm > 0.5 else 0
-    Y = X / 2.0**sq
-    eye = np.broadcast_to(np.eye(X.shape[-1]), X.shape)
-    out = eye.copy()
-    for k in range(12, 0, -1):  # Horner: I + Y/1 (I + Y/2 (I + ...))
-        out = eye + (Y @ out) / k
-    for _ in range(sq):
-        out = out @ out
-    return out
+#: RK4 step of the monodromy integration: ``dt`` times the largest rate of the variational matrix
+#: (local error ~ 0.1^5 / 120 per step: ~3e-5 over a period of the paper's model, below the
+#: harmonic-balance cycle's own error, which the trivial multiplier's distance from 1 shows).
+_FLOQUET_STEP = 0.1
 
 
-def floquet_multipliers(system: SecondOrderSystem, cycle: LimitCycle, *, n_floquet: int = 1024) -> NDArray:
-    """Floquet multipliers (2n,) of a cycle, largest modulus first, trivial one removed last.
+def _sample(Z: NDArray, n_samples: int) -> NDArray:
+    """The Fourier series ``[a_0, a_1..a_H, b_1..b_H]`` (2H+1, n) at ``tau_j = 2 pi j / n_samples``
+    (n_samples > 2H), by inverse real FFT."""
+    H = (Z.shape[0] - 1) // 2
+    c = np.zeros((n_samples // 2 + 1, Z.shape[1]), complex)
+    c[0] = Z[0]
+    c[1:H + 1] = 0.5 * (Z[1:H + 1] - 1j * Z[H + 1:])
+    return np.fft.irfft(c, n_samples, axis=0, norm="forward")
 
-    The monodromy matrix is the product over ``n_floquet`` sub-intervals of
-    ``expm(A(t_j + dt/2) dt)`` with ``A`` the variational matrix along the cycle
-    (exponential midpoint rule, second order in ``dt``).
+
+def _variational(system: SecondOrderSystem, cycle: LimitCycle, n_samples: int) -> NDArray:
+    """The variational matrix ``A(t)`` (n_samples, 2n, 2n) along the cycle at ``t_j = j T / n_samples``."""
+    n = system.n_dof
+    Z = cycle.coefficients
+    H = cycle.harmonics
+    k = np.arange(1, H + 1)[:, None]
+    X = _sample(Z, n_samples)
+    Xd = cycle.omega * _sample(np.r_[np.zeros((1, n)), k * Z[H + 1:], -k * Z[1:H + 1]], n_samples)  # a_k' = k b_k
+    _, dfdx, dfdv, _ = system.force(X, Xd, cycle.p)
+    Minv = np.linalg.inv(system.M)
+    A = np.zeros((n_samples, 2 * n, 2 * n))
+    A[:, :n, n:] = np.eye(n)
+    A[:, n:, :n] = Minv @ (dfdx - system.K)
+    A[:, n:, n:] = Minv @ (dfdv - system.C)
+    return A
+
+
+def floquet_steps(system: SecondOrderSystem, cycle: LimitCycle, A: NDArray | None = None) -> int:
+    """RK4 steps per period for :func:`floquet_multipliers`: ``T rho / 0.1`` (a multiple of 16, at least 64),
+    with ``rho`` the largest of ``sqrt(|M^-1 (K - df/dx)|)`` and ``|M^-1 (C - df/dv)|``
+    (Frobenius norms) over 64 instants of the cycle: the fastest rate of the variational system."""
+    n = system.n_dof
+    A = _variational(system, cycle, 64) if A is None else A
+    stiff = np.sqrt(np.linalg.norm(A[:, n:, :n], axis=(1, 2)).max())
+    damp = np.linalg.norm(A[:, n:, n:], axis=(1, 2)).max()
+    rho = max(float(stiff), float(damp), cycle.omega)
+    return 16 * max(4, math.ceil(2 * math.pi / cycle.omega * rho / _FLOQUET_STEP / 16))
+
+
+def floquet_multipliers(system: SecondOrderSystem, cycle: LimitCycle, *, n_floquet: int | None = None) -> NDArray:
+    """Floquet multipliers (2n,) of a cycle by the monodromy matrix, largest modulus first,
+    the trivial one last.
+
+    The monodromy matrix integrates the variational equations ``Phi' = A(t) Phi`` over one
+    period with ``n_floquet`` classical RK4 steps (compiled; default :func:`floquet_steps`),
+    ``A(t)`` from the harmonic-balance solution and the force's analytic derivatives.
 
     Parameters
     ----------
     system : SecondOrderSystem
-        The system the cycle belongs to.
+        The equations the cycle solves.
     cycle : LimitCycle
-        A converged limit cycle of ``system`` (from :func:`harmonic_balance` or a branch).
-    n_floquet : int, default 1024
-        Sub-intervals of the period in the monodromy product.
+        The periodic solution.
+    n_floquet : int, optional
+        RK4 steps per period.
 
     Returns
     -------
-    ndarray of complex, shape (2 n,)
-        All 2n multipliers, largest modulus first, with the one nearest 1 (the trivial
-        multiplier) last.
+    ndarray, shape (2n,), complex
+        All 2n multipliers, sorted by decreasing modulus, with the one nearest 1 (the
+        trivial multiplier, the phase shift along the cycle) moved last.
     """
-    n = system.n_dof
-    N = int(n_floquet)
-    b = _Basis.make(cycle.harmonics, 2 * N)
-    X = (b.E @ cycle.coefficients)[1::2]  # midpoints of the N sub-intervals
-    Xd = cycle.omega * (b.dE @ cycle.coefficients)[1::2]
-    _, dfdx, dfdv, _ = system.force(X, Xd, cycle.p)
-    Minv = np.linalg.inv(system.M)
-    A = np.zeros((N, 2 * n, 2 * n))
-    A[:, :n, n:] = np.eye(n)
-    A[:, n:, :n] = Minv @ (dfdx - system.K)
-    A[:, n:, n:] = Minv @ (dfdv - system.C)
-    Phi = _expm_batch(A * (2 * math.pi / cycle.omega / N))
-    while Phi.shape[0] > 1:  # ordered product Phi_{N-1} ... Phi_1 Phi_0, pairwise
-        if Phi.shape[0] % 2:
-            Phi = np.concatenate([Phi, np.eye(2 * n)[None]], axis=0)
-        Phi = Phi[1::2] @ Phi[0::2]
-    rho = np.linalg.eigvals(Phi[0])
+    from . import _kernels
+
+    S = floquet_steps(system, cycle) if n_floquet is None else int(n_floquet)
+    if S < 1:
+        raise InputError(f"Parameter n_floquet={n_floquet!r} must be an integer >= 1.")
+    A = _variational(system, cycle, 2 * S)
+    A = np.concatenate([A, A[:1]], axis=0)  # A(T) = A(0)
+    Phi = _kernels.monodromy_rk4(A, 2 * math.pi / cycle.omega / S)
+    rho = np.linalg.eigvals(Phi)
     i = int(np.argmin(np.abs(rho - 1.0)))
     rest = np.delete(rho, i)
     rest = rest[np.argsort(-np.abs(rest))]
@@ -154,9 +182,10 @@ def continue_branch(
     step: float | None = None,
     max_points: int = 400,
     amplitude_start: float = 0.05,
-    n_floquet: int = 1024,
+    n_floquet: int | None = None,
     max_amplitude: float = 1e3,
     max_turn: float = 0.3,
+    stability: str = "monodromy",
 ) -> Branch:
     """Follow the limit cycles born at ``hopf`` by pseudo-arclength continuation.
 
@@ -176,12 +205,16 @@ def continue_branch(
         Largest number of points.
     amplitude_start : float
         First cycle's amplitude, in ``length_scale`` units, on the onset mode.
-    n_floquet : int
-        Sub-intervals of the monodromy product.
+    n_floquet : int, optional
+        RK4 steps of the monodromy matrix per period (default :func:`floquet_steps`).
     max_amplitude : float
         Stop when an amplitude exceeds this many ``length_scale``.
     max_turn : float
         Largest angle [rad] between consecutive tangents (the step is halved otherwise).
+    stability : {"monodromy", "hill"}
+        How each cycle's Floquet multipliers are computed: the monodromy matrix
+        (:func:`floquet_multipliers`) or Hill's method on the harmonic-balance Jacobian
+        (:func:`~squealkit.nonlinear.hill.hill_exponents`, symmetry criterion).
 
     Returns
     -------
@@ -190,6 +223,19 @@ def continue_branch(
     lo, hi = (float(v) for v in p_range)
     if not hi > lo:
         raise InputError(f"Parameter range {p_range!r} must be increasing.")
+    if stability not in STABILITY_METHODS:
+        raise InputError(f"Parameter stability={stability!r} must be one of {', '.join(map(repr, STABILITY_METHODS))}.")
+    # small dense solves (n_u ~ 60-130): BLAS threads only wait for each other on shared cores
+    with threadpool_limits(1, user_api="blas"):
+        return _continue(system, hopf, lo, hi, harmonics=harmonics, step=step, max_points=max_points,
+                         amplitude_start=amplitude_start, n_floquet=n_floquet, max_amplitude=max_amplitude,
+                         max_turn=max_turn, stability=stability)
+
+
+def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_start, n_floquet, max_amplitude,
+              max_turn, stability) -> Branch:
+    from .hill import hill_multipliers
+
     H = int(harmonics)
     n = system.n_dof
     dp_nom = (hi - lo) / 50 if step is None else validate_positive("step", step)
@@ -212,9 +258,9 @@ def continue_branch(
         r, J = prob.residual(z)
         row = np.zeros(n_u + 2)
         row[ia] = 1.0
-        return np.r_[r, z[ia] - a_fix], np.vstack([J, row])
+        return np.append(r, z[ia] - a_fix), np.vstack([J, row])
 
-    y, _, nr = _newton(fun_amp, y)
+    y, _, nr, _ = _newton(fun_amp, y)
     if not nr <= 1e-8:
         raise InputError(f"No limit cycle found next to the Hopf point (residual {nr:.3g}).")
 
@@ -230,7 +276,9 @@ def continue_branch(
 
     r, J = prob.residual(y)
     t = tangent(J, None)
-    ys, ts = [y], [t]
+    ys, ts, nrs = [y], [t], [float(np.linalg.norm(r))]
+    e_last = np.zeros(n_u + 2)
+    e_last[-1] = 1.0
     h = 1.0
     reason = "max_points"
     while len(ys) < max_points:
@@ -239,17 +287,18 @@ def continue_branch(
 
         def fun(z, y_pred=y_pred, tw=tw):
             r, J = prob.residual(z)
-            return np.r_[r, tw @ (z - y_pred)], np.vstack([J, tw])
+            return np.append(r, tw @ (z - y_pred)), np.vstack([J, tw])
 
-        z, it, nr = _newton(fun, y_pred, max_iter=12)
+        z, it, nr, Jc = _newton(fun, y_pred, max_iter=12)
         if not (nr <= 1e-8 and np.all(np.isfinite(z))):
             h *= 0.5
             if h < 1e-4:
                 reason = "corrector_failed"
                 break
             continue
-        r, J = prob.residual(z)
-        t_new = tangent(J, ts[-1])
+        # the tangent at z: [J; t_prev W^2] t = e_last, with the corrector's final (bordered) Jacobian
+        t_new = np.linalg.solve(Jc, e_last)
+        t_new /= np.linalg.norm(t_new * W)
         if (t_new * W * W) @ ts[-1] < math.cos(max_turn) and h > 1e-3:
             h *= 0.5  # the branch turns sharply (a fold, contact loss setting in): smaller steps
             continue
@@ -262,21 +311,23 @@ def continue_branch(
             if nr_e <= 1e-8:
                 ys.append(y_e)
                 ts.append(t_new)
+                nrs.append(nr_e)
             reason = "left_range"
             break
         ys.append(z)
         ts.append(t_new)
+        nrs.append(nr)
         h = min(h * (1.5 if it <= 4 else 1.0 if it <= 7 else 0.6), 1.0)
         if np.abs(z[:n_u]).max() > max_amplitude:
             reason = "max_amplitude"
             break
     cycles = []
     mult = []
-    for y_i in ys:
-        r = float(np.linalg.norm(prob.residual(y_i)[0]))
+    for y_i, r in zip(ys, nrs, strict=True):
         c = prob.cycle(y_i, residual=r)
         cycles.append(c)
-        mult.append(floquet_multipliers(system, c, n_floquet=n_floquet))
+        mult.append(hill_multipliers(system, c) if stability == "hill"
+                    else floquet_multipliers(system, c, n_floquet=n_floquet))
     mult_a = np.array(mult)
     # the trivial multiplier's distance from 1 measures the error of the cycle and of the
     # monodromy product: a non-trivial multiplier must exceed 1 by more than that to count
@@ -309,8 +360,9 @@ def limit_cycle_branch(
     harmonics: int = 10,
     n_points: int = 50,
     max_points: int | None = None,
-    n_floquet: int = 1024,
+    n_floquet: int | None = None,
     check_harmonics: bool = True,
+    stability: str = "monodromy",
 ) -> xr.Dataset:
     """Squeal limit cycles of a squealkit model over friction, from the Hopf point (harmonic balance).
 
@@ -337,11 +389,15 @@ def limit_cycle_branch(
         Nominal number of points over the range (sets the arclength step).
     max_points : int, optional
         Largest number of points (default ``10 n_points``).
-    n_floquet : int
-        Sub-intervals of the monodromy product (stability).
+    n_floquet : int, optional
+        RK4 steps of the monodromy matrix per period (default: from the variational system's
+        fastest rate, :func:`floquet_steps`).
     check_harmonics : bool
         Re-solve every 5th point with 2H harmonics; the largest relative amplitude change
         is the attribute ``harmonics_change``.
+    stability : {"monodromy", "hill"}
+        Floquet multipliers by the monodromy matrix or by Hill's method (attribute
+        ``stability_method``).
 
     Returns
     -------
@@ -378,10 +434,10 @@ def limit_cycle_branch(
                          f"lies outside the friction range [{lo:g}, {hi:g}]; the branch starts there: widen the range.")
     hopf = hopf_point(system, crit.mu_critical)
     br = continue_branch(system, hopf, (lo, hi), harmonics=harmonics, step=(hi - lo) / (n_points - 1),
-                         max_points=max_points or 10 * n_points, n_floquet=n_floquet)
+                         max_points=max_points or 10 * n_points, n_floquet=n_floquet, stability=stability)
     return branch_dataset(system, br, harmonics=harmonics, check_harmonics=check_harmonics,
-                          attrs={"model": model.to_json(), "theta": theta, "theta_deg": math.degrees(theta),
-                                 "tan_theta": t, "speed": speed, "speed_units": "m/s",
+                          attrs={"model": model.to_json(), "stability_method": stability, "theta": theta,
+                                 "theta_deg": math.degrees(theta), "tan_theta": t, "speed": speed, "speed_units": "m/s",
                                  "contact": contact.describe(), "mu_range": [lo, hi]})
 
 
@@ -395,9 +451,10 @@ def limit_cycle_branch_slope(
     harmonics: int = 10,
     n_points: int = 50,
     max_points: int | None = None,
-    n_floquet: int = 1024,
+    n_floquet: int | None = None,
     check_harmonics: bool = True,
     scan: int = 81,
+    stability: str = "monodromy",
 ) -> xr.Dataset:
     """Squeal limit cycles over the run-out slope tan(theta) at a fixed friction ``mu``.
 
@@ -413,7 +470,7 @@ def limit_cycle_branch_slope(
         Slope range ``(start, stop)``.
     mu : float
         Friction coefficient.
-    contact, speed, harmonics, n_points, max_points, n_floquet, check_harmonics
+    contact, speed, harmonics, n_points, max_points, n_floquet, check_harmonics, stability
         As for :func:`limit_cycle_branch`.
     scan : int
         Slopes scanned for the onset.
@@ -440,10 +497,13 @@ def limit_cycle_branch_slope(
     k = up[0]
     hopf = hopf_point(system, float(grid[k] - g[k] * (grid[k + 1] - grid[k]) / (g[k + 1] - g[k])))
     br = continue_branch(system, hopf, (lo, hi), harmonics=harmonics, step=(hi - lo) / (n_points - 1),
-                         max_points=max_points or 10 * n_points, n_floquet=n_floquet)
-    return branch_dataset(system, br, harmonics=harmonics, check_harmonics=check_harmonics,
-                          attrs={"model": model.to_json(), "mu": float(mu), "speed": speed, "speed_units": "m/s",
-                                 "contact": contact.describe(), "tan_theta_range": [lo, hi]})
+                         max_points=max_points or 10 * n_points, n_floquet=n_floquet, stability=stability)
+    ds = branch_dataset(system, br, harmonics=harmonics, check_harmonics=check_harmonics,
+                        attrs={"model": model.to_json(), "stability_method": stability, "mu": float(mu),
+                               "speed": speed, "speed_units": "m/s", "contact": contact.describe(),
+                               "tan_theta_range": [lo, hi], "hopf_theta_deg": math.degrees(math.atan(hopf.p))})
+    theta_deg = np.degrees(np.arctan(ds["tan_theta"].values))
+    return ds.assign_coords(theta_deg=("point", theta_deg, {"units": "deg", "long_name": "run-out incline theta"}))
 
 
 def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, check_harmonics: bool = True,
@@ -461,10 +521,14 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
         # at the Hopf point itself a piecewise-linear law has cycles of any small amplitude
         # (a vertical start): the check is made where the parameter has moved off it
         moved = [c for c in cyc if abs(c.p - br.hopf.p) > 1e-6 * max(1.0, abs(br.hopf.p))]
-        for c in moved[::5]:
-            c2 = harmonic_balance(system, c.p, omega=c.omega, guess=c.coefficients, harmonics=2 * harmonics,
-                                  check_harmonics=False)
-            changes.append(float(np.max(np.abs(c2.amplitude - c.amplitude)) / np.max(c2.amplitude)))
+        with threadpool_limits(1, user_api="blas"):
+            for c in moved[::5]:
+                try:
+                    c2 = harmonic_balance(system, c.p, omega=c.omega, guess=c.coefficients,
+                                          harmonics=2 * harmonics, check_harmonics=False)
+                except InputError:  # next to a vertical start the fixed-parameter solve is ill-posed: skip it
+                    continue
+                changes.append(float(np.max(np.abs(c2.amplitude - c.amplitude)) / np.max(c2.amplitude)))
         change = max(changes) if changes else float("nan")
     kind, kind_from = _onset_kind(br.hopf, p, br.stable)
     fold_mu = [float(p[i]) for i in br.folds]
@@ -521,38 +585,65 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
 
 
 def limit_cycle_summary(ds: xr.Dataset) -> dict[str, object]:
-    """A :func:`limit_cycle_branch` result as plain Python (what ``squealkit limitcycle --json`` prints).
+    """A branch as plain Python (what ``squealkit limitcycle --json`` prints).
 
     Parameters
     ----------
     ds : xarray.Dataset
-        A result of :func:`limit_cycle_branch`.
+        A result of :func:`limit_cycle_branch` (over friction) or
+        :func:`limit_cycle_branch_slope` (over the run-out slope), optionally with
+        :func:`~squealkit.nonlinear.sound_level` added.
 
     Returns
     -------
     dict
-        ``mu`` (list), ``frequency_hz`` (list), ``amplitude`` (DOF name -> list of
+        ``parameter`` (``"mu"`` or ``"theta"``); ``mu`` (list over a friction branch, the fixed
+        value over a slope branch) and ``theta_deg`` (the fixed incline, or the list over a
+        slope branch); ``frequency_hz`` (list), ``amplitude`` (DOF name -> list of
         displacement amplitudes [m], half the peak-to-peak over one period), ``stable``
         (list of booleans), ``contact_loss_fraction`` (list), ``hopf`` (``mu``,
-        ``frequency_hz``, ``lyapunov_coefficient``, ``kind``, ``kind_from``), ``folds``
-        (list of mu), ``hysteresis_mu`` ([start, end] or []), ``harmonics``,
-        ``harmonics_change``, ``stop_reason``, ``theta_deg``, ``contact``.
+        ``frequency_hz``, ``lyapunov_coefficient``, ``kind``, ``kind_from``; and
+        ``theta_deg`` over a slope branch), ``folds`` (list of mu, or of theta_deg),
+        ``hysteresis_mu`` (or ``hysteresis_theta_deg``: [start, end] or []), ``harmonics``,
+        ``harmonics_change``, ``stability_method``, ``stop_reason``, ``contact``; with a
+        level: ``level_db`` (list, dB SPL re 20 uPa), ``level_dof``, ``level_from``.
     """
     a = ds.attrs
-    return {
-        "mu": [float(v) for v in ds["mu"].values],
+    over_theta = a.get("param") == "tan_theta"
+
+    def deg(t):
+        return [float(math.degrees(math.atan(float(v)))) for v in np.atleast_1d(t) if np.isfinite(v)]
+
+    hyst = [float(v) for v in np.atleast_1d(a["hysteresis_mu"]) if np.isfinite(v)]
+    out: dict[str, object] = {"parameter": "theta" if over_theta else "mu"}
+    if over_theta:
+        out["mu"] = float(a["mu"])
+        out["theta_deg"] = [float(v) for v in ds["theta_deg"].values]
+    else:
+        out["mu"] = [float(v) for v in ds["mu"].values]
+        out["theta_deg"] = float(a.get("theta_deg", 0.0))
+    hopf = {"mu": float(a["mu"]) if over_theta else float(a["hopf_mu"]),
+            "frequency_hz": float(a["hopf_frequency_hz"]),
+            "lyapunov_coefficient": float(a["lyapunov_coefficient"]), "kind": str(a["kind"]),
+            "kind_from": str(a["kind_from"])}
+    if over_theta:
+        hopf["theta_deg"] = float(math.degrees(math.atan(float(a["hopf_mu"]))))
+    out.update({
         "frequency_hz": [float(v) for v in ds["frequency_hz"].values],
         "amplitude": {str(d): [float(v) for v in ds["amplitude"].sel(dof=d).values] for d in ds["dof"].values},
         "stable": [bool(v) for v in ds["stable"].values],
         "contact_loss_fraction": [float(v) for v in ds["contact_loss_fraction"].values],
-        "hopf": {"mu": float(a["hopf_mu"]), "frequency_hz": float(a["hopf_frequency_hz"]),
-                 "lyapunov_coefficient": float(a["lyapunov_coefficient"]), "kind": str(a["kind"]),
-                 "kind_from": str(a["kind_from"])},
-        "folds": [float(v) for v in ds["fold_mu"].values],
-        "hysteresis_mu": [float(v) for v in np.atleast_1d(a["hysteresis_mu"]) if np.isfinite(v)],
+        "hopf": hopf,
+        "folds": deg(ds["fold_mu"].values) if over_theta else [float(v) for v in ds["fold_mu"].values],
+        ("hysteresis_theta_deg" if over_theta else "hysteresis_mu"): deg(hyst) if over_theta else hyst,
         "harmonics": int(a["harmonics"]),
         "harmonics_change": float(a["harmonics_change"]),
+        "stability_method": str(a.get("stability_method", "monodromy")),
         "stop_reason": str(a["stop_reason"]),
-        "theta_deg": float(a.get("theta_deg", 0.0)),
         "contact": str(a.get("contact", "")),
-    }
+    })
+    if "level_db" in ds:
+        out["level_db"] = [float(v) for v in ds["level_db"].values]
+        out["level_dof"] = str(a["level_dof"])
+        out["level_from"] = str(a["level_from"])
+    return out

@@ -23,6 +23,7 @@ model whose stiffness parts carry other contact kinematics is followed without c
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -218,42 +219,23 @@ def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float
     sep, sign, strib = contact.separation, contact.sign_friction, contact.mu_static is not None
     v_reg, mu_s, v_s = contact.v_reg, (contact.mu_static or 0.0), contact.v_stribeck
 
-    def friction(w: NDArray, mu: float) -> tuple[NDArray, NDArray, NDArray]:
-        """mu_e(w), d mu_e / dw, d mu_e / d mu."""
-        if strib:
-            ex = np.exp(-np.abs(w) / v_s)
-            mw = mu + (mu_s - mu) * ex
-            dmw = -np.sign(w) * (mu_s - mu) / v_s * ex
-            dmu = 1.0 - ex
-        else:
-            mw = np.full_like(w, mu)
-            dmw = np.zeros_like(w)
-            dmu = np.ones_like(w)
-        if sign:
-            phi = np.tanh(w / v_reg)
-            dphi = (1.0 - phi * phi) / v_reg
-        else:
-            phi, dphi = np.ones_like(w), np.zeros_like(w)
-        return mw * phi, dmw * phi + mw * dphi, dmu * phi
+    from . import _kernels
+
+    geometry = (np.ascontiguousarray(b, float), np.ascontiguousarray(f, float), np.ascontiguousarray(fhat, float),
+                float(kc), s, kin, float(speed), bool(sep), bool(sign), bool(strib), float(v_reg), float(mu_s),
+                float(v_s))
 
     def force_mu_t(x: NDArray, xd: NDArray, mu: float, t: float):
-        d0 = b + s * t * f  # direction of N_c alone
-        d1 = -t * b + s * f  # direction of N_c mu_e
-        bt = b + kin * s * t * fhat
-        nc = -kc * (x @ bt)
-        closed = nc > 0.0 if sep else np.ones_like(nc, dtype=bool)
-        nc = np.where(closed, nc, 0.0)
-        w = speed - s * (xd @ fhat)
-        me, dme_dw, dme_dmu = friction(w, mu)
-        direction = d0 + me[..., None] * d1
-        out = nc[..., None] * direction
-        dnc_dx = np.where(closed[..., None], -kc * bt, 0.0)
-        dfdx = direction[..., :, None] * dnc_dx[..., None, :]
-        dfdv = (nc * dme_dw)[..., None, None] * d1[:, None] * (-s * fhat)[None, :]
-        dfdmu = (nc * dme_dmu)[..., None] * d1
-        dnc_dt = np.where(closed, -kc * kin * s * (x @ fhat), 0.0)
-        dfdt = nc[..., None] * (s * f - me[..., None] * b) + dnc_dt[..., None] * direction
-        return out, dfdx, dfdv, dfdmu, dfdt
+        """The contact force and its derivatives (compiled, :func:`._kernels.contact_force`)."""
+        x, xd = np.asarray(x, float), np.asarray(xd, float)
+        shape = np.broadcast_shapes(x.shape, xd.shape)
+        n = shape[-1]
+        X = np.ascontiguousarray(np.broadcast_to(x, shape).reshape(-1, n))
+        V = np.ascontiguousarray(np.broadcast_to(xd, shape).reshape(-1, n))
+        res = _kernels.contact_force(X, V, float(mu), float(t), *geometry)
+        lead = shape[:-1]
+        return (res[0].reshape(*lead, n), res[1].reshape(*lead, n, n), res[2].reshape(*lead, n, n),
+                res[3].reshape(*lead, n), res[4].reshape(*lead, n))
 
     if param == "mu":
         def force(x: NDArray, xd: NDArray, p: float):
@@ -305,74 +287,94 @@ class _Basis:
     dE: NDArray = field(repr=False)  # d/dtau of E
     P: NDArray = field(repr=False)  # (2H+1, N): coefficients of a sampled signal (exact up to H)
     k: NDArray = field(repr=False)  # harmonic number of each coefficient row
+    D: NDArray = field(repr=False)  # (2H+1, 2H+1): d/dtau on the coefficients (dE = E @ D)
 
     @classmethod
     def make(cls, H: int, N: int) -> _Basis:
-        tau = 2 * np.pi * np.arange(N) / N
-        k = np.arange(1, H + 1)
-        c, s = np.cos(np.outer(tau, k)), np.sin(np.outer(tau, k))
-        E = np.hstack([np.ones((N, 1)), c, s])
-        dE = np.hstack([np.zeros((N, 1)), -s * k, c * k])
-        P = E.T * np.r_[1.0, np.full(2 * H, 2.0)][:, None] / N
-        kk = np.r_[0, k, k].astype(float)
-        return cls(H, N, E, dE, P, kk)
+        """The basis of ``H`` harmonics sampled at ``N`` points (cached: the arrays are read-only)."""
+        return _basis(int(H), int(N))
 
     def coefficients(self, f: NDArray) -> NDArray:
-        """Fourier coefficients (..., 2H+1, n) of signals sampled (..., N, n), by FFT."""
-        F = np.fft.rfft(f, axis=-2) / self.N
-        H = self.H
-        return np.concatenate([F[..., :1, :].real, 2 * F[..., 1:H + 1, :].real, -2 * F[..., 1:H + 1, :].imag], axis=-2)
+        """Fourier coefficients (..., 2H+1, n) of signals sampled (..., N, n)."""
+        return self.P @ f
 
 
-def _linear_residual(sys: SecondOrderSystem, Z: NDArray, omega: float, H: int) -> NDArray:
-    """Harmonic-balance residual of the linear part, (2H+1, n)."""
-    a, b = Z[1:H + 1], Z[H + 1:]
-    k = np.arange(1, H + 1)[:, None]
-    Ka = a @ sys.K.T - (k * omega) ** 2 * (a @ sys.M.T)
-    Kb = b @ sys.K.T - (k * omega) ** 2 * (b @ sys.M.T)
-    ca, cb = k * omega * (a @ sys.C.T), k * omega * (b @ sys.C.T)
-    return np.vstack([Z[:1] @ sys.K.T - sys.F0, Ka + cb, Kb - ca])
+@functools.lru_cache(maxsize=64)
+def _basis(H: int, N: int) -> _Basis:
+    tau = 2 * np.pi * np.arange(N) / N
+    k = np.arange(1, H + 1)
+    c, s = np.cos(np.outer(tau, k)), np.sin(np.outer(tau, k))
+    E = np.hstack([np.ones((N, 1)), c, s])
+    dE = np.hstack([np.zeros((N, 1)), -s * k, c * k])
+    P = E.T * np.r_[1.0, np.full(2 * H, 2.0)][:, None] / N
+    kk = np.r_[0, k, k].astype(float)
+    D = np.zeros((2 * H + 1, 2 * H + 1))
+    D[k, H + k] = k  # a_k' = k b_k
+    D[H + k, k] = -k  # b_k' = -k a_k
+    for a in (E, dE, P, kk, D):
+        a.flags.writeable = False
+    return _Basis(H, N, E, dE, P, kk, D)
 
 
-def _linear_jacobian(sys: SecondOrderSystem, omega: float, H: int) -> tuple[NDArray, NDArray]:
-    """d(linear residual)/dZ (2H+1, n, 2H+1, n) and d/d omega (2H+1, n, 2H+1, n) (apply to Z)."""
-    n = sys.n_dof
-    J = np.zeros((2 * H + 1, n, 2 * H + 1, n))
-    Jw = np.zeros_like(J)
-    J[0, :, 0, :] = sys.K
-    for k in range(1, H + 1):
-        ia, ib = k, H + k
-        D = sys.K - (k * omega) ** 2 * sys.M
-        J[ia, :, ia, :] = D
-        J[ib, :, ib, :] = D
-        J[ia, :, ib, :] = k * omega * sys.C
-        J[ib, :, ia, :] = -k * omega * sys.C
-        Jw[ia, :, ia, :] = Jw[ib, :, ib, :] = -2 * k * k * omega * sys.M
-        Jw[ia, :, ib, :] = k * sys.C
-        Jw[ib, :, ia, :] = -k * sys.C
-    return J, Jw
+def _linear_operators(sys: SecondOrderSystem, basis: _Basis) -> tuple[NDArray, NDArray, NDArray]:
+    """``(L0, L1, L2)`` with the linear residual ``(L0 + omega L1 + omega^2 L2) vec(Z) - F0 e_0``.
+
+    ``vec`` is row-major over ``(harmonic row, dof)``: ``L0 = I (x) K``, ``L1 = D (x) C``,
+    ``L2 = D^2 (x) M`` with ``D`` the derivative on the coefficients.
+    """
+    m = 2 * basis.H + 1
+    return np.kron(np.eye(m), sys.K), np.kron(basis.D, sys.C), np.kron(basis.D @ basis.D, sys.M)
 
 
-def hb_residual(sys: SecondOrderSystem, basis: _Basis, Z: NDArray, omega: float, p: float, *, jacobian: bool = True):
+def _aft_jacobian(basis: _Basis, dfdx: NDArray, dfdv: NDArray, omega: float) -> NDArray:
+    """d(P f)/dZ (n_u, n_u) of the AFT force: ``P diag(df/dx) E + omega P diag(df/dv) E D``.
+
+    For ``N >= 4H`` from the FFT of the sampled derivatives: products of cosines and sines
+    turn ``P diag(a) E`` into sums and differences of the Fourier coefficients ``c_{k-l}`` and
+    ``c_{k+l}`` of ``a`` (the same discrete sums, exactly; :func:`._kernels.aft_jacobian`);
+    otherwise by the matrix products themselves.
+    """
+    H, N = basis.H, basis.N
+    m, n = 2 * H + 1, dfdx.shape[-1]
+    if N < 4 * H:
+        G = dfdx[:, :, None, :] * basis.E[:, None, :, None]
+        G += dfdv[:, :, None, :] * (omega * basis.dE)[:, None, :, None]
+        return (basis.P @ G.reshape(N, -1)).reshape(m * n, m * n)
+    from . import _kernels
+
+    q = 2 * H + 1
+    ca = np.fft.rfft(dfdx, axis=0)[:q] / N
+    cb = np.fft.rfft(dfdv, axis=0)[:q] / N
+    out = np.empty((m, n, m, n))
+    _kernels.aft_jacobian(ca, cb, float(omega), out)
+    return out.reshape(m * n, m * n)
+
+
+def hb_residual(sys: SecondOrderSystem, basis: _Basis, Z: NDArray, omega: float, p: float, *, jacobian: bool = True,
+                operators: tuple[NDArray, NDArray, NDArray] | None = None):
     """Residual R (2H+1, n) of harmonic balance and, optionally, dR/dZ, dR/domega, dR/dp.
 
-    AFT: the force is sampled at N points of the period and transformed by FFT; its
-    derivatives are projected on the basis (``P diag(df/dx) E``), which is the exact
-    Jacobian of the AFT residual.
+    AFT: the force is sampled at N points of the period and projected on the basis; its
+    derivatives are projected the same way (``P diag(df/dx) E``), which is the exact
+    Jacobian of the AFT residual. ``dR/dZ`` is returned as ``(n_u, n_u)`` with
+    ``n_u = (2H+1) n`` (row-major over harmonic row and DOF), ``dR/domega`` and ``dR/dp``
+    as ``(2H+1, n)``.
     """
-    H = basis.H
+    m, n = Z.shape
+    L0, L1, L2 = _linear_operators(sys, basis) if operators is None else operators
+    z = Z.ravel()
     X = basis.E @ Z
-    Xd = omega * (basis.dE @ Z)
+    ZD = basis.D @ Z  # coefficients of dx/dtau
+    Xd = omega * (basis.E @ ZD)
     f, dfdx, dfdv, dfdp = sys.force(X, Xd, p)
-    R = _linear_residual(sys, Z, omega, H) - basis.coefficients(f)
+    JL = L0 + omega * L1 + (omega * omega) * L2
+    R = (JL @ z).reshape(m, n) - basis.P @ f
+    R[0] -= sys.F0
     if not jacobian:
         return R
-    JL, JLw = _linear_jacobian(sys, omega, H)
-    # d f(t_j)/dZ[l, m] = dfdx[j] E[j, l] + omega dfdv[j] dE[j, l]
-    T = dfdx[:, :, :, None] * basis.E[:, None, None, :] + omega * dfdv[:, :, :, None] * basis.dE[:, None, None, :]
-    Jnl = np.tensordot(basis.P, T, axes=(1, 0)).transpose(0, 1, 3, 2)  # (k, i, l, m)
+    Jnl = _aft_jacobian(basis, dfdx, dfdv, omega)
     JZ = JL - Jnl
-    Rw = np.einsum("kilm,lm->ki", JLw, Z) - basis.P @ np.einsum("jim,jm->ji", dfdv, basis.dE @ Z)
+    Rw = (L1 @ z + 2 * omega * (L2 @ z)).reshape(m, n) - basis.P @ np.einsum("jim,jm->ji", dfdv, basis.E @ ZD)
     Rp = -basis.P @ dfdp
     return R, JZ, Rw, Rp
 
@@ -450,8 +452,11 @@ def _amplitude(sys: SecondOrderSystem, Z: NDArray, H: int, p: float) -> tuple[ND
     return amp, loss
 
 
-def _newton(fun, y0: NDArray, *, tol: float = 1e-10, max_iter: int = 30) -> tuple[NDArray, int, float]:
-    """Newton's method for a square system ``fun(y) -> (r, J)``; damped by halving on growth."""
+def _newton(fun, y0: NDArray, *, tol: float = 1e-10, max_iter: int = 30) -> tuple[NDArray, int, float, NDArray]:
+    """Newton's method for a square system ``fun(y) -> (r, J)``; damped by halving on growth.
+
+    Returns the solution, the iterations, the residual norm and the Jacobian at the solution.
+    """
     y = y0.copy()
     r, J = fun(y)
     nr = float(np.linalg.norm(r))
@@ -468,10 +473,12 @@ def _newton(fun, y0: NDArray, *, tol: float = 1e-10, max_iter: int = 30) -> tupl
             if (np.isfinite(n_new) and n_new < max(nr, 1e-300) * (1 - 1e-4 * lam)) or n_new <= tol:
                 break
             lam *= 0.5
+        else:  # no step along the Newton direction lowers the residual: stuck, give up now
+            return y, it, nr, J
         y, r, J, nr = y_new, r_new, J_new, n_new
         if nr <= tol or float(np.linalg.norm(lam * dy)) <= 1e-12 * max(1.0, float(np.linalg.norm(y))):
-            return y, it, nr
-    return y, max_iter, nr
+            return y, it, nr, J
+    return y, max_iter, nr, J
 
 
 class HBProblem:
@@ -489,6 +496,7 @@ class HBProblem:
         self.k_ref = float(np.abs(np.diag(sys.K)).max())
         self.phase = (H + 1, phase_dof)
         self.n_u = (2 * H + 1) * sys.n_dof
+        self.operators = _linear_operators(sys, self.basis)
 
     def unpack(self, y: NDArray) -> tuple[NDArray, float, float]:
         Z = self.L * y[: self.n_u].reshape(2 * self.H + 1, self.sys.n_dof)
@@ -500,16 +508,16 @@ class HBProblem:
     def residual(self, y: NDArray) -> tuple[NDArray, NDArray]:
         """Scaled residual (n_u + 1,) and its Jacobian (n_u + 1, n_u + 2) over ``[u, w, p]``."""
         Z, omega, p = self.unpack(y)
-        R, JZ, Rw, Rp = hb_residual(self.sys, self.basis, Z, omega, p)
+        R, JZ, Rw, Rp = hb_residual(self.sys, self.basis, Z, omega, p, operators=self.operators)
         s = 1.0 / (self.k_ref * self.L)
         n_u = self.n_u
         J = np.zeros((n_u + 1, n_u + 2))
-        J[:n_u, :n_u] = JZ.reshape(n_u, n_u) * (self.L * s)
+        J[:n_u, :n_u] = JZ * (self.L * s)
         J[:n_u, n_u] = Rw.ravel() * (self.omega_ref * s)
         J[:n_u, n_u + 1] = Rp.ravel() * s
         ip = self.phase[0] * self.sys.n_dof + self.phase[1]
         J[n_u, ip] = 1.0
-        return np.r_[R.ravel() * s, y[ip]], J
+        return np.append(R.ravel() * s, y[ip]), J
 
     def cycle(self, y: NDArray, *, residual: float = float("nan"), iterations: int = 0,
               harmonics_change: float = float("nan")) -> LimitCycle:
@@ -536,11 +544,11 @@ def solve_fixed_p(problem: HBProblem, y0: NDArray, *, tol: float = 1e-10, max_it
     p = y0[-1]
 
     def fun(z):
-        r, J = problem.residual(np.r_[z, p])
+        r, J = problem.residual(np.append(z, p))
         return r, J[:, :n]
 
-    z, it, nr = _newton(fun, y0[:n], tol=tol, max_iter=max_iter)
-    return np.r_[z, p], it, nr
+    z, it, nr, _ = _newton(fun, y0[:n], tol=tol, max_iter=max_iter)
+    return np.append(z, p), it, nr
 
 
 def harmonic_balance(

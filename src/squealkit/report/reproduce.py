@@ -94,6 +94,9 @@ def _paper_steps(
         from .steps_beyond import beyond_step
 
         steps.append(("beyond the paper", lambda fig, dat: beyond_step(model, fig, dat)))
+        from .steps_nonlinear import nonlinear_step
+
+        steps.append(("how loud", lambda fig, dat: nonlinear_step(model, fig, dat, quick=quick)))
     if recording is None:
         steps.append(("Figs. 6-13 measurement", lambda fig, dat: measurement_step(model, fig, dat, quick=quick)))
     else:
