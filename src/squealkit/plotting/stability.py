@@ -11,7 +11,15 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-__all__ = ["coupled_modes", "fig2_plot", "kinematics_plot", "root_locus_plot", "stability_map_plot"]
+__all__ = [
+    "coupled_modes",
+    "critical_plot",
+    "fig2_plot",
+    "kinematics_plot",
+    "root_locus_plot",
+    "stability_map_plot",
+    "tolerance_plot",
+]
 
 
 def _figure(**kwargs: Any):
@@ -186,4 +194,97 @@ def kinematics_plot(ds: xr.Dataset, *, ax=None):
     ax.set_title("Onset of squeal: the paper's contact kinematics and the consistent ones")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
+    return fig
+
+
+def critical_plot(ds: xr.Dataset, *, ax=None):
+    """Critical friction over the run-out incline with every unstable friction window.
+
+    Each incline's unstable windows along mu are drawn as red bars, mu_crit(theta) and
+    mu_crit + tan(theta) (eq. 6) as lines; an incline without onset in the searched range is
+    marked at the top of the range ("stable up to mu_max").
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A critical-friction curve (:func:`squealkit.stability.critical_friction_curve`), one
+        incline or many.
+    ax : matplotlib Axes, optional
+        Axes to draw into; a new figure otherwise.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = _axes(ax, (7, 4.5))
+    th = ds.theta_deg.values
+    mu_max = float(ds.attrs.get("mu_max", 2.0))
+    width = 0.6 * (float(np.min(np.diff(th))) if th.size > 1 else 1.0)
+    for i, t in enumerate(th):
+        for k, (lo, hi) in enumerate(ds.unstable_intervals.values[i]):
+            if np.isfinite(lo):
+                ax.bar(t, hi - lo, bottom=lo, width=width, color="tab:red", alpha=0.3, lw=0,
+                       label="unstable friction window" if i == 0 and k == 0 else None)
+    mu_c = ds.mu_critical.values
+    style = "o-" if th.size > 1 else "o"
+    ax.plot(th, mu_c, style, color="k", ms=4, label="mu_crit")
+    ax.plot(th, ds.mu_e_critical.values, style.replace("-", "--"), color="C0", ms=3, lw=1,
+            label="mu_crit + tan(theta) (eq. 6)")
+    none = ~np.isfinite(mu_c)
+    if none.any():
+        ax.plot(th[none], np.full(none.sum(), mu_max), "^", color="C2", ls="none",
+                label=f"no onset: stable up to mu = {mu_max:g}")
+    ax.set_ylim(min(0.0, float(np.nanmin(np.append(mu_c, 0.0)))), 1.05 * mu_max)
+    if th.size == 1:
+        ax.set_xlim(th[0] - 1.0, th[0] + 1.0)
+        if np.isfinite(mu_c[0]):
+            ax.annotate(f"mu_crit = {mu_c[0]:.4f}", (th[0], mu_c[0]), xytext=(12, -14), textcoords="offset points")
+    ax.set_xlabel("run-out incline theta [deg]")
+    ax.set_ylabel("friction coefficient mu")
+    damped = "damped" if ds.attrs.get("damped") else "undamped"
+    ax.set_title(f"Critical friction and unstable windows ({damped}, mu searched 0 to {mu_max:g})")
+    ax.legend(fontsize=8, loc="best")
+    ax.grid(alpha=0.3)
+    return fig
+
+
+def tolerance_plot(ds: xr.Dataset, *, ax=None):
+    """Run-out tolerance against friction: the largest stable slope and, with a wavelength, amplitude.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Over ``mu``: ``tan_theta_max`` (inf where every slope searched is stable),
+        ``limiting_side`` and optionally ``q0_max`` [m] (as written by ``squealkit tolerance
+        --out``).
+    ax : matplotlib Axes, optional
+        Axes to draw into; a new figure otherwise.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = _axes(ax, (7, 4.5))
+    mu = ds.mu.values
+    s = ds.tan_theta_max.values
+    finite = np.isfinite(s)
+    ax.plot(mu[finite], s[finite], "o-", color="k", ms=4, label="largest stable slope tan(theta)")
+    top = float(np.nanmax(s[finite])) if finite.any() else 1.0
+    if (~finite).any():
+        ax.plot(mu[~finite], np.full((~finite).sum(), 1.05 * top), "^", color="C2", ls="none",
+                label=f"stable at every slope searched (up to {ds.attrs.get('slope_max_deg', 80):g} deg)")
+    flat = ds.limiting_side.values == "flat"
+    if flat.any():
+        ax.plot(mu[flat], s[flat], "x", color="tab:red", ms=8, ls="none", label="unstable on a flat disc")
+    ax.set_xlabel("friction coefficient mu")
+    ax.set_ylabel("tan(theta) max")
+    ax.grid(alpha=0.3)
+    if "q0_max" in ds and np.isfinite(ds.q0_max.values).any():
+        lam = float(ds.attrs["wavelength"])
+        sec = ax.secondary_yaxis("right", functions=(lambda t: t * lam / (2 * np.pi) * 1e6,
+                                                      lambda q: q * 2 * np.pi / lam / 1e6))
+        sec.set_ylabel(f"q0 max [um] at lambda = {lam * 1e3:g} mm (eq. 11)")
+    damped = "damped" if ds.attrs.get("damped") else "undamped"
+    ax.set_title(f"Run-out tolerance ({damped})")
+    ax.legend(fontsize=8, loc="center right")
     return fig
