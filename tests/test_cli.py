@@ -195,3 +195,19 @@ def test_critical_and_tolerance_write_dataset_and_figure(run, tmp_path):
         assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1
         r = run(*cmd, "--out", str(tmp_path / "x.csv"))
         assert r.exit_code == 2 and "must end in .nc or .zarr" in r.stderr
+
+
+def test_analyze_plot_takes_a_file_like_every_other_plot(run, tmp_path):
+    # issue 15: `analyze --plot` took a folder where every other --plot takes a file
+    rec = tmp_path / "r.nc"
+    assert run("synth", str(rec), "--duration", "0.3").exit_code == 0
+    args = ["analyze", str(rec), "--mic", "mic", "--displacement", "displacement", "--rpm", "900", "--radius", "0.05"]
+    r = run(*args, "--plot", str(tmp_path / "figs.svg"))
+    assert r.exit_code == 0, r.output
+    names = sorted(p.name for p in tmp_path.glob("figs_*"))
+    assert len(names) == 7 and "figs_spectrogram.svg" in names and "figs_polar.svg" in names
+    r = run(*args, "--plot", str(tmp_path / "figs.txt"))
+    assert r.exit_code == 2 and "must end in .png or .svg or .pdf" in r.stderr
+    # a folder still works, with a note that it is deprecated
+    r = run(*args, "--plot", str(tmp_path / "old"))
+    assert r.exit_code == 0 and "deprecated" in r.stderr and len(list((tmp_path / "old").glob("r_*.png"))) == 7
