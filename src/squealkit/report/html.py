@@ -54,7 +54,12 @@ def _comparisons(items: Sequence[Comparison]) -> str:
     rows = []
     for c in items:
         verdict = "" if c.agrees is None else (' class="ok"' if c.agrees else ' class="off"')
-        mark = "" if c.agrees is None else ("agrees" if c.agrees else "differs")
+        if c.agrees is None:
+            mark = ""
+        elif c.published is None:  # nothing published to agree with: the check stated in the note holds or not
+            mark = "holds" if c.agrees else "does not hold"
+        else:
+            mark = "agrees" if c.agrees else "differs"
         rows.append(
             f"<tr><td>{html.escape(c.quantity)}</td><td>{_fmt(c.published)}</td><td>{_fmt(c.computed)}</td>"
             f"<td>{html.escape(c.unit)}</td><td>{c.difference()}</td><td{verdict}>{mark}</td>"
