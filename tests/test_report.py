@@ -300,3 +300,41 @@ def test_transient_section_for_the_hoffmann_model(tmp_path):
     assert "pin would lift off" not in text
     grows = s.numbers["rise_rate"] > 0 > s.numbers["fall_rate"]
     assert ("swings through the stability boundary" in text) == grows
+
+
+def test_report_figures_a_reader_would_not_trip_on():
+    # issue 15, each seen in a headless-chromium screenshot of the report
+    import numpy as np
+
+    from squealkit.models import get_preset
+    from squealkit.plotting.stability import fig2_plot, root_locus_plot, stability_map_plot
+    from squealkit.stability import stability_map
+
+    model = get_preset("lv2013")
+    ds = stability_map(model, np.linspace(0, 0.8, 9), np.radians(np.linspace(-8, 8, 5)))
+    # root locus: the coupled pair (2387-2438 Hz, paper Fig. 2), not scaled to the 10531 Hz third mode
+    ax = root_locus_plot(ds).axes[0]
+    assert ax.get_ylim()[1] < 3000
+    # Fig. 2: at most 5 mu tick labels (9 ran together)
+    assert all(len(a.get_xticks()) <= 6 for a in fig2_plot(ds).axes if a.name == "3d")
+    # a stable rig (the printed equations, sliding = +1, never lose stability for mu <= 0.8: README) has
+    # growth rates of rounding size; the map shows them as zero, not as full red and blue
+    stable = stability_map(model.replace(sliding=1), np.linspace(0, 0.8, 9), np.radians([-8.0, 0.0, 8.0]))
+    assert not stable.any_unstable.values.any()
+    mesh = stability_map_plot(stable).axes[0].collections[0]
+    assert np.all(mesh.get_array() == 0.0)
+
+
+def test_fig4_scale_is_not_set_by_the_start_up_spike():
+    import numpy as np
+    import xarray as xr
+
+    from squealkit.plotting.transient import fig4_plot
+
+    t = np.linspace(0, 0.1, 4001)
+    a = np.sin(2 * np.pi * 2400 * t)
+    a[:5] = 400.0  # a start-up spike 400 times the response
+    ds = xr.Dataset({"x1_ddot": ("time", a), "q": ("time", 8e-5 * np.sin(2 * np.pi * 20 * t))},
+                    coords={"time": t}, attrs={"mu": 0.4})
+    ax = fig4_plot(ds).axes[0]
+    assert ax.get_ylim()[1] == pytest.approx(1.3, rel=0.01)

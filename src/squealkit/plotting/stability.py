@@ -80,9 +80,14 @@ def fig2_plot(ds: xr.Dataset, *, modes: list[int] | None = None, fig=None):
         ax = fig.add_subplot(1, 2, panel + 1, projection="3d")
         for n, k in enumerate(modes):
             Z = ds[var].isel(mode=k).values
+            # unshaded: the surface shows the legend's colour
             ax.plot_surface(MU, TH, Z, color=colors[n % len(colors)], alpha=0.75, linewidth=0, rasterized=True,
-                            rstride=max(1, MU.shape[0] // 40), cstride=max(1, MU.shape[1] // 40))
+                            rstride=max(1, MU.shape[0] // 40), cstride=max(1, MU.shape[1] // 40), shade=False)
             ax.plot([], [], color=colors[n % len(colors)], label=f"mode {k}")
+        from matplotlib.ticker import MaxNLocator
+
+        ax.xaxis.set_major_locator(MaxNLocator(4))  # 9 mu labels ran together
+        ax.yaxis.set_major_locator(MaxNLocator(5))
         ax.set_xlabel("friction coefficient mu")
         ax.set_ylabel("incline theta [deg]")
         ax.set_zlabel("sigma [1/s]" if var == "growth_rate" else "omega [rad/s]")
@@ -112,7 +117,11 @@ def stability_map_plot(ds: xr.Dataset, *, critical: xr.Dataset | None = None, ax
     """
     fig, ax = _axes(ax, (7, 5))
     sig = ds["max_growth_rate"].values
-    vmax = float(np.nanmax(np.abs(sig))) or 1.0
+    # growth rates below rounding of the frequencies (1e-9 of the largest) are zero: a stable rig's
+    # +-1e-26 must not fill the map with full red and blue
+    floor = 1e-9 * float(np.nanmax(np.abs(ds["omega"].values))) if "omega" in ds else 1e-12
+    sig = np.where(np.abs(sig) <= floor, 0.0, sig)
+    vmax = max(float(np.nanmax(np.abs(sig))), floor) or 1.0
     mesh = ax.pcolormesh(ds.mu.values, ds.theta_deg.values, sig.T, cmap="RdBu_r", vmin=-vmax, vmax=vmax,
                          shading="auto", rasterized=True)
     fig.colorbar(mesh, ax=ax, label="largest growth rate sigma [1/s]")
@@ -129,7 +138,7 @@ def stability_map_plot(ds: xr.Dataset, *, critical: xr.Dataset | None = None, ax
     return fig
 
 
-def root_locus_plot(ds: xr.Dataset, *, theta_index: int | None = None, ax=None):
+def root_locus_plot(ds: xr.Dataset, *, theta_index: int | None = None, modes: list[int] | None = None, ax=None):
     """Eigenvalues in the complex plane as mu_e = mu + tan(theta) grows (one theta column).
 
     Parameters
@@ -138,6 +147,9 @@ def root_locus_plot(ds: xr.Dataset, *, theta_index: int | None = None, ax=None):
         A stability map.
     theta_index : int, optional
         Which theta column to follow; default the one nearest theta = 0.
+    modes : list of int, optional
+        Modes to draw; default the coupled ones (:func:`coupled_modes`), so a far mode does not
+        shrink the coalescence to a few pixels.
     ax : matplotlib Axes, optional
 
     Returns
@@ -149,7 +161,7 @@ def root_locus_plot(ds: xr.Dataset, *, theta_index: int | None = None, ax=None):
     col = ds.isel(theta=j)
     mu_e = col["mu_e"].values
     sc = None
-    for k in range(ds.sizes["mode"]):
+    for k in coupled_modes(ds) if modes is None else modes:
         sc = ax.scatter(col["growth_rate"].isel(mode=k), col["frequency"].isel(mode=k), c=mu_e, s=8,
                         cmap="viridis", rasterized=True)
     if sc is not None:
