@@ -134,7 +134,8 @@ def stability_map_plot(ds: xr.Dataset, *, critical: xr.Dataset | None = None, ax
         ax.legend(loc="lower left", fontsize=8)
     ax.set_xlabel("friction coefficient mu")
     ax.set_ylabel("run-out incline theta [deg]")
-    ax.set_title("Stability map: unstable where sigma > 0 (red)")
+    ax.set_title("Stability map: unstable where sigma > 0 (red)" if bool(ds["any_unstable"].any()) else
+                 "Stability map: stable at every point (rounding-size sigma shown as 0)")
     return fig
 
 
