@@ -32,6 +32,27 @@ def _pairs(option: str, items: tuple[str, ...]) -> dict[str, str]:
     return out
 
 
+#: The figure formats --plot takes.
+_FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
+
+
+def _figure_stem(ctx: click.Context, param: click.Parameter, value: Path | None) -> Path | None:
+    """--plot FILE.png (like every other --plot), or a folder as before (deprecated, noted on stderr)."""
+    if value is None or ctx.resilient_parsing:
+        return value
+    if value.suffix.lower() in _FIGURE_SUFFIXES and not value.is_dir():
+        return writable(ctx, param, value)
+    if value.suffix and not value.is_dir():
+        raise InputError(f"--plot {str(value)!r} must end in {' or '.join(_FIGURE_SUFFIXES)} "
+                         "(the figures are written beside it as NAME_time.png, NAME_spectrogram.png, ...).")
+    from ._options import PENDING_NOTES
+
+    PENDING_NOTES.append(f"squealkit: --plot FOLDER is deprecated: give a file name such as --plot "
+                         f"{value / 'figs.png'} (writes figs_time.png, ...); the folder {str(value)!r} is used "
+                         "as before.")
+    return writable_folder(ctx, param, value)
+
+
 @click.command()
 @click.argument("files", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("--mic", required=True, help="Microphone channel [Pa]: name or 0-based index.")
@@ -57,9 +78,10 @@ def _pairs(option: str, items: tuple[str, ...]) -> dict[str, str]:
               help="File value -> physical unit factor per channel (e.g. WAV full scale in Pa). Repeatable.")
 @click.option("--unit", "units", multiple=True, metavar="CHANNEL=UNIT", help="Unit of a channel. Repeatable.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result (or the campaign) as JSON.")
-@click.option("--plot", "plot_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
-              callback=writable_folder,
-              help="Write the figures (paper Figs. 6-13 equivalents, polar plot) into this folder.")
+@click.option("--plot", "plot_dir", type=click.Path(path_type=Path), default=None, callback=_figure_stem,
+              help="Write the figures (paper Figs. 6-13 equivalents, polar plot): --plot figs.png writes "
+              "figs_time.png, figs_spectrogram.png, ... (.png, .svg or .pdf); with several FILEs "
+              "figs_<recording>_time.png, ... (A folder still works, deprecated.)")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               callback=writable,
               help="Write the labelled result of one file as netCDF (.nc).")
@@ -116,7 +138,8 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float | N
     check_output_suffix(summary_path, (".csv",), "--summary")
     if out_path is not None and len(files) > 1:
         raise InputError("--out takes one FILE; use --summary for several.")
-    if plot_dir is not None and not plot_dir.is_dir():
+    folder = plot_dir is not None and plot_dir.suffix.lower() not in _FIGURE_SUFFIXES
+    if folder and not plot_dir.is_dir():
         plot_dir.mkdir(parents=True, exist_ok=True)
     scale_map = {k: validate_finite(f"--scale {k}", v) for k, v in _pairs("--scale", scales).items()}
     unit_map = _pairs("--unit", units)
@@ -146,7 +169,12 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float | N
             res = analyze_recording(src, **kwargs)
         results.append(res)
         if plot_dir is not None:
-            _write_plots(src, res, mic, displacement, plot_dir / f.stem)
+            if folder:
+                stem, suffix = plot_dir / f.stem, ".png"
+            else:
+                name = plot_dir.stem if len(files) == 1 else f"{plot_dir.stem}_{f.stem}"
+                stem, suffix = plot_dir.with_name(name), plot_dir.suffix.lower()
+            _write_plots(src, res, mic, displacement, stem, suffix)
     if out_path is not None:
         save_dataset(results[0].to_dataset(), out_path)
     campaign = summarize_campaign(results, [str(f) for f in files]) if len(files) > 1 or summary_path else None
@@ -223,7 +251,8 @@ def _print_text(f: Path, r) -> None:
                    f"max tan(theta) {ro['max_tan_theta']:.2e}")
 
 
-def _write_plots(src, res, mic: str, displacement: str, stem: Path, max_seconds: float = 10.0) -> None:
+def _write_plots(src, res, mic: str, displacement: str, stem: Path, suffix: str = ".png",
+                 max_seconds: float = 10.0) -> None:
     """Figures from the first ``max_seconds`` of the recording plus the whole-recording results."""
     import numpy as np
 
@@ -247,4 +276,4 @@ def _write_plots(src, res, mic: str, displacement: str, stem: Path, max_seconds:
     figs = mp.measurement_figures(rec, res, mic=names[0], displacement=names[1])
     figs["event_phase"] = mp.event_phase_plot(res)  # every event's place on the disc
     for key, fig in figs.items():
-        save_figure(fig, stem.parent / f"{stem.name}_{key}.png")
+        save_figure(fig, stem.parent / f"{stem.name}_{key}{suffix}")

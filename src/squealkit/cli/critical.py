@@ -8,6 +8,7 @@ import click
 
 from ._options import (
     build_model_from_options,
+    check_output_suffix,
     emit_json,
     fe_kwargs_from_options,
     fe_options,
@@ -15,7 +16,19 @@ from ._options import (
     friction_json,
     friction_options,
     model_options,
+    output_options,
 )
+
+
+def no_onset_text(status: str, mu_max: float) -> str:
+    """What a missing mu_crit means, in words (the table's NaN cells)."""
+    if status == "stable_in_range":
+        return f"stable for every mu up to {mu_max:g} (no onset)"
+    if status == "unstable_at_start":
+        return f"unstable already at mu = 0, and at every mu down to -{mu_max:g}"
+    if status == "indeterminate":
+        return "undecided within rounding (see indeterminate_intervals in --json)"
+    return ""
 
 
 @click.command()
@@ -29,10 +42,10 @@ from ._options import (
               help="Also report d mu_crit / d p and the elasticity for every model parameter "
               "(exact, from the eigenvectors at onset).")
 @fe_options()
-@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON on stdout.")
+@output_options()
 @click.pass_context
 def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed, mu_max, sensitivity,
-             rpm_spec, band_spec, method, n_modes, as_json) -> None:
+             rpm_spec, band_spec, method, n_modes, as_json, out_path, plot_path) -> None:
     """Critical friction: where the brake first loses stability (paper §3, eq. 6).
 
     Finds every friction window in [0, --mu-max] where the brake is unstable (a
@@ -51,6 +64,14 @@ def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed
       squealkit critical --theta 0 --sensitivity
       squealkit critical --preset hoffmann2002
       squealkit critical --damped --stribeck 0.6,0.01 --speed 0.02
+      squealkit critical --theta -8:8:17 --out crit.nc --plot crit.png
+
+    \b
+    --out writes the curve (critical_friction_curve: mu_critical, mu_e_critical,
+    frequency_hz, status and the unstable windows over theta) as netCDF or zarr;
+    --plot draws mu_crit(theta) with every unstable friction window. Where no
+    onset is found the table says why instead of printing NaN (stable for every
+    mu searched, unstable already without friction, or undecided).
 
     \b
     With --stribeck MU_STATIC,V_STRIBECK friction depends on the sliding speed
@@ -79,6 +100,8 @@ def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed
     from .._validation import InputError, parse_range
     from ..stability import critical_friction, critical_friction_curve, critical_friction_sensitivity
 
+    check_output_suffix(out_path, (".nc", ".zarr"), "--out")
+    check_output_suffix(plot_path, (".png", ".svg", ".pdf"), "--plot")
     model = build_model_from_options(preset, config, sets, allow_fe=True)
     fe = fe_kwargs_from_options(model, rpm_spec, band_spec, method, n_modes)
     theta_deg = parse_range("--theta", theta_spec)
@@ -88,10 +111,21 @@ def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed
         if stribeck_spec is not None or sensitivity or damped or theta_deg.size != 1:
             raise InputError("For FE models critical takes one --theta, and no --stribeck, --sensitivity or --damped "
                              "(damping is always included).")
+        if out_path is not None or plot_path is not None:
+            raise InputError("--out and --plot are for the small models; for FE models use 'squealkit stability "
+                             "--config ... --out/--plot'.")
         return _critical_fe(model, fe, float(theta_deg[0]), mu_max, as_json)
     fr = friction_from_options(ctx, stribeck_spec, speed)
+    thetas = [math.radians(float(t)) for t in theta_deg]
     if theta_deg.size == 1:
-        res = critical_friction(model, math.radians(float(theta_deg[0])), damped=damped, mu_max=mu_max, **fr)
+        res = critical_friction(model, thetas[0], damped=damped, mu_max=mu_max, **fr)
+        if out_path is not None or plot_path is not None:
+            import warnings
+
+            with warnings.catch_warnings():  # the same search again, for the file: its warnings were shown
+                warnings.simplefilter("ignore")
+                _write(critical_friction_curve(model, thetas, damped=damped, mu_max=mu_max, **fr), out_path,
+                       plot_path)
         out = {**res.to_dict(), **friction_json(fr)}
         out.pop("theta")
         if sensitivity:
@@ -102,9 +136,13 @@ def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed
         click.echo(f"theta = {res.theta_deg:g} deg ({'damped' if damped else 'undamped'}): {res.status}")
         if fr:
             click.echo(f"  friction: {fr['friction'].describe()} at sliding speed {fr['speed']:g} m/s")
-        click.echo(f"  mu_crit   = {res.mu_critical:.8f}")
-        click.echo(f"  mu_e_crit = {res.mu_e_critical:.8f}   ({'mu(speed)' if fr else 'mu_crit'} + tan theta)")
-        click.echo(f"  frequency = {res.omega_rad_s:.2f} rad/s = {res.frequency_hz:.2f} Hz at onset")
+        if math.isfinite(res.mu_critical):
+            click.echo(f"  mu_crit   = {res.mu_critical:.8f}")
+            click.echo(f"  mu_e_crit = {res.mu_e_critical:.8f}   ({'mu(speed)' if fr else 'mu_crit'} + tan theta)")
+        else:
+            click.echo(f"  mu_crit: none, {no_onset_text(res.status, mu_max)}")
+        if math.isfinite(res.frequency_hz):
+            click.echo(f"  frequency = {res.omega_rad_s:.2f} rad/s = {res.frequency_hz:.2f} Hz at onset")
         windows = ", ".join(f"[{a:.6f}, {b:.6f}]" for a, b in res.unstable_intervals) or "none"
         click.echo(f"  unstable for mu in {windows}   (searched 0 to {mu_max:g})")
         if res.indeterminate_intervals:
@@ -115,10 +153,12 @@ def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed
             for row in out["sensitivity"]:
                 click.echo(f"    {row['parameter']:<8} {row['elasticity']:+9.4f}   d mu/dp = {row['dmu_dp']:+.4g} "
                            f"per {row['unit']}")
+        _echo_written(out_path, plot_path)
         return
     if sensitivity:
         raise InputError("--sensitivity needs a single --theta value.")
-    ds = critical_friction_curve(model, [math.radians(t) for t in theta_deg], damped=damped, mu_max=mu_max, **fr)
+    ds = critical_friction_curve(model, thetas, damped=damped, mu_max=mu_max, **fr)
+    _write(ds, out_path, plot_path)
     from ..stability import ONSET_STATUS
 
     def pairs(a):
@@ -141,10 +181,37 @@ def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed
         emit_json(out)
         return
     click.echo(f"{'theta [deg]':>12} {'mu_crit':>12} {'mu_e_crit':>12} {'f [Hz]':>10}  unstable windows")
-    for t, m, me, f, w in zip(out["theta_deg"], out["mu_critical"], out["mu_e_critical"], out["frequency_hz"],
-                              out["unstable_intervals"], strict=True):
-        windows = " ".join(f"[{a:.4f}, {b:.4f}]" for a, b in w) or "-"
-        click.echo(f"{t:12.4g} {m:12.6f} {me:12.6f} {f:10.2f}  {windows}")
+    for t, m, me, f, w, st in zip(out["theta_deg"], out["mu_critical"], out["mu_e_critical"], out["frequency_hz"],
+                                  out["unstable_intervals"], out["status"], strict=True):
+        windows = " ".join(f"[{a:.4f}, {b:.4f}]" for a, b in w) or "none"
+        if not math.isfinite(m):
+            windows += f": {no_onset_text(st, mu_max)}"
+        click.echo(f"{t:12.4g} {_num(m, 12, 6)} {_num(me, 12, 6)} {_num(f, 10, 2)}  {windows}")
+    _echo_written(out_path, plot_path)
+
+
+def _num(x: float, width: int, decimals: int) -> str:
+    """A table cell: the number, or '-' where there is none (the row's words say why)."""
+    return f"{x:{width}.{decimals}f}" if math.isfinite(x) else f"{'-':>{width}}"
+
+
+def _write(ds, out_path, plot_path) -> None:
+    """--out and --plot of the critical-friction curve, each written whole or not at all."""
+    if out_path is not None:
+        from ..io import save_dataset
+
+        save_dataset(ds, out_path)
+    if plot_path is not None:
+        from ..io import save_figure
+        from ..plotting.stability import critical_plot
+
+        save_figure(critical_plot(ds), plot_path)
+
+
+def _echo_written(out_path, plot_path) -> None:
+    for label, path in (("dataset", out_path), ("figure", plot_path)):
+        if path is not None:
+            click.echo(f"wrote {label}: {path}")
 
 
 def _critical_fe(model, fe, theta_deg: float, mu_max: float, as_json: bool) -> None:
@@ -166,4 +233,5 @@ def _critical_fe(model, fe, theta_deg: float, mu_max: float, as_json: bool) -> N
     click.echo(f"{'rpm':>10} {'mu_crit':>12} {'mu_e_crit':>12} {'f [Hz]':>12}  status")
     for r, m, me, f, st in zip(out["rpm"], out["mu_critical"], out["mu_e_critical"], out["frequency_hz"],
                                out["status"], strict=True):
-        click.echo(f"{r:10.4g} {m:12.6f} {me:12.6f} {f:12.6g}  {st}")
+        words = f": {no_onset_text(st, mu_max)}" if not math.isfinite(m) and no_onset_text(st, mu_max) else ""
+        click.echo(f"{r:10.4g} {_num(m, 12, 6)} {_num(me, 12, 6)} {_num(f, 12, 2)}  {st}{words}")

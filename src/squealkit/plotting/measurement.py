@@ -97,13 +97,16 @@ def spectrogram_plot(rec: xr.Dataset, result: Any = None, *, mic: str = "mic", d
     for ax, name, ref, unit in ((axes[0], mic, P_REF, "dB re 20 uPa"), (axes[1], displacement, 1e-12, "dB re 1 pm")):
         sg = spectrogram(rec[name].values, fs, nperseg=nperseg, name=name).sel(freq=slice(0, freq_max))
         db = 10 * np.log10(np.maximum(sg.values.T, 1e-30) / ref**2)
-        m = ax.pcolormesh(sg["time"], sg["freq"], db, shading="auto", vmin=np.percentile(db, 5))
+        # rasterized: a vector mesh of every time-frequency cell made a 15-30 MB SVG
+        m = ax.pcolormesh(sg["time"], sg["freq"], db, shading="auto", vmin=np.percentile(db, 5), rasterized=True)
         fig.colorbar(m, ax=ax, label=unit)
         ax.set_ylabel(f"{name}\nfrequency [Hz]")
     if result is not None and result.squeal:
         fr = result.frames
         loud = fr["level_dba"] >= result.settings.threshold_dba
         axes[0].plot(fr["time"][loud], fr["ridge_freq"][loud], ".", ms=1.5, color="w", label="ridge")
+    t = rec["time"].values
+    axes[1].set_xlim(float(t[0]), float(t[-1]))  # the recording, not the ridge's frames beyond it (a blank strip)
     axes[1].set_xlabel("time [s]")
     axes[0].set_title("Spectrograms" + _tag(rec))
     return fig

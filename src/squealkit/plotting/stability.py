@@ -11,7 +11,15 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-__all__ = ["coupled_modes", "fig2_plot", "kinematics_plot", "root_locus_plot", "stability_map_plot"]
+__all__ = [
+    "coupled_modes",
+    "critical_plot",
+    "fig2_plot",
+    "kinematics_plot",
+    "root_locus_plot",
+    "stability_map_plot",
+    "tolerance_plot",
+]
 
 
 def _figure(**kwargs: Any):
@@ -83,9 +91,14 @@ def fig2_plot(ds: xr.Dataset, *, modes: list[int] | None = None, fig=None):
         ax = fig.add_subplot(1, 2, panel + 1, projection="3d")
         for n, k in enumerate(modes):
             Z = ds[var].isel(mode=k).values
+            # unshaded: the surface shows the legend's colour
             ax.plot_surface(MU, TH, Z, color=colors[n % len(colors)], alpha=0.75, linewidth=0, rasterized=True,
-                            rstride=max(1, MU.shape[0] // 40), cstride=max(1, MU.shape[1] // 40))
+                            rstride=max(1, MU.shape[0] // 40), cstride=max(1, MU.shape[1] // 40), shade=False)
             ax.plot([], [], color=colors[n % len(colors)], label=f"mode {k}")
+        from matplotlib.ticker import MaxNLocator
+
+        ax.xaxis.set_major_locator(MaxNLocator(4))  # 9 mu labels ran together
+        ax.yaxis.set_major_locator(MaxNLocator(5))
         ax.set_xlabel("friction coefficient mu")
         ax.set_ylabel("incline theta [deg]")
         ax.set_zlabel("sigma [1/s]" if var == "growth_rate" else "omega [rad/s]")
@@ -115,7 +128,11 @@ def stability_map_plot(ds: xr.Dataset, *, critical: xr.Dataset | None = None, ax
     """
     fig, ax = _axes(ax, (7, 5))
     sig = ds["max_growth_rate"].values
-    vmax = float(np.nanmax(np.abs(sig))) or 1.0
+    # growth rates below rounding of the frequencies (1e-9 of the largest) are zero: a stable rig's
+    # +-1e-26 must not fill the map with full red and blue
+    floor = 1e-9 * float(np.nanmax(np.abs(ds["omega"].values))) if "omega" in ds else 1e-12
+    sig = np.where(np.abs(sig) <= floor, 0.0, sig)
+    vmax = max(float(np.nanmax(np.abs(sig))), floor) or 1.0
     mesh = ax.pcolormesh(ds.mu.values, ds.theta_deg.values, sig.T, cmap="RdBu_r", vmin=-vmax, vmax=vmax,
                          shading="auto", rasterized=True)
     fig.colorbar(mesh, ax=ax, label="largest growth rate sigma [1/s]")
@@ -128,11 +145,12 @@ def stability_map_plot(ds: xr.Dataset, *, critical: xr.Dataset | None = None, ax
         ax.legend(loc="lower left", fontsize=8)
     ax.set_xlabel("friction coefficient mu")
     ax.set_ylabel("run-out incline theta [deg]")
-    ax.set_title("Stability map: unstable where sigma > 0 (red)")
+    ax.set_title("Stability map: unstable where sigma > 0 (red)" if bool(ds["any_unstable"].any()) else
+                 "Stability map: stable at every point (rounding-size sigma shown as 0)")
     return fig
 
 
-def root_locus_plot(ds: xr.Dataset, *, theta_index: int | None = None, ax=None):
+def root_locus_plot(ds: xr.Dataset, *, theta_index: int | None = None, modes: list[int] | None = None, ax=None):
     """Eigenvalues in the complex plane as mu_e = mu + tan(theta) grows (one theta column).
 
     Parameters
@@ -141,6 +159,9 @@ def root_locus_plot(ds: xr.Dataset, *, theta_index: int | None = None, ax=None):
         A stability map.
     theta_index : int, optional
         Which theta column to follow; default the one nearest theta = 0.
+    modes : list of int, optional
+        Modes to draw; default the coupled ones (:func:`coupled_modes`), so a far mode does not
+        shrink the coalescence to a few pixels.
     ax : matplotlib Axes, optional
 
     Returns
@@ -152,7 +173,7 @@ def root_locus_plot(ds: xr.Dataset, *, theta_index: int | None = None, ax=None):
     col = ds.isel(theta=j)
     mu_e = col["mu_e"].values
     sc = None
-    for k in range(ds.sizes["mode"]):
+    for k in coupled_modes(ds) if modes is None else modes:
         sc = ax.scatter(col["growth_rate"].isel(mode=k), col["frequency"].isel(mode=k), c=mu_e, s=8,
                         cmap="viridis", rasterized=True)
     if sc is not None:
@@ -197,4 +218,97 @@ def kinematics_plot(ds: xr.Dataset, *, ax=None):
     ax.set_title("Onset of squeal: the paper's contact kinematics and the consistent ones")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
+    return fig
+
+
+def critical_plot(ds: xr.Dataset, *, ax=None):
+    """Critical friction over the run-out incline with every unstable friction window.
+
+    Each incline's unstable windows along mu are drawn as red bars, mu_crit(theta) and
+    mu_crit + tan(theta) (eq. 6) as lines; an incline without onset in the searched range is
+    marked at the top of the range ("stable up to mu_max").
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A critical-friction curve (:func:`squealkit.stability.critical_friction_curve`), one
+        incline or many.
+    ax : matplotlib Axes, optional
+        Axes to draw into; a new figure otherwise.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = _axes(ax, (7, 4.5))
+    th = ds.theta_deg.values
+    mu_max = float(ds.attrs.get("mu_max", 2.0))
+    width = 0.6 * (float(np.min(np.diff(th))) if th.size > 1 else 1.0)
+    for i, t in enumerate(th):
+        for k, (lo, hi) in enumerate(ds.unstable_intervals.values[i]):
+            if np.isfinite(lo):
+                ax.bar(t, hi - lo, bottom=lo, width=width, color="tab:red", alpha=0.3, lw=0,
+                       label="unstable friction window" if i == 0 and k == 0 else None)
+    mu_c = ds.mu_critical.values
+    style = "o-" if th.size > 1 else "o"
+    ax.plot(th, mu_c, style, color="k", ms=4, label="mu_crit")
+    ax.plot(th, ds.mu_e_critical.values, style.replace("-", "--"), color="C0", ms=3, lw=1,
+            label="mu_crit + tan(theta) (eq. 6)")
+    none = ~np.isfinite(mu_c)
+    if none.any():
+        ax.plot(th[none], np.full(none.sum(), mu_max), "^", color="C2", ls="none",
+                label=f"no onset: stable up to mu = {mu_max:g}")
+    ax.set_ylim(min(0.0, float(np.nanmin(np.append(mu_c, 0.0)))), 1.05 * mu_max)
+    if th.size == 1:
+        ax.set_xlim(th[0] - 1.0, th[0] + 1.0)
+        if np.isfinite(mu_c[0]):
+            ax.annotate(f"mu_crit = {mu_c[0]:.4f}", (th[0], mu_c[0]), xytext=(12, -14), textcoords="offset points")
+    ax.set_xlabel("run-out incline theta [deg]")
+    ax.set_ylabel("friction coefficient mu")
+    damped = "damped" if ds.attrs.get("damped") else "undamped"
+    ax.set_title(f"Critical friction and unstable windows ({damped}, mu searched 0 to {mu_max:g})")
+    ax.legend(fontsize=8, loc="best")
+    ax.grid(alpha=0.3)
+    return fig
+
+
+def tolerance_plot(ds: xr.Dataset, *, ax=None):
+    """Run-out tolerance against friction: the largest stable slope and, with a wavelength, amplitude.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Over ``mu``: ``tan_theta_max`` (inf where every slope searched is stable),
+        ``limiting_side`` and optionally ``q0_max`` [m] (as written by ``squealkit tolerance
+        --out``).
+    ax : matplotlib Axes, optional
+        Axes to draw into; a new figure otherwise.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = _axes(ax, (7, 4.5))
+    mu = ds.mu.values
+    s = ds.tan_theta_max.values
+    finite = np.isfinite(s)
+    ax.plot(mu[finite], s[finite], "o-", color="k", ms=4, label="largest stable slope tan(theta)")
+    top = float(np.nanmax(s[finite])) if finite.any() else 1.0
+    if (~finite).any():
+        ax.plot(mu[~finite], np.full((~finite).sum(), 1.05 * top), "^", color="C2", ls="none",
+                label=f"stable at every slope searched (up to {ds.attrs.get('slope_max_deg', 80):g} deg)")
+    flat = ds.limiting_side.values == "flat"
+    if flat.any():
+        ax.plot(mu[flat], s[flat], "x", color="tab:red", ms=8, ls="none", label="unstable on a flat disc")
+    ax.set_xlabel("friction coefficient mu")
+    ax.set_ylabel("tan(theta) max")
+    ax.grid(alpha=0.3)
+    if "q0_max" in ds and np.isfinite(ds.q0_max.values).any():
+        lam = float(ds.attrs["wavelength"])
+        sec = ax.secondary_yaxis("right", functions=(lambda t: t * lam / (2 * np.pi) * 1e6,
+                                                      lambda q: q * 2 * np.pi / lam / 1e6))
+        sec.set_ylabel(f"q0 max [um] at lambda = {lam * 1e3:g} mm (eq. 11)")
+    damped = "damped" if ds.attrs.get("damped") else "undamped"
+    ax.set_title(f"Run-out tolerance ({damped})")
+    ax.legend(fontsize=8, loc="center right")
     return fig

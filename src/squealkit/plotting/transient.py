@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
+import numpy as np
 import xarray as xr
 
 from .._deprecation import renamed_kwargs
@@ -92,6 +93,12 @@ def fig4_plot(ds: xr.Dataset, ax: Any = None, *, smooth: xr.Dataset | None = Non
         if smooth is not None and name in smooth:
             a.plot(smooth.time.values, smooth[name].values, lw=0.5, color="0.6", label="smooth disc")
         a.plot(t, ds[name].values, lw=0.6, color="C0", label="with SRO")
+        # the scale follows the response after the start-up (first 5 %), not a start-up spike
+        x = np.asarray(ds[name].values)[t >= t[0] + 0.05 * (t[-1] - t[0])]
+        peak = float(np.nanmax(np.abs(x))) if x.size else 0.0
+        if peak > 0 and float(np.nanmax(np.abs(ds[name].values))) > 1.5 * peak:
+            a.set_ylim(-1.3 * peak, 1.3 * peak)
+            a.text(0.01, 0.02, "start-up spike clipped", transform=a.transAxes, fontsize=7, color="0.4")
         a.set_ylabel(f"{name} [m/s²]")
         a.grid(True, alpha=0.3)
         tw = a.twinx()

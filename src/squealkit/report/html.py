@@ -43,7 +43,7 @@ def _fmt(value: object) -> str:
         if not math.isfinite(value):
             return "&mdash;"
         if value != 0 and (abs(value) >= 1e5 or abs(value) < 1e-3):
-            return f"{value:.4e}"
+            return f"{value:.4g}"  # 8.545e+06: the digits the paper gives, not 8.5450e+06
         return f"{value:.6g}"
     if isinstance(value, tuple):
         return " &ndash; ".join(_fmt(v) for v in value)
@@ -54,7 +54,12 @@ def _comparisons(items: Sequence[Comparison]) -> str:
     rows = []
     for c in items:
         verdict = "" if c.agrees is None else (' class="ok"' if c.agrees else ' class="off"')
-        mark = "" if c.agrees is None else ("agrees" if c.agrees else "differs")
+        if c.agrees is None:
+            mark = ""
+        elif c.published is None:  # nothing published to agree with: the check stated in the note holds or not
+            mark = "holds" if c.agrees else "does not hold"
+        else:
+            mark = "agrees" if c.agrees else "differs"
         rows.append(
             f"<tr><td>{html.escape(c.quantity)}</td><td>{_fmt(c.published)}</td><td>{_fmt(c.computed)}</td>"
             f"<td>{html.escape(c.unit)}</td><td>{c.difference()}</td><td{verdict}>{mark}</td>"
@@ -69,10 +74,17 @@ def _comparisons(items: Sequence[Comparison]) -> str:
 
 def _table(t: Table) -> str:
     head = "".join(f"<th>{html.escape(h)}</th>" for h in t.header)
-    def cell(v: object) -> str:
-        return f"<td class='txt'>{_fmt(v)}</td>" if isinstance(v, str) else f"<td>{_fmt(v)}</td>"
+    percent = [h.endswith("[%]") for h in t.header]
 
-    body = "".join("<tr>" + "".join(cell(v) for v in row) + "</tr>" for row in t.rows)
+    def cell(v: object, pct: bool) -> str:
+        if isinstance(v, str):
+            return f"<td class='txt'>{_fmt(v)}</td>"
+        if pct and isinstance(v, float) and math.isfinite(v):  # a difference in %: one decimal, signed
+            return f"<td>{v:+.1f}</td>"
+        return f"<td>{_fmt(v)}</td>"
+
+    body = "".join("<tr>" + "".join(cell(v, p) for v, p in zip(row, percent, strict=False)) + "</tr>"
+                   for row in t.rows)
     return f"<table><caption>{html.escape(t.caption)}</caption><tr>{head}</tr>{body}</table>"
 
 

@@ -18,25 +18,59 @@ from .steps_stability import _save_fig
 # rising SRO. The probe radius is not given; 50 mm is assumed.
 RPM, FS, RADIUS, F_PUBLISHED = 900.0, 40_000.0, 0.05, 2388.0
 
-_CAPTIONS = {
-    "time": "Figs. 6-7: sound pressure and disc surface displacement",
-    "spectrogram": "Figs. 8-9: spectrograms of both channels, with the squeal ridge",
-    "zoom": "Figs. 10-11: the 0.1-0.3 s zoom over three revolutions",
-    "runout": "Fig. 12: low-pass (1000 Hz) run-out, split into macro and micro run-out",
-    "band": "Fig. 13: 1000-2500 Hz band of the displacement against the sound pressure",
-    "level": "A-weighted squeal level with the detected events (SAE J2521 threshold)",
-    "polar": "Squeal level against disc angle with the run-out, over the revolutions",
-}
+def _captions(res, t_end: float) -> dict[str, str]:
+    """Captions of the §5 figures from what they show: the zoom's revolutions at the actual speed,
+    the band around the squeal found (or the paper's band without squeal), the filters used."""
+    from ..plotting.measurement import squeal_views
+
+    v = squeal_views(res, t_end)
+    (t0, t1), (lo, hi), s = v["zoom"], v["band"], res.settings
+    fr = res.frames
+    rpm = float(np.mean(fr["rpm"].values)) if "rpm" in fr else float(s.rpm)
+    revs = (t1 - t0) * rpm / 60.0
+    f_sq = res.squeal_frequency_hz
+    start = "from the squeal's onset" if f_sq is not None else "from the start (no squeal found)"
+    band = (f"the {lo:.0f}-{hi:.0f} Hz band around the squeal found at {f_sq:.0f} Hz" if f_sq is not None else
+            f"the paper's {lo:.0f}-{hi:.0f} Hz band (no squeal found)")
+    return {
+        "time": "Figs. 6-7: sound pressure and disc surface displacement",
+        "spectrogram": f"Figs. 8-9: spectrograms of both channels up to {v['freq_max'] / 1000:g} kHz"
+                       + (", with the squeal ridge" if f_sq is not None else ""),
+        "zoom": f"Figs. 10-11: zoom on {t0:.3g}-{t1:.3g} s, {revs:.3g} revolutions at {rpm:.4g} rpm {start}",
+        "runout": f"Fig. 12: low-pass ({s.lowpass_freq:g} Hz) run-out over the same {revs:.3g} revolutions, split "
+                  f"into macro (orders <= {s.macro_orders}) and micro run-out",
+        "band": f"Fig. 13: {band}, displacement against the sound pressure over the same revolutions",
+        "level": f"A-weighted squeal level with the detected events ({s.criteria.describe()})",
+        "polar": "Squeal level against disc angle with the run-out, over the revolutions",
+    }
 
 
-def _save_measurement_figures(figs: dict, figures: Path, prefix: str) -> tuple[FigureRef, ...]:
+def _save_measurement_figures(figs: dict, figures: Path, prefix: str, captions: dict[str, str]
+                              ) -> tuple[FigureRef, ...]:
     """Save the §5 figures (PNG and SVG) as ``sec5_NN_name`` and return their references."""
     refs = []
     for i, (name, fig) in enumerate(figs.items()):
         stem = f"sec5_{i:02d}_{name}"
         _save_fig(fig, figures, stem)
-        refs.append(FigureRef(stem, prefix + _CAPTIONS.get(name, name.replace("_", " "))))
+        refs.append(FigureRef(stem, prefix + captions.get(name, name.replace("_", " "))))
     return tuple(refs)
+
+
+def model_frequency(model: FrictionModel) -> tuple[float | None, str]:
+    """The frequency a model says a rig squeals at, and where it comes from.
+
+    The damped onset on a flat disc (the mode that loses stability first, eq. 4 with C); a
+    model that stays stable damped gives its undamped coalescence (lock-in) frequency
+    instead (eq. 7, Fig. 2); None when it never loses stability up to mu = 2.
+    """
+    onset = critical_friction(model, 0.0, damped=True)
+    if math.isfinite(onset.frequency_hz):
+        return onset.frequency_hz, f"the model's damped onset (mu_crit = {onset.mu_critical:.4f}, flat disc)"
+    onset = critical_friction(model, 0.0)
+    if math.isfinite(onset.frequency_hz):
+        return onset.frequency_hz, (f"the model's undamped coalescence (mu_crit = {onset.mu_critical:.4f}, flat "
+                                    "disc; damped it stays stable)")
+    return None, "the model never loses stability up to mu = 2 (flat disc)"
 
 
 def recording_step(recording: Path, figures: Path, data: Path, *, mic: str, displacement: str, rpm: float,
@@ -50,34 +84,44 @@ def recording_step(recording: Path, figures: Path, data: Path, *, mic: str, disp
     kwargs = {"fs": fs} if fs is not None else {}
     rec = read_recording(recording, channels=[mic, displacement], **kwargs)
     mic_name, disp_name = list(rec.data_vars)[:2]
-    refs = _save_measurement_figures(measurement_figures(rec, res, mic=mic_name, displacement=disp_name), figures, "")
+    captions = _captions(res, float(rec["time"].values[-1]))
+    refs = _save_measurement_figures(measurement_figures(rec, res, mic=mic_name, displacement=disp_name), figures, "",
+                                     captions)
     f_sq, rf = res.squeal_frequency_hz, res.rising_fraction
     comps = (
-        Comparison("squeal main frequency", F_PUBLISHED, f_sq, "Hz", None, "paper: its own rig; yours may differ"),
+        Comparison("squeal main frequency", F_PUBLISHED, f_sq, "Hz", None,
+                   "published: measured on the paper's rig, for reference (yours is another rig)"),
         Comparison("growth/slope correlation", None, res.growth_slope_correlation, "1", None,
                    "the squeal's growth rate against the run-out slope; positive: squeal grows on rising run-out"),
         Comparison("share of squeal energy on rising run-out", None, rf, "1", None,
                    "above 0.5: squeal favours rising run-out, as the paper finds"),
     )
-    if model is not None:
-        onset = critical_friction(model, 0.0, damped=True)
-        f_model = onset.frequency_hz if math.isfinite(onset.frequency_hz) else None
-        comps += (Comparison("squeal frequency: model onset (published column) against measured", f_model, f_sq, "Hz",
-                             None if f_model is None or f_sq is None else abs(f_sq / f_model - 1) < 0.05,
-                             "the model's frequency where it first loses stability (theta = 0); within 5 % agrees"),)
-    paragraphs = (
+    paragraphs = [
         f"Your recording {recording.name}: microphone channel {mic!r}, displacement channel {displacement!r}, "
         f"{rpm:g} rpm, probe radius {radius * 1e3:g} mm. Criteria: {res.settings.criteria.describe()}.",
-    )
-    table = Table(
+    ]
+    tables = []
+    numbers = {"squeal_frequency_hz": f_sq if f_sq is not None else math.nan,
+               "rising_fraction": rf if rf is not None else math.nan, "events": float(len(res.events))}
+    if model is not None:
+        f_model, source = model_frequency(model)
+        diff = 100.0 * (f_sq / f_model - 1) if f_sq is not None and f_model is not None else None
+        tables.append(Table(
+            "Model against measurement", ("quantity", "model [Hz]", "measured [Hz]", "difference [%]", "model source"),
+            (("squeal frequency", f_model, f_sq, diff, source),),
+        ))
+        numbers.update(model_frequency_hz=f_model if f_model is not None else math.nan,
+                       model_difference_percent=diff if diff is not None else math.nan)
+        if diff is not None:
+            paragraphs.append(f"The model puts squeal at {f_model:.0f} Hz ({source}); the recording squeals at "
+                              f"{f_sq:.0f} Hz, {abs(diff):.1f} % {'above' if diff > 0 else 'below'} it.")
+    tables.append(Table(
         "Detected squeal events (first 12)", ("start [s]", "end [s]", "frequency [Hz]", "peak [dB(A)]"),
         tuple((e.start_s, e.end_s, e.frequency_hz, e.peak_dba) for e in res.events[:12]),
-    )
+    ))
     return Section(
-        "measurement", f"§5: analysis of {recording.name} (Figs. 6-13)", paragraphs, comps, (table,), refs,
-        ("recording_analysis.nc",),
-        numbers={"squeal_frequency_hz": f_sq if f_sq is not None else math.nan,
-                 "rising_fraction": rf if rf is not None else math.nan, "events": float(len(res.events))},
+        "measurement", f"§5: analysis of {recording.name} (Figs. 6-13)", tuple(paragraphs), comps, tuple(tables), refs,
+        ("recording_analysis.nc",), numbers=numbers,
     )
 
 
@@ -93,7 +137,8 @@ def measurement_step(model: FrictionModel, figures: Path, data: Path, *, quick: 
     res = analyze_recording(rec, mic="mic", displacement="displacement", rpm=RPM, radius=RADIUS)
     save_dataset(rec, data / "synthetic_recording.nc")
     save_dataset(res.to_dataset(), data / "synthetic_recording_analysis.nc")
-    refs = _save_measurement_figures(measurement_figures(rec, res), figures, "[SYNTHETIC] ")
+    refs = _save_measurement_figures(measurement_figures(rec, res), figures, "[SYNTHETIC] ",
+                                     _captions(res, float(rec["time"].values[-1])))
     f_sq = res.squeal_frequency_hz
     rf = res.rising_fraction
     truth_rf = float(rec.attrs["truth_rising_fraction"])
