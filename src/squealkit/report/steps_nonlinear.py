@@ -89,7 +89,7 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
         warnings.simplefilter("ignore", TensileContactWarning)
         run = simulate(model, mu=MU_FIG4, profile=SineRunOut(Q0, WAVELENGTH), speed=SPEED,
                        duration=0.05 if quick else 0.15, contact=Contact.nonlinear())
-    env = response_envelope(run, DOF, freq_lower=1000.0)
+    env = response_envelope(run, DOF, highpass_freq=1000.0)
     # the limit-cycle amplitude at each instant's slope (0 where the quiet state is stable)
     inst = run["tan_theta"].values
     if slope is not None:
