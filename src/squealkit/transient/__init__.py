@@ -10,15 +10,18 @@
 from .contact import Contact
 from .profiles import DiscRunOut, RandomRoughness, SampledProfile, SineRunOut, Smooth, SurfaceProfile
 from .simulate import (
+    AliasingWarning,
     TensileContactWarning,
     response_envelope,
     simulate,
     simulate_batch,
+    simulate_blocks,
     step_bound,
     transient_summary,
 )
 
 __all__ = [
+    "AliasingWarning",
     "Contact",
     "DiscRunOut",
     "RandomRoughness",
@@ -30,6 +33,7 @@ __all__ = [
     "response_envelope",
     "simulate",
     "simulate_batch",
+    "simulate_blocks",
     "step_bound",
     "transient_summary",
 ]
