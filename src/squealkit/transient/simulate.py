@@ -797,7 +797,7 @@ def _stream(run: _Run, setup: dict[str, Any], progress: Progress | None, block: 
 
     def take(k: int) -> xr.Dataset:
         nonlocal pending, n_pending
-        whole = pending[0] if len(pending) == 1 else xr.concat(pending, "time", combine_attrs="drop")
+        whole = pending[0] if len(pending) == 1 else xr.concat(pending, "time", combine_attrs="override")
         out, rest = whole.isel(time=slice(0, k)), whole.isel(time=slice(k, None))
         pending, n_pending = ([rest] if rest.sizes["time"] else []), n_pending - k
         return out
