@@ -242,3 +242,22 @@ def test_endless_model_file_is_read_bounded(run):
     r = run("critical", "--config", "/dev/zero")
     assert r.exit_code == 2 and "larger than 16 MiB" in _one_line(r)
     assert time.monotonic() - t0 < 20
+
+
+def test_sigterm_during_a_streamed_simulation_leaves_no_partial_file(tmp_path):
+    # simulate --out streams block by block into the staged file: killed half way, nothing is left
+    p = subprocess.Popen([*SQUEALKIT, "simulate", "--duration", "30", "--out", "long.nc"],
+                         stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    deadline = time.monotonic() + 300  # a loaded machine starts slowly
+    while not any(n.startswith(".long.nc") and os.path.getsize(tmp_path / n) > 0 for n in os.listdir(tmp_path)):
+        if p.poll() is not None:
+            pytest.fail(f"finished before the signal: {p.stderr.read()}")
+        if time.monotonic() > deadline:
+            p.kill()
+            pytest.fail("the staged file never appeared")
+        time.sleep(0.05)
+    p.send_signal(signal.SIGTERM)
+    err = p.communicate(timeout=60)[1]
+    assert p.returncode == 143, err
+    assert "Traceback" not in err
+    assert os.listdir(tmp_path) == []
