@@ -246,8 +246,9 @@ def test_endless_model_file_is_read_bounded(run):
 
 def test_sigterm_during_a_streamed_simulation_leaves_no_partial_file(tmp_path):
     # simulate --out streams block by block into the staged file: killed half way, nothing is left
-    p = subprocess.Popen([*SQUEALKIT, "simulate", "--duration", "30", "--out", "long.nc"],
-                         stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    # --json: no progress bar filling the unread stderr pipe
+    p = subprocess.Popen([*SQUEALKIT, "simulate", "--duration", "30", "--out", "long.nc", "--json"],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
     deadline = time.monotonic() + 300  # a loaded machine starts slowly
     while not any(n.startswith(".long.nc") and os.path.getsize(tmp_path / n) > 0 for n in os.listdir(tmp_path)):
         if p.poll() is not None:
