@@ -80,3 +80,28 @@ def test_bad_input_exit_2_one_line(args, needle):
     assert r.exit_code == 2
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and needle in lines[0], r.stderr
+
+
+def test_output_rate_below_the_fastest_mode_is_one_warning_line(tmp_path):
+    # issue #15: --fs 1000 sampled the 2.4 kHz squeal aliased without a word
+    r = _run(["--duration", "0.002", "--fs", "1000", "--json"])
+    assert r.exit_code == 0, r.stderr
+    lines = [x for x in r.stderr.splitlines() if "sampled, not filtered" in x]
+    assert len(lines) == 1 and lines[0].startswith("squealkit: warning: fs=1000 Hz")
+
+
+def test_streamed_out_gives_the_in_memory_summary(tmp_path):
+    # --out streams the run into the file; the summary read back from it is the in-memory one
+    a = _run(["--duration", "0.01", "--json", "--out", str(tmp_path / "r.nc")])
+    b = _run(["--duration", "0.01", "--json"])
+    assert a.exit_code == 0 and b.exit_code == 0, a.stderr + b.stderr
+    assert json.loads(a.stdout) == json.loads(b.stdout)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.nc"]
+
+
+def test_synth_squeal_above_half_the_sample_rate_is_one_line(tmp_path):
+    from squealkit.cli.main import cli
+
+    r = CliRunner().invoke(cli, ["synth", str(tmp_path / "r.nc"), "--fs", "1000", "--duration", "0.1"])
+    assert r.exit_code == 2 and "fs/2 = 500 Hz" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []

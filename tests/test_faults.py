@@ -282,3 +282,46 @@ def test_bad_recording_is_one_line_exit_2(run, tmp_path, make):
     r = run("analyze", str(f), *mic, "--rpm", "900", "--radius", "0.05")
     line = _one_line(r)
     assert r.exit_code == 2 and says in line and str(f) in line, line
+
+
+def test_sigterm_during_a_streamed_simulation_leaves_no_partial_file(tmp_path):
+    # simulate --out streams block by block into the staged file: killed half way, nothing is left
+    # --json: no progress bar filling the unread stderr pipe
+    p = subprocess.Popen([*SQUEALKIT, "simulate", "--duration", "30", "--out", "long.nc", "--json"],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    deadline = time.monotonic() + 300  # a loaded machine starts slowly
+    while not any(n.startswith(".long.nc") and os.path.getsize(tmp_path / n) > 0 for n in os.listdir(tmp_path)):
+        if p.poll() is not None:
+            pytest.fail(f"finished before the signal: {p.stderr.read()}")
+        if time.monotonic() > deadline:
+            p.kill()
+            pytest.fail("the staged file never appeared")
+        time.sleep(0.05)
+    p.send_signal(signal.SIGTERM)
+    err = p.communicate(timeout=60)[1]
+    assert p.returncode == 143, err
+    assert "Traceback" not in err
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("suffix", [".nc", ".csv", ".wav", ".tdms", ".mf4"])
+def test_recording_written_block_by_block_reads_back_whole(tmp_path, suffix):
+    # issue #15: synth streams long recordings; blocks of 1000 samples read back as the one-shot dataset
+    from squealkit.measurement.synthetic import synthetic_attrs, synthetic_source
+    from squealkit.measurement.writers import write_recording_blocks
+
+    src = synthetic_source(duration=0.1, seed=3)
+    whole = src.block(0, src.n_samples)
+    write_recording_blocks(src.iter_blocks(src.channels, block=1000), tmp_path / f"r{suffix}", fs=src.fs,
+                           n_samples=src.n_samples, units=src.units, attrs=synthetic_attrs(src))
+    from squealkit.measurement import read_recording
+
+    back = read_recording(tmp_path / f"r{suffix}")
+    assert back.sizes["time"] == src.n_samples
+    for i, name in enumerate(src.channels):
+        got = back[next(v for v in back.data_vars if str(v).endswith(name) or str(v) == f"ch{i}")].values
+        # noise is seeded per block (1000 here, not one block of 4000): the noise-free tacho is exact
+        if name == "tacho":
+            np.testing.assert_array_equal(got, whole[name])
+        assert got.shape == whole[name].shape and np.all(np.isfinite(got))
+    assert os.listdir(tmp_path) == [f"r{suffix}"]

@@ -16,7 +16,7 @@ import os
 import shutil
 import tempfile
 import threading
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -25,8 +25,8 @@ import xarray as xr
 from . import _accessor  # noqa: F401  (registers ds.squeal.plot(), also on loaded results)
 from ._validation import InputError
 
-__all__ = ["atomic_path", "check_output", "load_dataset", "output_folder", "save_dataset", "save_figure",
-           "write_text"]
+__all__ = ["atomic_path", "check_output", "load_dataset", "output_folder", "save_blocks", "save_dataset",
+           "save_figure", "write_text"]
 
 _DATASET_SUFFIXES = {".nc": "h5netcdf", ".zarr": "zarr"}
 #: Written into every folder squealkit fills: the files it wrote there.
@@ -321,6 +321,81 @@ def save_dataset(ds: xr.Dataset, path: str | Path) -> Path:
         else:
             ds.to_netcdf(tmp, engine="h5netcdf")
     return final
+
+
+def save_blocks(blocks: Iterable[xr.Dataset], path: str | Path, *, dim: str = "time") -> Path:
+    """Write datasets that follow one another along ``dim`` to one file, a block at a time, atomically.
+
+    The memory needed is that of one block, whatever the length: netCDF (``.nc``, h5netcdf)
+    grows an unlimited ``dim``, zarr (``.zarr``) appends along it. Variables without ``dim``
+    (a run's events) and the attributes are taken from the last block, which is how
+    :func:`squealkit.transient.simulate_blocks` delivers them. The file is staged and moved
+    into place only when the last block is written (:func:`atomic_path`); an error or an
+    interrupt (SIGINT, SIGTERM) on the way leaves nothing behind.
+
+    Parameters
+    ----------
+    blocks : iterable of xarray.Dataset
+        Consecutive pieces of one dataset along ``dim``, all with the same variables on ``dim``.
+    path : path-like
+        The output file (``.nc``) or store (``.zarr``).
+    dim : str
+        The dimension the blocks follow one another along.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path`` as a ``Path``.
+    """
+    final = Path(path)
+    engine = _engine_for(final)
+    with atomic_path(final, directory=engine == "zarr") as tmp:
+        last: xr.Dataset | None = None
+        n = 0
+        for block in blocks:
+            along = block[[v for v in block.data_vars if dim in block[v].dims]]
+            along = along.drop_vars([c for c in along.coords if dim not in along[c].dims])
+            along.attrs = {}
+            with deferred_interrupts():
+                n = _append_block(along, tmp, engine, dim, n)
+            last = block
+        if last is None:
+            raise InputError(f"Nothing to write to {str(final)!r}: no blocks.")
+        rest = last[[v for v in last.data_vars if dim not in last[v].dims]]
+        rest = rest.drop_vars([c for c in rest.coords if dim in rest[c].dims])
+        rest.attrs = dict(last.attrs)
+        with deferred_interrupts():
+            if engine == "zarr":
+                rest.to_zarr(tmp, mode="a", consolidated=False)
+            else:
+                rest.to_netcdf(tmp, mode="a", engine="h5netcdf")
+    return final
+
+
+def _append_block(block: xr.Dataset, tmp: Path, engine: str, dim: str, n: int) -> int:
+    """Write one block at offset ``n`` along ``dim``; the new length."""
+    k = block.sizes[dim]
+    if n == 0:
+        chunks = {v: max(k, 1) for v in block.variables}
+        if engine == "zarr":
+            block.to_zarr(tmp, mode="w", consolidated=False,
+                          encoding={v: {"chunks": (chunks[v],)} for v in block.variables if block[v].ndim == 1})
+        else:
+            block.to_netcdf(tmp, engine="h5netcdf", unlimited_dims=[dim],
+                            encoding={v: {"chunksizes": (chunks[v],)} for v in block.variables
+                                      if block[v].ndim == 1})
+        return k
+    if engine == "zarr":
+        block.to_zarr(tmp, append_dim=dim, consolidated=False)
+    else:
+        import h5netcdf
+
+        with h5netcdf.File(tmp, "a") as f:
+            f.resize_dimension(dim, n + k)
+            for name, var in block.variables.items():
+                index = tuple(slice(n, n + k) if d == dim else slice(None) for d in var.dims)
+                f.variables[name][index] = var.values
+    return n + k
 
 
 def load_dataset(path: str | Path) -> xr.Dataset:

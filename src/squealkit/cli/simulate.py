@@ -43,7 +43,10 @@ from ._options import (
               "nonlinear: loss of contact and velocity-sign friction.")
 @friction_options
 @click.option("--duration", type=float, default=0.15, show_default=True, help="Simulated time [s].")
-@click.option("--fs", type=float, default=40_000.0, show_default=True, help="Output sample rate [Hz].")
+@click.option("--fs", type=float, default=40_000.0, show_default=True,
+              help="Output sample rate [Hz]. The outputs are sampled from the integrator, not filtered: below "
+              "twice the model's highest natural frequency a warning says so (the run goes on, for a quick look "
+              "at slow content; the integration step does not depend on --fs).")
 @click.option("--method", type=click.Choice(["dopri5", "rosenbrock", "rk4"]), default="dopri5", show_default=True,
               help="dopri5: Dormand-Prince 5(4) with error control, located contact and stick/slip events; "
               "rosenbrock: Rodas4 (linearly implicit, analytic Jacobian) for stiff friction (small v_reg), "
@@ -67,6 +70,11 @@ def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, 
     Friction falling with speed (Stribeck) at a low sliding speed, smooth disc:
       squealkit simulate --mu 0.2 --sro none --stribeck 0.6,0.001 --speed 0.0015 \\
           --perturbation 1e-14 --duration 0.01 --json
+
+    \b
+    With --out the run is written block by block as it is computed (memory
+    bounded whatever --duration); without --out it is held in memory, and a
+    run that will not fit is refused before it starts.
 
     \b
     Batch --json keys: mu, status, max_growth_rate [1/s] (largest frozen-time
@@ -110,22 +118,31 @@ def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, 
                plot_path=plot_path, method=method, rtol=rtol)
         return
     mu = float(mu_all[0])
+    kw = dict(mu=mu, profile=profile, speed=speed, duration=duration, fs=fs, contact=contact,
+              perturbation=perturbation, rng=rng, method=method, rtol=rtol)
     with progress_callback("simulating", enabled=not as_json and duration * 1e6 > 2e5) as progress:
-        ds = run_simulation(
-            model, mu=mu, profile=profile, speed=speed, duration=duration, fs=fs, contact=contact,
-            perturbation=perturbation, rng=rng, progress=progress, method=method, rtol=rtol,
-        )
-    if out_path is not None:
-        from ..io import save_dataset
+        if out_path is None:
+            ds = run_simulation(model, progress=progress, **kw)
+        else:
+            # streamed block by block into the staged file: the memory does not grow with --duration
+            from ..io import save_blocks
+            from ..transient import simulate_blocks
 
-        save_dataset(ds, out_path)
+            save_blocks(simulate_blocks(model, progress=progress, **kw), out_path)
+    if out_path is not None:
+        ds = _open_lazily(out_path)
     if plot_path is not None:
+        from .._validation import check_memory
         from ..io import save_figure
         from ..plotting.transient import fig3_plot, fig4_plot
 
+        check_memory(8.0 * ds.sizes["time"] * (len(ds.data_vars) + 2) * 3, f"--plot of {ds.sizes['time']} samples",
+                     "Plot a shorter --duration.")
+        ds = ds.load()
         fig = fig3_plot(ds) if sro == "none" else fig4_plot(ds)
         save_figure(fig, plot_path)
     summary = transient_summary(ds)
+    ds.close()
     if as_json:
         emit_json(summary)
         return
@@ -142,6 +159,13 @@ def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, 
         click.echo(f"  {st['stage']:<8} {st['t_start']:.4f}-{st['t_end']:.4f} s: rate {st['rate_per_s']:+.1f} 1/s "
                    f"(mean sigma {st['sigma_mean_per_s']:+.1f} 1/s)")
 
+
+
+def _open_lazily(path: Path) -> xr.Dataset:
+    """The written run, read piece by piece when summarised (bounded memory for any duration)."""
+    if path.suffix.lower() == ".zarr":  # no index over time: it would load the whole time axis
+        return xr.open_zarr(path, consolidated=False, create_default_indexes=False)
+    return xr.open_dataset(path, engine="h5netcdf", chunks={"time": 1 << 16}, create_default_indexes=False)
 
 
 def _batch(model, mu, profile, *, scheduler, as_json, out_path, plot_path, **kw) -> None:

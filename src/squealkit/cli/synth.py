@@ -43,7 +43,10 @@ def synth(out: Path, seed: int, duration: float, fs: float, rpm: float, rpm_end:
     """Write a SYNTHETIC pin-on-disc recording (mic [Pa], displacement [m]) with known truth.
 
     OUT ends in .nc (netCDF, truth in attributes), .csv, .wav (32-bit float), .tdms, .mf4
-    (ASAM MDF4) or .uff (UFF 58): every format `analyze` reads. Channels: mic [Pa],
+    (ASAM MDF4) or .uff (UFF 58): every format `analyze` reads. All but UFF 58 are
+    generated and written block by block (memory bounded whatever --duration).
+    --freq (and its 2 harmonics) must lie below fs/2: a squeal the sampling
+    cannot represent is refused, not aliased. Channels: mic [Pa],
     displacement [m], tacho [V] (5 V pulses, the first rising edge is the disc's angle 0).
 
     \b
@@ -53,8 +56,8 @@ def synth(out: Path, seed: int, duration: float, fs: float, rpm: float, rpm_end:
       squealkit synth stop.mf4 --rpm 900 --rpm-end 300
       squealkit analyze stop.mf4 --mic mic --displacement displacement --tacho tacho --radius 0.05
     """
-    from ..measurement import synthetic_recording
-    from ..measurement.writers import FORMATS, write_recording
+    from ..measurement.synthetic import synthetic_attrs, synthetic_source
+    from ..measurement.writers import FORMATS, write_recording_blocks
 
     if n_campaign is not None:
         from ..campaign import synthetic_campaign
@@ -73,11 +76,14 @@ def synth(out: Path, seed: int, duration: float, fs: float, rpm: float, rpm_end:
     from ..io import check_output
 
     check_output(out)  # before the work: the folder exists and takes a file, OUT is not a folder
-    rec = synthetic_recording(duration=duration, fs=fs, rpm=rpm, radius=radius, freq=freq, level_dba=level_dba,
-                              squeal_on=squeal_on, seed=seed, rpm_end=rpm_end, probe_offset_deg=probe_offset_deg,
-                              polarity=int(polarity), acoustic_delay=acoustic_delay, tacho_ppr=tacho_ppr)
-    write_recording(rec, out)
-    truth = {k.removeprefix("truth_"): v for k, v in rec.attrs.items() if k.startswith("truth_")}
+    src = synthetic_source(duration=duration, fs=fs, rpm=rpm, radius=radius, freq=freq, level_dba=level_dba,
+                           squeal_on=squeal_on, seed=seed, rpm_end=rpm_end, probe_offset_deg=probe_offset_deg,
+                           polarity=int(polarity), acoustic_delay=acoustic_delay, tacho_ppr=tacho_ppr)
+    attrs = synthetic_attrs(src, squeal_on=squeal_on)
+    # generated and written block by block: the memory does not grow with --duration
+    write_recording_blocks(src.iter_blocks(src.channels), out, fs=src.fs, n_samples=src.n_samples, units=src.units,
+                           attrs=attrs)
+    truth = {k.removeprefix("truth_"): v for k, v in attrs.items() if k.startswith("truth_")}
     if as_json:
         emit_json({"out": str(out), "synthetic": True, "truth": truth})
     else:

@@ -21,13 +21,14 @@ import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
-from .._validation import InputError, validate_fs, validate_positive
+from .._validation import InputError, check_memory, validate_fs, validate_positive
 from .criteria import P_REF, a_weighting_db, exponential_average
 from .readers import DEFAULT_BLOCK, RecordingSource, recording_dataset
 
-__all__ = ["SyntheticSource", "synthetic_recording"]
+__all__ = ["SyntheticSource", "synthetic_attrs", "synthetic_recording"]
 
 _N_ANGLE = 8192  # envelope samples per revolution
+_TRUTH_BLOCK = 1 << 18  # points of the truth's level grid per block
 
 
 @dataclass(frozen=True)
@@ -244,23 +245,47 @@ class SyntheticSource:
             ``threshold_dba``, ``runout_phase_deg``, ``peak_dba`` (None where there is no squeal).
         """
         step = 8
-        t = np.arange(0, self.n_samples, step) / self.fs
-        turns = self.turns(t)
-        env = self.envelope(turns)
-        _, tan_t = self.surface(turns)
+        dt = step / self.fs
         gain = 10 ** (a_weighting_db(self.freq) / 10) + sum(
             a * a * 10 ** (a_weighting_db(h * self.freq) / 10) for h, a in enumerate(self.harmonics, start=2))
-        ms = exponential_average(env**2 / 2 * gain, step / self.fs, time_constant)
-        level = 10 * np.log10(np.maximum(ms, 1e-300) / P_REF**2)
-        on = level >= threshold_dba
-        edges = np.flatnonzero(np.diff(np.concatenate([[0], on.astype(np.int8), [0]])))
-        starts, ends = t[edges[::2]], t[np.minimum(edges[1::2], t.size - 1)]
+        # block by block over the level grid (memory bounded for any duration); the meter's state
+        # and the open event carry over from one block to the next
+        idx_all = np.arange(0, self.n_samples, step)
+        n_grid = idx_all.size
+        del idx_all
+        ms_last, on_last, peak = 0.0, False, -math.inf
+        e_sum = e_rising = 0.0
+        starts_l: list[NDArray[np.float64]] = []
+        ends_l: list[NDArray[np.float64]] = []
+        for g0 in range(0, n_grid, _TRUTH_BLOCK):
+            t = np.arange(g0, min(n_grid, g0 + _TRUTH_BLOCK)) * step / self.fs
+            turns = self.turns(t)
+            env = self.envelope(turns)
+            _, tan_t = self.surface(turns)
+            ms = exponential_average(env**2 / 2 * gain, dt, time_constant, initial=ms_last)
+            ms_last = float(ms[-1])
+            level = 10 * np.log10(np.maximum(ms, 1e-300) / P_REF**2)
+            on = level >= threshold_dba
+            edges = np.flatnonzero(np.diff(np.concatenate([[on_last], on]).astype(np.int8)))
+            rises = edges[on[edges]]  # the first sample of an event
+            falls = edges[~on[edges]]  # the first sample after one (as the whole-record edges before)
+            starts_l.append(t[rises])
+            ends_l.append(t[falls])
+            on_last = bool(on[-1])
+            e = env**2 * on
+            e_sum += float(e.sum())
+            e_rising += float((e * (tan_t > 0)).sum())
+            if on.any():
+                peak = max(peak, float(level.max()))
+        t_last = (n_grid - 1) * step / self.fs
+        starts = np.concatenate(starts_l)
+        ends = np.concatenate([*ends_l, [t_last]] if on_last else ends_l)
         if starts.size > 1:  # gaps shorter than merge_gap are one event
             keep = np.concatenate([[True], starts[1:] - ends[:-1] > merge_gap])
             ends = np.append(ends[np.flatnonzero(keep)[1:] - 1], ends[-1])
             starts = starts[keep]
-        e = env**2 * on
-        rising = float((e * (tan_t > 0)).sum() / e.sum()) if e.sum() > 0 else None
+        any_on = starts.size > 0
+        rising = e_rising / e_sum if e_sum > 0 else None
         # where the squeal sounds against the macro run-out's crest (orders <= 10), in the disc's frame
         ang = (np.arange(_N_ANGLE) + 0.5) / _N_ANGLE
         macro = self.sro_orders <= 10
@@ -268,10 +293,10 @@ class SyntheticSource:
             @ self.sro_amps[macro]
         z = np.sum(self.envelope(ang) ** 2 * np.exp(2j * np.pi * ang))
         phase = float(np.degrees(np.angle(z * np.exp(-2j * np.pi * ang[np.argmax(q_macro)]))))
-        return {"frequency_hz": self.freq if on.any() else None, "event_starts_s": starts, "event_ends_s": ends,
+        return {"frequency_hz": self.freq if any_on else None, "event_starts_s": starts, "event_ends_s": ends,
                 "rising_fraction": rising, "threshold_dba": threshold_dba,
-                "runout_phase_deg": phase if on.any() else None,
-                "peak_dba": float(level.max()) if on.any() else None}
+                "runout_phase_deg": phase if any_on else None,
+                "peak_dba": peak if any_on else None}
 
 
 def synthetic_source(
@@ -446,16 +471,44 @@ def synthetic_recording(*, threshold_dba: float = 70.0, **kwargs) -> xr.Dataset:
     (1, 'Pa')
     """
     src = synthetic_source(**kwargs)
-    data = src.block(0, src.n_samples)
+    check_memory(8.0 * 16 * src.n_samples, f"A synthetic recording of {src.n_samples} samples",
+                 "Write it block by block: write_recording_blocks(source.iter_blocks(...)) (CLI: squealkit synth).")
+    attrs = synthetic_attrs(src, threshold_dba, kwargs.get("squeal_on", "rising"))
+    # the blocks squealkit synth writes (noise is seeded per block): file and dataset agree
+    parts = [data for _, data in src.iter_blocks(src.channels)]
+    data = {c: np.concatenate([p[c] for p in parts]) for c in src.channels}
+    return recording_dataset(data, src.fs, src.units, attrs)
+
+
+def synthetic_attrs(src: SyntheticSource, threshold_dba: float = 70.0, squeal_on: str = "rising") -> dict:
+    """The attributes of a synthetic recording: the SYNTHETIC label, its settings and its truth.
+
+    Computed block by block (bounded memory), so that a long recording can be written as it is
+    generated (:func:`~squealkit.measurement.writers.write_recording_blocks`).
+
+    Parameters
+    ----------
+    src : SyntheticSource
+        The recording, from :func:`synthetic_source`.
+    threshold_dba : float
+        Threshold of the truth's event intervals [dB(A)].
+    squeal_on : str
+        The run-out stage the squeal grows on (recorded as given to :func:`synthetic_source`).
+
+    Returns
+    -------
+    dict
+        ``synthetic = 1``, ``title``, settings and ``truth_*`` attributes (see :func:`synthetic_recording`).
+    """
     tr = src.truth(threshold_dba)
-    attrs = {
+    return {
         "synthetic": 1,
         "title": "SYNTHETIC pin-on-disc recording (squealkit), not a measurement",
         "source": "squealkit.measurement.synthetic",
         "rpm": src.rpm,
         "radius": src.radius,
         "seed": -1 if src.seed is None else int(src.seed),
-        "squeal_on": kwargs.get("squeal_on", "rising"),
+        "squeal_on": squeal_on,
         "truth_frequency_hz": float("nan") if tr["frequency_hz"] is None else float(tr["frequency_hz"]),
         "truth_event_starts_s": np.asarray(tr["event_starts_s"]),
         "truth_event_ends_s": np.asarray(tr["event_ends_s"]),
@@ -468,4 +521,4 @@ def synthetic_recording(*, threshold_dba: float = 70.0, **kwargs) -> xr.Dataset:
         "acoustic_delay": src.acoustic_delay,
         "tacho_ppr": src.tacho_ppr,
     }
-    return recording_dataset(data, src.fs, src.units, attrs)
+

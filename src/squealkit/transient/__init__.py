@@ -11,15 +11,18 @@ from .. import _accessor  # noqa: F401  (registers ds.squeal.plot() on the resul
 from .contact import Contact
 from .profiles import DiscRunOut, RandomRoughness, SampledProfile, SineRunOut, Smooth, SurfaceProfile
 from .simulate import (
+    AliasingWarning,
     TensileContactWarning,
     response_envelope,
     simulate,
     simulate_batch,
+    simulate_blocks,
     step_bound,
     transient_summary,
 )
 
 __all__ = [
+    "AliasingWarning",
     "Contact",
     "DiscRunOut",
     "RandomRoughness",
@@ -31,6 +34,7 @@ __all__ = [
     "response_envelope",
     "simulate",
     "simulate_batch",
+    "simulate_blocks",
     "step_bound",
     "transient_summary",
 ]

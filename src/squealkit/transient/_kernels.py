@@ -86,11 +86,13 @@ def _rhs(x, xd, q, t, mu, v, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b
 def integrate_chunk(
     X, V, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
     qh, th, dt, n_steps, stride, out_x, out_v, out_a, out_nc, out_me, o_start, limit, status, n_valid,
+    o_base,
 ):
     """Advance each run r by ``n_steps`` RK4 steps of ``dt``; record every ``stride`` steps.
 
     ``qh[r, 2k + j]``/``th[r, 2k + j]`` hold q and tan(theta) at ``t_k + j dt/2``. The state at
-    step 0 of the chunk is recorded at output index ``o_start``; ``status[r]`` turns 1 when a
+    step 0 of the chunk is recorded at output index ``o_start``, stored at ``o_start - o_base`` of
+    the ``out_*`` buffers (which hold samples ``o_base...``); ``status[r]`` turns 1 when a
     recorded displacement exceeds ``limit`` (or is not finite) and the run then stops.
     """
     R = X.shape[0]
@@ -128,13 +130,13 @@ def integrate_chunk(
                 if bad:
                     status[r] = 1
                     break
-                if o < out_x.shape[1]:
+                if o - o_base < out_x.shape[1]:
                     for i in range(n):
-                        out_x[r, o, i] = x[i]
-                        out_v[r, o, i] = xd[i]
-                        out_a[r, o, i] = k1v[i]
-                    out_nc[r, o] = nc
-                    out_me[r, o] = me
+                        out_x[r, o - o_base, i] = x[i]
+                        out_v[r, o - o_base, i] = xd[i]
+                        out_a[r, o - o_base, i] = k1v[i]
+                    out_nc[r, o - o_base] = nc
+                    out_me[r, o - o_base] = me
                     n_valid[r] = o + 1
                 o += 1
             if k == n_steps:
@@ -301,18 +303,19 @@ def _log_event(r, t_ev, kind, ev_t, ev_k, n_ev):
 
 
 @njit(cache=True, inline="always")
-def _store(r, o, z, dz, nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
-    """Write output sample ``o`` of run ``r``; False (nothing written) if some |x_i| > ``limit``."""
+def _store(r, o, o_base, z, dz, nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
+    """Write output sample ``o`` of run ``r`` at row ``o - o_base`` of the output buffers; False
+    (nothing written) if some |x_i| > ``limit``."""
     n = out_x.shape[2]
     for i in range(n):
         if not (abs(z[i]) <= limit):
             return False
     for i in range(n):
-        out_x[r, o, i] = z[i]
-        out_v[r, o, i] = z[n + i]
-        out_a[r, o, i] = dz[n + i]
-    out_nc[r, o] = nc
-    out_me[r, o] = me
+        out_x[r, o - o_base, i] = z[i]
+        out_v[r, o - o_base, i] = z[n + i]
+        out_a[r, o - o_base, i] = dz[n + i]
+    out_nc[r, o - o_base] = nc
+    out_me[r, o - o_base] = me
     n_valid[r] = o + 1
     return True
 
@@ -320,14 +323,16 @@ def _store(r, o, z, dz, nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_va
 @njit(cache=True, parallel=True)
 def integrate_adaptive(
     X, V, H, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
-    qg, tgr, tg0, hg, t_a, t_b, fs, o_first, o_last, A, Bw, Cn, E, P, rtol, atol, h_max,
+    qg, tgr, tg0, hg, t_a, t_b, fs, o_first, o_last, o_base, A, Bw, Cn, E, P, rtol, atol, h_max,
     out_x, out_v, out_a, out_nc, out_me, limit, status, n_valid, counts, ev_t, ev_k, n_ev,
 ):
     """Advance each run from ``t_a`` to ``t_b`` by Dormand-Prince 5(4) with error control.
 
     Output samples ``o_first..o_last`` (times ``o / fs``) inside ``[t_a, t_b]`` are written by
-    dense output. ``H[r]`` carries each run's step size between calls. ``atol`` has one entry per
-    state component (x then x'). ``counts[r] = [accepted, rejected, rhs calls, smallest step]``.
+    dense output, sample ``o`` at index ``o - o_base`` of the ``out_*`` buffers (a buffer per
+    chunk: the memory does not grow with the duration). ``H[r]`` carries each run's step size
+    between calls. ``atol`` has one entry per state component (x then x').
+    ``counts[r] = [accepted, rejected, rhs calls, smallest step]``.
     With contact loss (opts[1]) a sign change of the contact force inside a step is located by
     bisection on the dense output and the step is retaken to end just past it, so no step
     straddles the kink; the events (and stick/slip band crossings with the sign law) are recorded
@@ -364,7 +369,7 @@ def integrate_adaptive(
                             Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
         counts[r, 2] += 1
         if o <= o_last and o / fs <= t + 1e-12 / fs:
-            if not _store(r, o, z, K[0], nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
+            if not _store(r, o, o_base, z, K[0], nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
                 status[r] = 1
             o += 1
         g_old, w_old = _gap_and_slip(z[:n], z[n:], q, tt_, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
@@ -441,7 +446,7 @@ def integrate_adaptive(
                 ncs, mes, _q, _t = _f(o / fs, zd, dzd, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r,
                                       Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r,
                                       s_r, opts, work, acc)
-                if not _store(r, o, zd, dzd, ncs, mes, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
+                if not _store(r, o, o_base, zd, dzd, ncs, mes, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
                     status[r] = 1
                     break
                 o += 1
@@ -589,7 +594,7 @@ def _lu_solve(A, piv, x):
 @njit(cache=True, parallel=True)
 def integrate_rosenbrock(
     X, V, H, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
-    qg, tgr, tg0, hg, t_a, t_b, fs, o_first, o_last, RA, RC, RAL, RD, RM, RDD, gam, rtol, atol, h_max,
+    qg, tgr, tg0, hg, t_a, t_b, fs, o_first, o_last, o_base, RA, RC, RAL, RD, RM, RDD, gam, rtol, atol, h_max,
     out_x, out_v, out_a, out_nc, out_me, limit, status, n_valid, counts, ev_t, ev_k, n_ev,
 ):
     """Advance each run from ``t_a`` to ``t_b`` by Rodas4 (see the notes above) with error control.
@@ -637,7 +642,7 @@ def integrate_rosenbrock(
                             Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
         counts[r, 2] += 1
         if o <= o_last and o / fs <= t + 1e-12 / fs:
-            if not _store(r, o, z, f0, nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
+            if not _store(r, o, o_base, z, f0, nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
                 status[r] = 1
             o += 1
         g_old, w_old = _gap_and_slip(z[:n], z[n:], q, tt_, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
@@ -744,7 +749,7 @@ def integrate_rosenbrock(
                 ncs, mes, _q, _t = _f(o / fs, zd, dzd, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r,
                                       Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r,
                                       s_r, opts, work, acc)
-                if not _store(r, o, zd, dzd, ncs, mes, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
+                if not _store(r, o, o_base, zd, dzd, ncs, mes, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
                     status[r] = 1
                     break
                 o += 1

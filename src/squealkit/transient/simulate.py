@@ -28,7 +28,7 @@ from __future__ import annotations
 import itertools
 import math
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -39,15 +39,15 @@ from numpy.typing import ArrayLike
 
 from .._deprecation import renamed_kwargs
 from .._threads import limit_threads, threads_for
-from .._validation import InputError, validate_finite, validate_fs, validate_positive
+from .._validation import InputError, check_memory, validate_finite, validate_fs, validate_positive
 from ..models import FrictionModel
 from ..stability.eigen import eigenvalues
 from . import _kernels
 from .contact import Contact, as_contact, contact_geometry
 from .profiles import Smooth, SurfaceProfile
 
-__all__ = ["TensileContactWarning", "response_envelope", "simulate", "simulate_batch", "step_bound",
-           "transient_summary"]
+__all__ = ["AliasingWarning", "TensileContactWarning", "response_envelope", "simulate", "simulate_batch",
+           "simulate_blocks", "step_bound", "transient_summary"]
 
 #: RK4 step as a fraction of the period of the fastest mode: dt <= STEP_FACTOR / omega_max.
 STEP_FACTOR = 0.25
@@ -70,6 +70,26 @@ _STATUS = {0: "completed", 1: "diverged", 2: "failed"}
 
 class TensileContactWarning(UserWarning):
     """The linear (paper's) contact law carried a pulling normal force: run with contact loss."""
+
+
+class AliasingWarning(UserWarning):
+    """The output sample rate ``fs`` is below twice the model's highest natural frequency.
+
+    The integrator's step does not depend on ``fs`` (it follows the error control and the
+    modes' bound), but the outputs are sampled from it, not filtered: vibration above
+    ``fs / 2`` shows up at a false, aliased frequency and peaks between samples are missed.
+    """
+
+
+def _check_sampling(fs: float, omega_max: float) -> None:
+    """Warn (:class:`AliasingWarning`) when ``fs`` cannot represent the fastest mode."""
+    f_max = omega_max / (2 * math.pi)
+    if fs < 2.0 * f_max:
+        warnings.warn(
+            f"fs={fs:g} Hz is below twice the model's highest natural frequency {f_max:.0f} Hz: the outputs are "
+            f"sampled, not filtered (the integration step does not depend on fs), so vibration above fs/2 = "
+            f"{fs / 2:g} Hz appears aliased and peaks are missed; use fs >= {math.ceil(2 * f_max)} Hz.",
+            AliasingWarning, stacklevel=4)
 
 
 def _dopri_tableau():
@@ -268,7 +288,7 @@ def _perturbation_noise(perturbation: float, rng, n_runs: int, n: int) -> np.nda
     return rng.standard_normal((n_runs, n))
 
 
-def _integrate(
+def _prepare(
     runs: Sequence[_Run],
     *,
     duration: float,
@@ -281,11 +301,11 @@ def _integrate(
     x_start: float,
     dt: float | None,
     limit: float,
-    progress: Progress | None,
     method: str = "dopri5",
     rtol: float = 1e-8,
     atol: float | None = None,
-):
+) -> dict[str, Any]:
+    """Validate, build the per-run arrays and the initial states: everything but the outputs."""
     method = _validate_method(method)
     rtol = validate_positive("rtol", rtol)
     if not 1e-13 <= rtol < 1:
@@ -305,6 +325,7 @@ def _integrate(
         raise InputError("All models of a batch must have the same number of degrees of freedom.")
     dt_user = dt
     dt, stride, bounds = _step_size(runs, fs, dt, contact, method)
+    _check_sampling(fs, bounds["omega_max"])
     n_steps = (n_out - 1) * stride
     t_end = (n_out - 1) / fs
     for run in runs:
@@ -349,27 +370,55 @@ def _integrate(
     noise = _perturbation_noise(perturbation, rng, R, n)
     for i, run in enumerate(runs):
         X[i], V[i] = _initial_state(run, contact, x0, v0, perturbation, noise[i], x_start)
-    out_x = np.full((R, n_out, n), np.nan)
-    out_v = np.full((R, n_out, n), np.nan)
-    out_a = np.full((R, n_out, n), np.nan)
-    out_nc = np.full((R, n_out), np.nan)
-    out_me = np.full((R, n_out), np.nan)
     status = np.zeros(R, dtype=np.int64)
     n_valid = np.zeros(R, dtype=np.int64)
-
     arrays = (bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts)
-    outs = (out_x, out_v, out_a, out_nc, out_me)
-    extra: dict[str, Any] = {"bounds": bounds, "method": method}
-    if method == "rk4":
-        _run_rk4(runs, X, V, arrays, outs, dt, stride, n_steps, x_start, limit, status, n_valid, progress)
+    return dict(runs=runs, X=X, V=V, arrays=arrays, n=n, n_out=n_out, n_steps=n_steps, status=status,
+                n_valid=n_valid, dt=dt, dt_user=dt_user, stride=stride, x_start=x_start, limit=limit, contact=contact,
+                rtol=rtol, atol_user=atol, bounds=bounds, method=method, fs=fs)
+
+
+def _chunks(setup: dict[str, Any], progress: Progress | None) -> Iterator[tuple[int, tuple[np.ndarray, ...]]]:
+    """Integrate chunk by chunk, yielding ``(first sample, (x, v, a, nc, me))`` per chunk.
+
+    Each chunk's outputs are a fresh buffer (NaN where a run stopped) of at most
+    ``_CHUNK_SAMPLES + 1`` samples: the memory does not grow with the duration. The state
+    (``X``, ``V``, the step sizes) carries over from chunk to chunk inside the kernels; the
+    chunks are the same whatever the caller does with them, so a streamed run equals the
+    in-memory one bit for bit. The per-run counters (``status``, ``n_valid``, steps, events)
+    are updated in ``setup``.
+    """
+    if setup["method"] == "rk4":
+        yield from _run_rk4(setup, progress)
     else:
-        extra.update(_run_dopri5(runs, X, V, arrays, outs, dt_user, contact, fs, n_out, x_start, limit, status,
-                                 n_valid, progress, rtol, atol, method))
-    time = np.arange(n_out) / fs
-    return dict(
-        time=time, x=out_x, v=out_v, a=out_a, nc=out_nc, me=out_me, status=status, n_valid=n_valid,
-        dt=dt, stride=stride, x_start=x_start, limit=limit, contact=contact, rtol=rtol, **extra,
-    )
+        yield from _run_dopri5(setup, progress)
+
+
+def _buffers(R: int, m: int, n: int) -> tuple[np.ndarray, ...]:
+    return (np.full((R, m, n), np.nan), np.full((R, m, n), np.nan), np.full((R, m, n), np.nan),
+            np.full((R, m), np.nan), np.full((R, m), np.nan))
+
+
+#: Bytes per output sample and DOF, and per sample, of an in-memory run (the kernel's outputs,
+#: the labelled variables and the growth rate's temporaries): 6 n + 24 doubles.
+def _in_memory_bytes(n_runs: int, n_out: int, n: int) -> float:
+    return 8.0 * n_runs * n_out * (6.0 * n + 24.0)
+
+
+def _integrate(runs: Sequence[_Run], *, progress: Progress | None, memory_hint: str = "", **kw) -> dict[str, Any]:
+    """The whole run in memory: the chunks of :func:`_chunks` gathered into arrays over all samples."""
+    setup = _prepare(runs, **kw)
+    R, n, n_out = len(runs), setup["n"], setup["n_out"]
+    check_memory(_in_memory_bytes(R, n_out, n), f"A transient run of {n_out} samples" + (f" x {R} runs" if R > 1
+                 else ""), memory_hint)
+    outs = _buffers(R, n_out, n)
+    for first, chunk in _chunks(setup, progress):
+        k = chunk[0].shape[1]
+        for full, part in zip(outs, chunk, strict=True):
+            full[:, first:first + k] = part
+    raw = {k: v for k, v in setup.items() if k not in ("X", "V", "arrays")}
+    raw.update(time=np.arange(n_out) / setup["fs"], x=outs[0], v=outs[1], a=outs[2], nc=outs[3], me=outs[4])
+    return raw
 
 
 def _profile_samples(runs: Sequence[_Run], x_start: float, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -387,31 +436,38 @@ def _profile_samples(runs: Sequence[_Run], x_start: float, times: np.ndarray) ->
     return qh, th
 
 
-def _run_rk4(runs, X, V, arrays, outs, dt, stride, n_steps, x_start, limit, status, n_valid, progress) -> None:
+def _run_rk4(setup: dict[str, Any], progress: Progress | None) -> Iterator[tuple[int, tuple[np.ndarray, ...]]]:
     """Fixed-step classical RK4, chunk by chunk (q and slope at the half steps)."""
+    runs, X, V, arrays = setup["runs"], setup["X"], setup["V"], setup["arrays"]
+    dt, stride, n_steps, status = setup["dt"], setup["stride"], setup["n_steps"], setup["status"]
     R = len(runs)
     chunk = max(stride, (_CHUNK_STEPS // stride) * stride)
     done = 0
     while True:
         m = min(chunk, n_steps - done)  # m == 0: record the final state only
-        qh, th = _profile_samples(runs, x_start, (done + 0.5 * np.arange(2 * m + 1)) * dt)
+        qh, th = _profile_samples(runs, setup["x_start"], (done + 0.5 * np.arange(2 * m + 1)) * dt)
+        first = done // stride
+        outs = _buffers(R, m // stride if m else 1, setup["n"])
         with limit_threads(threads_for(R, serial_below=2)):  # parallel over runs: one run is serial
-            _kernels.integrate_chunk(X, V, *arrays, qh, th, dt, m, stride, *outs, done // stride, limit, status,
-                                     n_valid)
+            _kernels.integrate_chunk(X, V, *arrays, qh, th, dt, m, stride, *outs, first, setup["limit"], status,
+                                     setup["n_valid"], first)
         done += m
+        yield first, outs
         if progress is not None:
             progress(done, n_steps)
         if m == 0 or np.all(status != 0):
             break
 
 
-def _run_dopri5(runs, X, V, arrays, outs, dt_user, contact, fs, n_out, x_start, limit, status, n_valid, progress,
-                rtol, atol, method="dopri5") -> dict[str, Any]:
+def _run_dopri5(setup: dict[str, Any], progress: Progress | None
+                ) -> Iterator[tuple[int, tuple[np.ndarray, ...]]]:
     """Dormand-Prince 5(4) (or Rodas4, ``method="rosenbrock"``) with error control, chunk by chunk
     of output samples. Each run has its own step bound and tolerances (from its own model and
     friction), so that a run's numbers do not depend on the batch it is in."""
+    runs, X, V, arrays, method = setup["runs"], setup["X"], setup["V"], setup["arrays"], setup["method"]
+    fs, n_out, rtol, atol, status = setup["fs"], setup["n_out"], setup["rtol"], setup["atol_user"], setup["status"]
     R, n = X.shape
-    per_run = [_step_size([run], fs, dt_user, contact, method) for run in runs]
+    per_run = [_step_size([run], fs, setup["dt_user"], setup["contact"], method) for run in runs]
     h_max = np.array([p[0] for p in per_run])
     w = np.array([max(p[2]["omega_max"], 1.0) for p in per_run])
     if atol is None:
@@ -425,10 +481,9 @@ def _run_dopri5(runs, X, V, arrays, outs, dt_user, contact, fs, n_out, x_start, 
     tableau = _dopri_tableau() if method == "dopri5" else _rodas4_tableau()
     kernel = _kernels.integrate_adaptive if method == "dopri5" else _kernels.integrate_rosenbrock
     H = np.minimum(h_max, 0.1 / w)
-    counts = np.zeros((R, 4))
-    ev_t = np.full((R, _MAX_EVENTS), np.nan)
-    ev_k = np.zeros((R, _MAX_EVENTS), dtype=np.int64)
-    n_ev = np.zeros(R, dtype=np.int64)
+    setup.update(counts=np.zeros((R, 4)), ev_t=np.full((R, _MAX_EVENTS), np.nan),
+                 ev_k=np.zeros((R, _MAX_EVENTS), dtype=np.int64), n_ev=np.zeros(R, dtype=np.int64), atol=atol_a,
+                 h_max=h_max)
     per = _FORCING_PER_SAMPLE
     o_first = 0
     while o_first < n_out:
@@ -436,18 +491,20 @@ def _run_dopri5(runs, X, V, arrays, outs, dt_user, contact, fs, n_out, x_start, 
         t_a, t_b = (o_first - (o_first > 0)) / fs, o_last / fs
         k_a = o_first - (o_first > 0)
         g = np.arange(k_a * per, o_last * per + 1) / (fs * per)
-        qg, tg = _profile_samples(runs, x_start, g)
+        qg, tg = _profile_samples(runs, setup["x_start"], g)
+        outs = _buffers(R, o_last - o_first + 1, n)
         with limit_threads(threads_for(R, serial_below=2)):  # parallel over runs: one run is serial
             kernel(
-                X, V, H, *arrays, qg, tg, g[0], 1.0 / (fs * per), t_a, t_b, fs, o_first, o_last, *tableau,
-                rtol, atol_a, h_max, *outs, limit, status, n_valid, counts, ev_t, ev_k, n_ev,
+                X, V, H, *arrays, qg, tg, g[0], 1.0 / (fs * per), t_a, t_b, fs, o_first, o_last, o_first, *tableau,
+                rtol, atol_a, h_max, *outs, setup["limit"], status, setup["n_valid"], setup["counts"], setup["ev_t"],
+                setup["ev_k"], setup["n_ev"],
             )
+        yield o_first, outs
         if progress is not None:
             progress(o_last, n_out - 1)
         o_first = o_last + 1
         if np.all(status != 0):
             break
-    return {"counts": counts, "ev_t": ev_t, "ev_k": ev_k, "n_ev": n_ev, "atol": atol_a, "h_max": h_max}
 
 
 def _run_dataset(run: _Run, raw: dict, i: int, n_keep: int) -> xr.Dataset:
@@ -670,6 +727,7 @@ def simulate(
     raw = _integrate(
         runs, duration=duration, fs=fs, contact=as_contact(contact), x0=x0, v0=v0, perturbation=perturbation,
         rng=rng, x_start=x_start, dt=dt, limit=limit, progress=progress, method=method, rtol=rtol, atol=atol,
+        memory_hint="Stream it to a file block by block: simulate_blocks and io.save_blocks (CLI: --out FILE.nc).",
     )
     n_keep = max(1, int(raw["n_valid"][0]))
     status = _STATUS[int(raw["status"][0])]
@@ -678,6 +736,118 @@ def simulate(
     ds = _with_events(ds, raw, 0)
     _warn_tensile(ds)
     return ds
+
+
+#: Samples per block of :func:`simulate_blocks` by default (about 10 MB for the paper's model).
+BLOCK_SAMPLES = 1 << 16
+
+
+def simulate_blocks(
+    model: FrictionModel,
+    *,
+    mu: float,
+    profile: SurfaceProfile | None = None,
+    speed: float = 0.02,
+    duration: float,
+    fs: float = 40_000.0,
+    contact: Contact | str = "linear",
+    x0: ArrayLike | None = None,
+    v0: ArrayLike | None = None,
+    perturbation: float = 0.0,
+    rng: np.random.Generator | None = None,
+    x_start: float = 0.0,
+    dt: float | None = None,
+    limit: float = 1.0,
+    progress: Progress | None = None,
+    method: str = "dopri5",
+    rtol: float = 1e-8,
+    atol: float | None = None,
+    block_samples: int = BLOCK_SAMPLES,
+) -> Iterator[xr.Dataset]:
+    """The run of :func:`simulate`, block by block along ``time``: memory bounded for any duration.
+
+    The integrator runs in the same chunks as :func:`simulate` and carries its state from one to
+    the next, so the blocks put together (``xarray.concat(blocks, "time")``) equal
+    :func:`simulate`'s result bit for bit. Write them with :func:`squealkit.io.save_blocks`.
+    The inputs are checked when this is called, before the first block.
+
+    Parameters
+    ----------
+    model : FrictionModel
+        The system, e.g. ``get_preset("lv2013")``.
+    mu, profile, speed, duration, fs, contact, x0, v0, perturbation, rng, x_start, dt, limit : object
+        As for :func:`simulate`.
+    progress, method, rtol, atol : object
+        As for :func:`simulate`.
+    block_samples : int
+        Samples per block (the last one holds what is left, at least one sample).
+
+    Yields
+    ------
+    xarray.Dataset
+        The variables of :func:`simulate` over consecutive pieces of ``time``. Only the last
+        block carries the attributes (status, steps, ``tensile_fraction`` over the whole
+        run...) and the located events (``event_time``, ``event_kind``); the others have none.
+
+    Examples
+    --------
+    >>> from squealkit.models import get_preset
+    >>> blocks = simulate_blocks(get_preset("lv2013"), mu=0.4, duration=0.01, block_samples=100)
+    >>> [b.sizes["time"] for b in blocks]
+    [100, 100, 100, 100, 1]
+    """
+    if isinstance(block_samples, bool) or not isinstance(block_samples, int | np.integer) or block_samples < 1:
+        raise InputError(f"Parameter block_samples={block_samples!r} must be an integer >= 1.")
+    runs = _as_runs([model], [mu], [profile], [speed])
+    setup = _prepare(
+        runs, duration=duration, fs=fs, contact=as_contact(contact), x0=x0, v0=v0, perturbation=perturbation,
+        rng=rng, x_start=x_start, dt=dt, limit=limit, method=method, rtol=rtol, atol=atol,
+    )
+    return _stream(runs[0], setup, progress, int(block_samples))
+
+
+def _stream(run: _Run, setup: dict[str, Any], progress: Progress | None, block: int) -> Iterator[xr.Dataset]:
+    fs = setup["fs"]
+    pending: list[xr.Dataset] = []
+    n_pending = n_kept = n_tensile = 0
+    min_force, any_force = math.inf, False
+
+    def take(k: int) -> xr.Dataset:
+        nonlocal pending, n_pending
+        whole = pending[0] if len(pending) == 1 else xr.concat(pending, "time", combine_attrs="override")
+        out, rest = whole.isel(time=slice(0, k)), whole.isel(time=slice(k, None))
+        pending, n_pending = ([rest] if rest.sizes["time"] else []), n_pending - k
+        return out
+
+    for first, (x, v, a, nc, me) in _chunks(setup, progress):
+        valid = min(int(setup["n_valid"][0]), first + x.shape[1]) - first
+        if first == 0:
+            valid = max(valid, 1)  # as simulate: a run that fails at once keeps its first sample
+        if valid <= 0:
+            break
+        raw = {"time": np.arange(first, first + valid) / fs, "x": x, "v": v, "a": a, "nc": nc, "me": me,
+               "x_start": setup["x_start"], "contact": setup["contact"]}
+        part = _run_dataset(run, raw, 0, valid)
+        part.attrs = {}
+        normal = part["normal_force"].values
+        if setup["contact"].is_linear and np.isfinite(normal).any():
+            any_force = True
+            n_tensile += int(np.sum(normal < 0.0))
+            min_force = min(min_force, float(np.nanmin(normal)))
+        n_kept += valid
+        pending.append(part)
+        n_pending += valid
+        while n_pending > block:  # keep at least one sample back: the last block carries the attributes
+            yield take(block)
+    last = take(n_pending)
+    attrs: dict[str, Any] = {}
+    if any_force:
+        attrs = {"tensile_fraction": float(n_tensile / n_kept), "min_normal_force": min_force}
+    attrs.update(_attrs(run, setup, _STATUS[int(setup["status"][0])], float((n_kept - 1) / fs), fs))
+    last.attrs = attrs
+    last = _with_events(last, setup, 0)
+    _warn_tensile(last)
+    yield last
 
 
 def _with_events(ds: xr.Dataset, raw: dict, i: int) -> xr.Dataset:
@@ -855,6 +1025,7 @@ def _batch_dataset(runs: Sequence[_Run], *, duration, fs, contact, x0, perturbat
     raw = _integrate(
         runs, duration=duration, fs=fs, contact=contact, x0=x0, v0=None, perturbation=perturbation,
         rng=rng, x_start=x_start, dt=dt, limit=limit, progress=progress, method=method, rtol=rtol, atol=atol,
+        memory_hint="Stream the batch run by run: store='....zarr' (CLI: --out FILE.zarr).",
     )
     n_out = raw["time"].size
     parts = [_run_dataset(run, raw, i, n_out) for i, run in enumerate(runs)]
@@ -940,6 +1111,11 @@ def _stages(tan_theta: np.ndarray) -> list[tuple[int, int, str]]:
     return [(int(a), int(b), names[int(label[a])]) for a, b in itertools.pairwise(bounds)]
 
 
+#: Samples of the record the stage rates of :func:`transient_summary` look at (about 26 s at 40 kHz):
+#: the envelope is a whole-record filter, so a longer (streamed) record is summarised by its start.
+SUMMARY_STAGE_SAMPLES = 1 << 20
+
+
 @renamed_kwargs(freq_lower="highpass_freq")
 def transient_summary(ds: xr.Dataset, *, max_stages: int = 50, highpass_freq: float = 1000.0) -> dict[str, object]:
     """Peak amplitudes, and growth or decay rate of the vibration per run-out stage.
@@ -949,10 +1125,15 @@ def transient_summary(ds: xr.Dataset, *, max_stages: int = 50, highpass_freq: fl
     first and last 5 ms of the record (filter end effects); it is positive
     where the vibration grows (paper Fig. 4: rising SRO) and negative where it decays.
 
+    The peaks cover the whole record, read piece by piece when ``ds`` is opened lazily (a
+    streamed run: ``xarray.open_dataset(path, chunks={})``), so a record of any length is
+    summarised in bounded memory; the stages are those of its first
+    :data:`SUMMARY_STAGE_SAMPLES` samples (``stages_truncated`` is then true).
+
     Parameters
     ----------
     ds : xarray.Dataset
-        One run of :func:`simulate`.
+        A result of :func:`simulate` (or the blocks of :func:`simulate_blocks` as written).
     max_stages : int, default 50
         At most this many stages are listed (``stages_truncated`` says whether more were cut).
     highpass_freq : float, default 1000.0
@@ -966,15 +1147,15 @@ def transient_summary(ds: xr.Dataset, *, max_stages: int = 50, highpass_freq: fl
         ``speed``, ``profile``, ``contact``, step statistics, ``peak`` per DOF (displacement
         change [m], velocity [m/s], acceleration [m/s^2]), ``growth_rate_max`` [1/s] and
         ``stages`` (``stage``, ``t_start``, ``t_end``, ``rate_per_s``, ``sigma_mean_per_s``,
-        ``partial``).
+        ``partial``) and ``stages_truncated``.
     """
     model_dofs = [v[: -len("_ddot")] for v in ds.data_vars if str(v).endswith("_ddot")]
     fs = float(ds.attrs["fs"])
-    time = ds.time.values
+    n_time = ds.sizes["time"]
     out: dict[str, object] = {
         "status": ds.attrs.get("status"),
         "t_stop": ds.attrs.get("t_stop"),
-        "duration": float(time[-1]) if time.size else 0.0,
+        "duration": float(ds.time[-1]) if n_time else 0.0,
         "fs": fs,
         "mu": ds.attrs.get("mu"),
         "speed": ds.attrs.get("speed"),
@@ -988,22 +1169,43 @@ def transient_summary(ds: xr.Dataset, *, max_stages: int = 50, highpass_freq: fl
         "min_normal_force": ds.attrs.get("min_normal_force"),
         "peak": {},
     }
+    reductions = {"growth_rate_max": ds.growth_rate.max()}
     for d in model_dofs:
-        dev = ds[d].values - ds[d].values[0]
+        start = float(ds[d].isel(time=0))  # a number, not a lazy piece: dask would hold every chunk for it
+        reductions[f"{d}/disp"] = abs(ds[d] - start).max()
+        reductions[f"{d}/vel"] = abs(ds[f"{d}_dot"]).max()
+        reductions[f"{d}/acc"] = abs(ds[f"{d}_ddot"]).max()
+    # one pass over a lazily opened record, a piece at a time (no-op for one in memory)
+    red = {k: float(v) for k, v in xr.Dataset(reductions).compute(scheduler="synchronous").data_vars.items()}
+    for d in model_dofs:
         out["peak"][d] = {  # type: ignore[index]
-            "displacement_change_m": float(np.max(np.abs(dev))),
-            "velocity_m_s": float(np.max(np.abs(ds[f"{d}_dot"].values))),
-            "acceleration_m_s2": float(np.max(np.abs(ds[f"{d}_ddot"].values))),
+            "displacement_change_m": red[f"{d}/disp"],
+            "velocity_m_s": red[f"{d}/vel"],
+            "acceleration_m_s2": red[f"{d}/acc"],
         }
-    out["growth_rate_max"] = float(ds.growth_rate.max())
-    stages = []
+    out["growth_rate_max"] = red["growth_rate_max"]
+    cut = n_time > SUMMARY_STAGE_SAMPLES
+    head = ds.isel(time=slice(0, SUMMARY_STAGE_SAMPLES)) if cut else ds
+    stages = _stage_rates(head, fs, model_dofs[0], highpass_freq)
+    if cut and stages:
+        stages = stages[:-1]  # the stage the cut runs through is not whole
+    out["stages"] = stages[:max_stages]
+    out["stages_truncated"] = len(stages) > max_stages or cut
+    return out
+
+
+def _stage_rates(ds: xr.Dataset, fs: float, dof: str, highpass_freq: float) -> list[dict[str, object]]:
+    """Growth or decay rate of the envelope per run-out stage (see :func:`transient_summary`)."""
+    time = ds.time.values
+    stages: list[dict[str, object]] = []
     if time.size > 32 and fs > 2500.0:
-        env = response_envelope(ds, f"{model_dofs[0]}_ddot", highpass_freq=highpass_freq).values
+        env = response_envelope(ds, f"{dof}_ddot", highpass_freq=highpass_freq).values
         # The zero-phase filter and the Hilbert transform ring for a few ms at both ends of
         # the record: those samples take no part in the rate fits.
         edge = np.zeros(time.size, dtype=bool)
         n_edge = min(int(0.005 * fs), time.size // 4)
         edge[:n_edge] = edge[time.size - n_edge :] = True
+        sigma = ds.growth_rate.values
         for a, b, kind in _stages(ds.tan_theta.values):
             if b - a < 16:
                 continue
@@ -1012,9 +1214,7 @@ def transient_summary(ds: xr.Dataset, *, max_stages: int = 50, highpass_freq: fl
             rate = float(np.polyfit(time[a:b][ok], np.log(seg[ok]), 1)[0]) if ok.sum() > 8 else math.nan
             stages.append({
                 "stage": kind, "t_start": float(time[a]), "t_end": float(time[b - 1]), "rate_per_s": rate,
-                "sigma_mean_per_s": float(ds.growth_rate.values[a:b].mean()),
+                "sigma_mean_per_s": float(sigma[a:b].mean()),
                 "partial": a == 0 or b == time.size,  # cut by the record: rate less reliable
             })
-    out["stages"] = stages[:max_stages]
-    out["stages_truncated"] = len(stages) > max_stages
-    return out
+    return stages
