@@ -205,9 +205,9 @@ def test_analyze_plot_takes_a_file_like_every_other_plot(run, tmp_path):
     r = run(*args, "--plot", str(tmp_path / "figs.svg"))
     assert r.exit_code == 0, r.output
     names = sorted(p.name for p in tmp_path.glob("figs_*"))
-    assert len(names) == 7 and "figs_spectrogram.svg" in names and "figs_polar.svg" in names
+    assert len(names) == 8 and "figs_spectrogram.svg" in names and "figs_event_phase.svg" in names
     r = run(*args, "--plot", str(tmp_path / "figs.txt"))
     assert r.exit_code == 2 and "must end in .png or .svg or .pdf" in r.stderr
     # a folder still works, with a note that it is deprecated
     r = run(*args, "--plot", str(tmp_path / "old"))
-    assert r.exit_code == 0 and "deprecated" in r.stderr and len(list((tmp_path / "old").glob("r_*.png"))) == 7
+    assert r.exit_code == 0 and "deprecated" in r.stderr and len(list((tmp_path / "old").glob("r_*.png"))) == 8
