@@ -80,6 +80,9 @@ class FESolver:
         the friction the friction matrices see).
     sigma_reach : float
         For ``sparse``: find every mode in the band with ``|sigma|`` up to this [1/s].
+    band_workers : int, optional
+        For ``sparse``: sub-bands solved at once (:func:`~squealkit.stability.sparse.band_eigs`'s
+        ``workers``); 1 where operating points are already solved in parallel.
     """
 
     model: FEModel
@@ -88,6 +91,7 @@ class FESolver:
     n_modes: int | None = None
     samples: tuple[NDArray, NDArray] | None = None
     sigma_reach: float = 0.0
+    band_workers: int | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.model, FEModel):
@@ -132,7 +136,8 @@ class FESolver:
     def solve(self, omega: float, mu: float, tan_theta: float = 0.0, *, vectors: bool = True) -> EigenSolution:
         """Eigenvalues (and right eigenvectors in the full model's DOFs) at one operating point."""
         if self.method == "sparse":
-            return band_eigs(self.model, omega, mu, tan_theta, band=self.band, sigma_reach=self.sigma_reach)
+            return band_eigs(self.model, omega, mu, tan_theta, band=self.band, sigma_reach=self.sigma_reach,
+                             workers=self.band_workers)
         need_x = vectors or self.basis is not None
         sol = dense_eigs(self.solve_model, omega, mu, tan_theta, vectors=need_x, parts=self.parts)
         lam, X = sol.eigenvalues, sol.vectors
@@ -268,12 +273,13 @@ def fe_stability_map(
         pick = [0, len(omegas) // 2, len(omegas) - 1]
         pick_mu = [0, len(mu_a) // 2, len(mu_a) - 1]
         samples = (np.unique(omegas[pick]), np.unique(mu_a[pick_mu]) + t)  # pod_basis takes mu_e
-    solver = FESolver(model, method, band, n_modes, samples, sigma_reach)
     n_r, n_m = rpm_a.size, mu_a.size
+    workers = thread_limit() if workers is None else max(1, int(workers))
+    # points in parallel, or a single point's sub-bands in parallel: never both
+    solver = FESolver(model, method, band, n_modes, samples, sigma_reach, band_workers=1 if n_r * n_m > 1 else None)
     results: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
     tracker = _Tracker()
     total, done = n_r * n_m, 0
-    workers = thread_limit() if workers is None else max(1, int(workers))
 
     def solve(ij):
         return solver.solve(omegas[ij[0]], mu_a[ij[1]], t, vectors=track)
