@@ -22,7 +22,6 @@ from typing import Any
 import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import linear_sum_assignment
 from threadpoolctl import threadpool_limits
 
 from .. import __version__
@@ -42,6 +41,7 @@ from .sparse import (
     dense_parts,
     validate_band,
 )
+from .tracking import _MacTracker
 
 __all__ = ["DENSE_MAX_DOF", "METHODS", "FESolver", "fe_critical_friction", "fe_modes", "fe_stability_map"]
 
@@ -154,38 +154,6 @@ class FESolver:
         return EigenSolution(lam, X if vectors else None, res)
 
 
-def _mac(A: NDArray, B: NDArray) -> NDArray:
-    """Modal assurance criterion between the columns of A and B (unit-norm columns)."""
-    return np.abs(A.conj().T @ B) ** 2
-
-
-class _Tracker:
-    """Assign each point's modes to slots, matching the previous point's by MAC and eigenvalue."""
-
-    def __init__(self) -> None:
-        self.n_slots = 0
-
-    def first(self, sol: EigenSolution) -> NDArray[np.intp]:
-        slots = np.arange(self.n_slots, self.n_slots + sol.eigenvalues.size)
-        self.n_slots += sol.eigenvalues.size
-        return slots
-
-    def match(self, prev: tuple[NDArray, NDArray, NDArray], sol: EigenSolution) -> NDArray[np.intp]:
-        """Slots of ``sol``'s modes given the previous point's ``(slots, lam, X)``."""
-        p_slots, p_lam, p_X = prev
-        lam, X = sol.eigenvalues, sol.vectors
-        slots = np.full(lam.size, -1, dtype=np.intp)
-        if p_lam.size and lam.size:
-            scale = max(np.max(np.abs(p_lam)), np.max(np.abs(lam)), 1e-300)
-            cost = (1.0 - _mac(p_X, X)) + np.abs(p_lam[:, None] - lam[None, :]) / scale
-            rows, cols = linear_sum_assignment(cost)
-            slots[cols] = p_slots[rows]
-        new = slots < 0
-        slots[new] = np.arange(self.n_slots, self.n_slots + int(new.sum()))
-        self.n_slots += int(new.sum())
-        return slots
-
-
 def _validate_grid(name: str, values: ArrayLike) -> NDArray[np.float64]:
     a = np.atleast_1d(validate_array_finite(name, values))
     if a.ndim != 1:
@@ -278,7 +246,7 @@ def fe_stability_map(
     # points in parallel, or a single point's sub-bands in parallel: never both
     solver = FESolver(model, method, band, n_modes, samples, sigma_reach, band_workers=1 if n_r * n_m > 1 else None)
     results: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
-    tracker = _Tracker()
+    tracker = _MacTracker()
     total, done = n_r * n_m, 0
 
     def solve(ij):
@@ -289,7 +257,8 @@ def fe_stability_map(
             slots = np.arange(sol.eigenvalues.size)
             tracker.n_slots = max(tracker.n_slots, slots.size)
         else:
-            slots = tracker.first(sol) if prev is None else tracker.match(prev, sol)
+            lam = sol.eigenvalues
+            slots = tracker.first(lam.size) if prev is None else tracker.match(prev, lam, sol.vectors)
         results[ij] = (slots, sol.eigenvalues, sol.residuals)
         return slots, sol.eigenvalues, sol.vectors
 
@@ -348,14 +317,14 @@ def _row_task(item: tuple) -> list[tuple[NDArray, NDArray, NDArray]]:
     Modes new to the row get provisional indices from ``_PROVISIONAL`` up, renumbered by the caller.
     """
     solver, omega, mus, t, first, track = item
-    tracker = _Tracker()
+    tracker = _MacTracker()
     tracker.n_slots = _PROVISIONAL
     out = []
     prev = first
     with threadpool_limits(1, user_api="blas"):
         for mu in mus[1:]:
             sol = solver.solve(omega, mu, t, vectors=track)
-            slots = tracker.match(prev, sol) if track else np.arange(sol.eigenvalues.size)
+            slots = tracker.match(prev, sol.eigenvalues, sol.vectors) if track else np.arange(sol.eigenvalues.size)
             prev = (slots, sol.eigenvalues, sol.vectors)
             out.append((slots, sol.eigenvalues, sol.residuals))
     return out
