@@ -67,7 +67,8 @@ def main() -> None:
               f"{sum(s[0] for s in shifts):.1f} s, L+U up to {max(s[1] for s in shifts) / 1e6:.0f}e6 entries); "
               f"wall {wall:.1f} s, CPU {cpu:.1f} s; peak RSS {peak_mb():.0f} MB; "
               f"max backward error {sol.residuals.max():.1e}", flush=True)
-        print("  unstable: " + ", ".join(f"{x.imag / 2 / math.pi:.0f} Hz ({x.real:+.1f} 1/s)" for x in lam[lam.real > 0]))
+        grow = lam[lam.real > 0]
+        print("  unstable: " + ", ".join(f"{x.imag / 2 / math.pi:.0f} Hz ({x.real:+.1f} 1/s)" for x in grow))
         return sol, wall, cpu
 
     sparse._factorize = counting
