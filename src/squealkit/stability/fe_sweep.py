@@ -30,7 +30,7 @@ from .._validation import InputError, validate_angle, validate_array_finite, val
 from ..models.fe import FEModel, rpm_to_omega
 from ._kernels import derived_quantities
 from ._solve import VERDICTS
-from .eigen import UNSTABLE_RTOL
+from .eigen import UNSTABLE_RTOL, _eigen_variables
 from .sparse import (
     BAND_HZ,
     RESIDUAL_TOL,
@@ -376,24 +376,11 @@ def _fe_dataset(solver, rpm, omegas, mu, theta, t, results, n_slots, *, tracked:
     model = solver.model
     ds = xr.Dataset(
         data_vars={
-            "growth_rate": (dims, sigma, {"units": "1/s", "long_name": "growth rate sigma (real part)"}),
-            "omega": (dims, omega, {"units": "rad/s", "long_name": "damped circular frequency omega_d"}),
-            "frequency": (dims, omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency"}),
-            "damping_ratio": (dims, zeta, {"units": "1", "long_name": "damping ratio -sigma/|lambda|"}),
-            "growth_rate_error": (dims, err, {"units": "1/s", "long_name": "error radius of the eigenvalue "
-                                              "(16 x backward error x |lambda|)"}),
+            **_eigen_variables(dims, sigma, omega, zeta, err, unstable, verdict, smax, any_u, locked, lock_in_rtol,
+                               err_name="error radius of the eigenvalue (16 x backward error x |lambda|)"),
             "residual": (dims, res, {"units": "1", "long_name": "backward error of the eigenpair in the full model"}),
             "trusted": (dims, valid & ~(res > RESIDUAL_TOL),
                         {"long_name": "backward error below residual_tol (or not computed: dense, no vectors)"}),
-            "unstable": (dims, unstable,
-                         {"long_name": "mode unstable (sigma beyond 1e-9 |lambda|_max by more than its error)"}),
-            "verdict": (("rpm", "mu"), verdict,
-                        {"long_name": "stability verdict", "flag_values": np.arange(len(VERDICTS), dtype=np.int8),
-                         "flag_meanings": " ".join(VERDICTS)}),
-            "max_growth_rate": (("rpm", "mu"), smax, {"units": "1/s", "long_name": "largest growth rate"}),
-            "any_unstable": (("rpm", "mu"), any_u, {"long_name": "unstable: flutter or divergence"}),
-            "lock_in": (("rpm", "mu"), locked,
-                        {"long_name": "two modes coalesced in frequency, one unstable", "rtol": lock_in_rtol}),
         },
         coords={
             "rpm": ("rpm", rpm, {"units": "1/min", "long_name": "disc speed"}),
