@@ -10,14 +10,14 @@ import scipy.sparse.linalg as spla
 from squealkit import InputError
 from squealkit.stability.reduction import (
     _as_model,
-    _backward_error,
-    _band_eigs,
+    _fe_model,
     modal_basis,
     pod_basis,
     reduce,
     reduced_eigs,
     reduced_sweep,
 )
+from squealkit.stability.sparse import backward_errors, band_eigs
 
 pytest.importorskip("skfem")
 
@@ -38,7 +38,8 @@ def pod(brake):
 
 
 def full(brake, omega, mu, band=BAND):
-    return _band_eigs(_as_model(brake), omega, mu, band)
+    sol = band_eigs(_fe_model(_as_model(brake)), omega, mu, band=band)
+    return sol.eigenvalues, sol.vectors
 
 
 def nearest_rel_error(lam, ref):
@@ -57,7 +58,7 @@ def test_band_solver_agrees_with_scipy_shift_invert(brake):
     B = sp.bmat([[eye, None], [None, brake["M"]]], format="csc").astype(complex)
     ref = spla.eigs(A, k=4, M=B, sigma=2j * math.pi * 12e3, return_eigenvectors=False)
     assert np.max(nearest_rel_error(ref, lam)) < 1e-10
-    assert np.max(_backward_error(_as_model(brake), omega, mu, lam, X)) < 1e-12
+    assert np.max(backward_errors(_fe_model(_as_model(brake)), omega, mu, lam, X)) < 1e-12
 
 
 def test_modal_basis_is_mass_normalised_up_to_the_cut_off(brake):
@@ -114,3 +115,23 @@ def test_bad_input_is_rejected(brake):
         reduced_eigs(reduce(brake, modal_basis(brake, n_modes=4)), 1.0, 0.3, band=(5e3, 1e3))
     with pytest.raises(InputError, match="K1"):
         modal_basis({"M": brake["M"]}, n_modes=3)
+
+
+def test_reduced_sweep_tracks_modes_by_mac(pod):
+    # tracking only relabels: each point keeps its eigenvalues; a tracked mode moves
+    # smoothly along mu (the friction matrix enters linearly), here by < 2 % per 0.1 of mu
+    mus = np.linspace(0.0, 0.6, 7)
+    tracked = reduced_sweep(pod, [20.0, 50.0], mus, band=BAND)
+    plain = reduced_sweep(pod, [20.0, 50.0], mus, band=BAND, track=False)
+    assert tracked.attrs["tracked"] == 1 and plain.attrs["tracked"] == 0
+    for i in range(2):
+        for j in range(mus.size):
+            a = tracked.frequency_hz.values[i, j]
+            b = plain.frequency_hz.values[i, j]
+            np.testing.assert_allclose(np.sort(a[~np.isnan(a)]), np.sort(b[~np.isnan(b)]), rtol=1e-12)
+    lam = tracked.growth_rate.values + 2j * math.pi * tracked.frequency_hz.values
+    step = np.abs(np.diff(lam, axis=1)) / np.abs(lam[:, :-1])
+    assert np.nanmax(step) < 0.02
+    # by frequency, the labels jump where two modes cross or coalesce; tracking never does worse
+    lam_p = plain.growth_rate.values + 2j * math.pi * plain.frequency_hz.values
+    assert np.nanmax(step) <= np.nanmax(np.abs(np.diff(lam_p, axis=1)) / np.abs(lam_p[:, :-1]))

@@ -570,6 +570,30 @@ def _stream_map(model, mu, theta, *, damped, track, lock_in_rtol, progress, stor
                           weights=[(b - a) * n_th for *_, a, b in pieces], name="squealkit-stability")
 
 
+def _eigen_variables(dims, sigma, omega, zeta, err, unstable, verdict, smax, any_u, locked, lock_in_rtol,
+                     err_name: str = "error radius of the eigenvalue") -> dict:
+    """The per-mode and per-point variables of a stability map over ``dims`` (grid dims + ``mode``),
+    from :func:`~squealkit.stability._kernels.derived_quantities`: one builder for every map
+    (small models here, FE models in :mod:`~squealkit.stability.fe_sweep`)."""
+    point = dims[:-1]
+    return {
+        "growth_rate": (dims, sigma, {"units": "1/s", "long_name": "growth rate sigma (real part)"}),
+        "omega": (dims, omega, {"units": "rad/s", "long_name": "damped circular frequency omega_d"}),
+        "frequency": (dims, omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency"}),
+        "damping_ratio": (dims, zeta, {"units": "1", "long_name": "damping ratio -sigma/|lambda|"}),
+        "growth_rate_error": (dims, err, {"units": "1/s", "long_name": err_name}),
+        "unstable": (dims, unstable,
+                     {"long_name": "mode unstable (sigma beyond 1e-9 |lambda|_max by more than its error)"}),
+        "verdict": (point, verdict,
+                    {"long_name": "stability verdict", "flag_values": np.arange(len(VERDICTS), dtype=np.int8),
+                     "flag_meanings": " ".join(VERDICTS)}),
+        "max_growth_rate": (point, smax, {"units": "1/s", "long_name": "largest growth rate"}),
+        "any_unstable": (point, any_u, {"long_name": "unstable: flutter or divergence"}),
+        "lock_in": (point, locked,
+                    {"long_name": "two modes coalesced in frequency, one unstable", "rtol": lock_in_rtol}),
+    }
+
+
 def _dataset(model, mu, theta, sol, *, damped, tracked, lock_in_rtol, friction=None, speed=None) -> xr.Dataset:
     lam, err, verdict, thr = sol
     n = lam.shape[-1]
@@ -584,22 +608,8 @@ def _dataset(model, mu, theta, sol, *, damped, tracked, lock_in_rtol, friction=N
     n = lam.shape[-1]
     tan_t = np.tan(theta)
     ds = xr.Dataset(
-        data_vars={
-            "growth_rate": (dims, sigma, {"units": "1/s", "long_name": "growth rate sigma (real part)"}),
-            "omega": (dims, omega, {"units": "rad/s", "long_name": "damped circular frequency omega_d"}),
-            "frequency": (dims, omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency"}),
-            "damping_ratio": (dims, zeta, {"units": "1", "long_name": "damping ratio -sigma/|lambda|"}),
-            "growth_rate_error": (dims, err, {"units": "1/s", "long_name": "error radius of the eigenvalue"}),
-            "unstable": (dims, unstable,
-                         {"long_name": "mode unstable (sigma beyond 1e-9 |lambda|_max by more than its error)"}),
-            "verdict": (("mu", "theta"), verdict,
-                        {"long_name": "stability verdict", "flag_values": np.arange(len(VERDICTS), dtype=np.int8),
-                         "flag_meanings": " ".join(VERDICTS)}),
-            "max_growth_rate": (("mu", "theta"), smax, {"units": "1/s", "long_name": "largest growth rate"}),
-            "any_unstable": (("mu", "theta"), any_u, {"long_name": "unstable: flutter or divergence"}),
-            "lock_in": (("mu", "theta"), locked,
-                        {"long_name": "two modes coalesced in frequency, one unstable", "rtol": lock_in_rtol}),
-        },
+        data_vars=_eigen_variables(dims, sigma, omega, zeta, err, unstable, verdict, smax, any_u, locked,
+                                   lock_in_rtol),
         coords={
             "mu": ("mu", mu, {"units": "1", "long_name": "friction coefficient"}),
             "theta": ("theta", theta, {"units": "rad", "long_name": "run-out incline angle"}),

@@ -22,7 +22,6 @@ from typing import Any
 import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import linear_sum_assignment
 from threadpoolctl import threadpool_limits
 
 from .. import __version__
@@ -31,7 +30,7 @@ from .._validation import InputError, validate_angle, validate_array_finite, val
 from ..models.fe import FEModel, rpm_to_omega
 from ._kernels import derived_quantities
 from ._solve import VERDICTS
-from .eigen import UNSTABLE_RTOL
+from .eigen import UNSTABLE_RTOL, _eigen_variables
 from .sparse import (
     BAND_HZ,
     RESIDUAL_TOL,
@@ -42,6 +41,7 @@ from .sparse import (
     dense_parts,
     validate_band,
 )
+from .tracking import _MacTracker
 
 __all__ = ["DENSE_MAX_DOF", "METHODS", "FESolver", "fe_critical_friction", "fe_modes", "fe_stability_map"]
 
@@ -80,6 +80,9 @@ class FESolver:
         the friction the friction matrices see).
     sigma_reach : float
         For ``sparse``: find every mode in the band with ``|sigma|`` up to this [1/s].
+    band_workers : int, optional
+        For ``sparse``: sub-bands solved at once (:func:`~squealkit.stability.sparse.band_eigs`'s
+        ``workers``); 1 where operating points are already solved in parallel.
     """
 
     model: FEModel
@@ -88,6 +91,7 @@ class FESolver:
     n_modes: int | None = None
     samples: tuple[NDArray, NDArray] | None = None
     sigma_reach: float = 0.0
+    band_workers: int | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.model, FEModel):
@@ -132,7 +136,8 @@ class FESolver:
     def solve(self, omega: float, mu: float, tan_theta: float = 0.0, *, vectors: bool = True) -> EigenSolution:
         """Eigenvalues (and right eigenvectors in the full model's DOFs) at one operating point."""
         if self.method == "sparse":
-            return band_eigs(self.model, omega, mu, tan_theta, band=self.band, sigma_reach=self.sigma_reach)
+            return band_eigs(self.model, omega, mu, tan_theta, band=self.band, sigma_reach=self.sigma_reach,
+                             workers=self.band_workers)
         need_x = vectors or self.basis is not None
         sol = dense_eigs(self.solve_model, omega, mu, tan_theta, vectors=need_x, parts=self.parts)
         lam, X = sol.eigenvalues, sol.vectors
@@ -147,38 +152,6 @@ class FESolver:
             X = X / np.linalg.norm(X, axis=0) if X.shape[1] else X
             res = backward_errors(self.model, omega, mu, lam, X, tan_theta)
         return EigenSolution(lam, X if vectors else None, res)
-
-
-def _mac(A: NDArray, B: NDArray) -> NDArray:
-    """Modal assurance criterion between the columns of A and B (unit-norm columns)."""
-    return np.abs(A.conj().T @ B) ** 2
-
-
-class _Tracker:
-    """Assign each point's modes to slots, matching the previous point's by MAC and eigenvalue."""
-
-    def __init__(self) -> None:
-        self.n_slots = 0
-
-    def first(self, sol: EigenSolution) -> NDArray[np.intp]:
-        slots = np.arange(self.n_slots, self.n_slots + sol.eigenvalues.size)
-        self.n_slots += sol.eigenvalues.size
-        return slots
-
-    def match(self, prev: tuple[NDArray, NDArray, NDArray], sol: EigenSolution) -> NDArray[np.intp]:
-        """Slots of ``sol``'s modes given the previous point's ``(slots, lam, X)``."""
-        p_slots, p_lam, p_X = prev
-        lam, X = sol.eigenvalues, sol.vectors
-        slots = np.full(lam.size, -1, dtype=np.intp)
-        if p_lam.size and lam.size:
-            scale = max(np.max(np.abs(p_lam)), np.max(np.abs(lam)), 1e-300)
-            cost = (1.0 - _mac(p_X, X)) + np.abs(p_lam[:, None] - lam[None, :]) / scale
-            rows, cols = linear_sum_assignment(cost)
-            slots[cols] = p_slots[rows]
-        new = slots < 0
-        slots[new] = np.arange(self.n_slots, self.n_slots + int(new.sum()))
-        self.n_slots += int(new.sum())
-        return slots
 
 
 def _validate_grid(name: str, values: ArrayLike) -> NDArray[np.float64]:
@@ -268,12 +241,13 @@ def fe_stability_map(
         pick = [0, len(omegas) // 2, len(omegas) - 1]
         pick_mu = [0, len(mu_a) // 2, len(mu_a) - 1]
         samples = (np.unique(omegas[pick]), np.unique(mu_a[pick_mu]) + t)  # pod_basis takes mu_e
-    solver = FESolver(model, method, band, n_modes, samples, sigma_reach)
     n_r, n_m = rpm_a.size, mu_a.size
-    results: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
-    tracker = _Tracker()
-    total, done = n_r * n_m, 0
     workers = thread_limit() if workers is None else max(1, int(workers))
+    # points in parallel, or a single point's sub-bands in parallel: never both
+    solver = FESolver(model, method, band, n_modes, samples, sigma_reach, band_workers=1 if n_r * n_m > 1 else None)
+    results: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
+    tracker = _MacTracker()
+    total, done = n_r * n_m, 0
 
     def solve(ij):
         return solver.solve(omegas[ij[0]], mu_a[ij[1]], t, vectors=track)
@@ -283,7 +257,8 @@ def fe_stability_map(
             slots = np.arange(sol.eigenvalues.size)
             tracker.n_slots = max(tracker.n_slots, slots.size)
         else:
-            slots = tracker.first(sol) if prev is None else tracker.match(prev, sol)
+            lam = sol.eigenvalues
+            slots = tracker.first(lam.size) if prev is None else tracker.match(prev, lam, sol.vectors)
         results[ij] = (slots, sol.eigenvalues, sol.residuals)
         return slots, sol.eigenvalues, sol.vectors
 
@@ -342,14 +317,14 @@ def _row_task(item: tuple) -> list[tuple[NDArray, NDArray, NDArray]]:
     Modes new to the row get provisional indices from ``_PROVISIONAL`` up, renumbered by the caller.
     """
     solver, omega, mus, t, first, track = item
-    tracker = _Tracker()
+    tracker = _MacTracker()
     tracker.n_slots = _PROVISIONAL
     out = []
     prev = first
     with threadpool_limits(1, user_api="blas"):
         for mu in mus[1:]:
             sol = solver.solve(omega, mu, t, vectors=track)
-            slots = tracker.match(prev, sol) if track else np.arange(sol.eigenvalues.size)
+            slots = tracker.match(prev, sol.eigenvalues, sol.vectors) if track else np.arange(sol.eigenvalues.size)
             prev = (slots, sol.eigenvalues, sol.vectors)
             out.append((slots, sol.eigenvalues, sol.residuals))
     return out
@@ -401,24 +376,11 @@ def _fe_dataset(solver, rpm, omegas, mu, theta, t, results, n_slots, *, tracked:
     model = solver.model
     ds = xr.Dataset(
         data_vars={
-            "growth_rate": (dims, sigma, {"units": "1/s", "long_name": "growth rate sigma (real part)"}),
-            "omega": (dims, omega, {"units": "rad/s", "long_name": "damped circular frequency omega_d"}),
-            "frequency": (dims, omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency"}),
-            "damping_ratio": (dims, zeta, {"units": "1", "long_name": "damping ratio -sigma/|lambda|"}),
-            "growth_rate_error": (dims, err, {"units": "1/s", "long_name": "error radius of the eigenvalue "
-                                              "(16 x backward error x |lambda|)"}),
+            **_eigen_variables(dims, sigma, omega, zeta, err, unstable, verdict, smax, any_u, locked, lock_in_rtol,
+                               err_name="error radius of the eigenvalue (16 x backward error x |lambda|)"),
             "residual": (dims, res, {"units": "1", "long_name": "backward error of the eigenpair in the full model"}),
             "trusted": (dims, valid & ~(res > RESIDUAL_TOL),
                         {"long_name": "backward error below residual_tol (or not computed: dense, no vectors)"}),
-            "unstable": (dims, unstable,
-                         {"long_name": "mode unstable (sigma beyond 1e-9 |lambda|_max by more than its error)"}),
-            "verdict": (("rpm", "mu"), verdict,
-                        {"long_name": "stability verdict", "flag_values": np.arange(len(VERDICTS), dtype=np.int8),
-                         "flag_meanings": " ".join(VERDICTS)}),
-            "max_growth_rate": (("rpm", "mu"), smax, {"units": "1/s", "long_name": "largest growth rate"}),
-            "any_unstable": (("rpm", "mu"), any_u, {"long_name": "unstable: flutter or divergence"}),
-            "lock_in": (("rpm", "mu"), locked,
-                        {"long_name": "two modes coalesced in frequency, one unstable", "rtol": lock_in_rtol}),
         },
         coords={
             "rpm": ("rpm", rpm, {"units": "1/min", "long_name": "disc speed"}),

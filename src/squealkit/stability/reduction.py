@@ -32,7 +32,6 @@ Three steps, as industry does it (Graebner, Tiedemann, Schroeder & Mehrmann, ZAM
 from __future__ import annotations
 
 import contextlib
-import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -44,6 +43,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .._validation import InputError
+from .sparse import band_eigs
+from .tracking import _MacTracker
 
 __all__ = [
     "MATRIX_NAMES",
@@ -188,7 +189,10 @@ def modal_basis(
         w, V = sla.eigh(_dense(K1), _dense(M))
         freq = np.sqrt(np.maximum(w, 0.0)) / (2 * math.pi)
     else:
-        lu = spla.splu(sp.csc_matrix(K1))
+        # minimum degree on the symmetric pattern with diagonal pivots (stability.sparse._factorize):
+        # SuperLU's default COLAMD fills 4x more on FE matrices
+        lu = spla.splu(sp.csc_matrix(K1), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.1,
+                       options={"SymmetricMode": True})
         op = spla.LinearOperator((n, n), matvec=lu.solve, dtype=float)
         k = n_modes if n_modes is not None else 40
         while True:
@@ -220,81 +224,12 @@ def _dense(A: Any) -> np.ndarray:
 # ----------------------------------------------------------------------------- full band solve
 
 
-def _band_eigs(
-    model: _Model,
-    omega: float,
-    mu: float,
-    band: tuple[float, float],
-    *,
-    k: int = 24,
-    max_depth: int = 6,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Every eigenpair of the full model with frequency in ``band`` [Hz], by shift-invert.
+def _fe_model(model: _Model):
+    """The :class:`~squealkit.models.fe.FEModel` of the matrices, for :func:`~squealkit.stability.sparse.band_eigs`."""
+    from ..models.fe import FEModel
 
-    Private stand-in until ``stability.sparse`` is merged. One sparse LU of
-    ``P(s) = s^2 M + s C + K`` per shift ``s = i 2 pi f_s``; ARPACK on ``(A - s B)^-1 B`` of the
-    first-companion linearisation. The ``k`` eigenvalues nearest ``s`` cover the disc of
-    radius ``d_k`` (the farthest of them); a sub-band not covered by that disc is split in
-    two. Returns eigenvalues (positive frequencies) and displacement eigenvectors (n, m).
-    """
-    M, C, K = _mck(model, omega, mu)
-    n = model.n
-    lo, hi = band
-    lam_out: list[complex] = []
-    vec_out: list[np.ndarray] = []
-
-    def solve(f_lo: float, f_hi: float, depth: int) -> None:
-        s = 2j * math.pi * 0.5 * (f_lo + f_hi)
-        P = (s * s) * M + K + (s * C if C is not None else 0)
-        lu = spla.splu(sp.csc_matrix(P, dtype=complex), permc_spec="MMD_AT_PLUS_A")
-        CsM = (C + s * M) if C is not None else s * M
-
-        def op(z: np.ndarray) -> np.ndarray:
-            a, v = z[:n], z[n:]
-            x = -lu.solve(M @ v + CsM @ a)
-            return np.concatenate([x, a + s * x])
-
-        L = spla.LinearOperator((2 * n, 2 * n), matvec=op, dtype=complex)
-        kk = min(k, 2 * n - 2)
-        theta, Z = spla.eigs(L, k=kk, which="LM", tol=1e-13)
-        lam = s + 1.0 / theta
-        radius = np.max(np.abs(lam - s))
-        half = 2 * math.pi * 0.5 * (f_hi - f_lo)
-        f = lam.imag / (2 * math.pi)
-        covered = radius > 1.02 * half
-        if not covered and depth < max_depth:
-            mid = 0.5 * (f_lo + f_hi)
-            solve(f_lo, mid, depth + 1)
-            solve(mid, f_hi, depth + 1)
-            return
-        if not covered:
-            raise RuntimeError(f"band solve: {kk} eigenvalues do not cover {f_lo:.1f}-{f_hi:.1f} Hz")
-        sel = (f >= f_lo) & (f < f_hi)
-        lam_out.extend(lam[sel])
-        vec_out.extend(Z[:n, sel].T)
-
-    width = hi - lo
-    n_seg = max(1, math.ceil(width / 4000.0))
-    edges = np.linspace(lo, hi, n_seg + 1)
-    with _one_blas_thread():
-        for a, b in itertools.pairwise(edges):
-            solve(a, b, 0)
-    lam = np.array(lam_out)
-    X = np.array(vec_out).T if vec_out else np.zeros((n, 0), dtype=complex)
-    order = np.argsort(lam.imag)
-    X = X[:, order] / np.linalg.norm(X[:, order], axis=0)
-    return lam[order], X
-
-
-def _backward_error(model: _Model, omega: float, mu: float, lam: np.ndarray, X: np.ndarray) -> np.ndarray:
-    """Backward error of each eigenpair (columns of X) in the full model (1-norms)."""
-    M, C, K = _mck(model, omega, mu)
-    nM, nC, nK = _norm1(M), (_norm1(C) if C is not None else 0.0), _norm1(K)
-    out = np.empty(len(lam))
-    for j, (lj, x) in enumerate(zip(lam, X.T, strict=True)):
-        r = (lj * lj) * (M @ x) + K @ x + (lj * (C @ x) if C is not None else 0)
-        out[j] = np.linalg.norm(r) / ((abs(lj) ** 2 * nM + abs(lj) * nC + nK) * np.linalg.norm(x))
-    return out
+    return FEModel.from_matrices(**{k: v for k, v in model.mats.items() if v is not None}, omega_ref=model.omega_ref,
+                                 mu_ref=model.mu_ref, f_ref=model.f_ref)
 
 
 # ----------------------------------------------------------------------------- POD basis
@@ -335,8 +270,8 @@ def pod_basis(
         Relative widening of the band for the snapshots (modes just outside the band couple
         into it).
     eig_solver : callable, optional
-        ``eig_solver(matrices, omega, mu, band) -> (lam, X)``; default a private sparse
-        shift-invert band solve (``stability.sparse`` when merged).
+        ``eig_solver(matrices, omega, mu, band) -> (lam, X)``; default the sparse
+        shift-invert band solve :func:`~squealkit.stability.sparse.band_eigs`.
     return_singular_values : bool
         Also return the singular values (all of them, for choosing ``tol``).
 
@@ -356,10 +291,11 @@ def pod_basis(
     lo, hi = _validate_band(band)
     wide = (max(lo * (1 - band_margin), 1.0), hi * (1 + band_margin))
     cols = [] if extra is None else [np.asarray(extra, dtype=float)]
+    fe = _fe_model(model) if eig_solver is None else None
     for omega in omegas:
         for mu in mus:
             if eig_solver is None:
-                _, X = _band_eigs(model, float(omega), float(mu), wide)
+                X = band_eigs(fe, float(omega), float(mu), band=wide).vectors
             else:
                 _, X = eig_solver(matrices, float(omega), float(mu), wide)
             cols += [X.real, X.imag]
@@ -469,6 +405,21 @@ def reduced_eigs(
         ``residual`` (backward error), ``trusted`` (bool), and ``vector`` on request.
     """
     lo, hi = _validate_band(band)
+    lam, Y, eta = _reduced_solve(reduced, omega, mu, lo, hi)
+    out = {
+        "eigenvalue": lam,
+        "growth_rate": lam.real,
+        "frequency_hz": lam.imag / (2 * math.pi),
+        "residual": eta,
+        "trusted": eta <= eta_max,
+    }
+    if vectors:
+        out["vector"] = reduced.V @ Y
+    return out
+
+
+def _reduced_solve(reduced: ReducedModel, omega: float, mu: float, lo: float, hi: float):
+    """Eigenvalues in ``[lo, hi]`` Hz, their unit coordinates ``Y`` in the basis and full-model residuals."""
     coef = _coefficients(_Model({k: reduced.mats.get(k) for k in MATRIX_NAMES}, *_refs(reduced)), omega, mu)
     r = reduced.n_reduced
     Mr = reduced.mats["M"]
@@ -495,17 +446,7 @@ def reduced_eigs(
     lam, U = lam[order], U[:, order]
     Y = sla.solve_triangular(L, U, lower=True, trans="T")
     Y = Y / np.linalg.norm(Y, axis=0)
-    eta = _reduced_backward_error(reduced, coef, lam, Y)
-    out = {
-        "eigenvalue": lam,
-        "growth_rate": lam.real,
-        "frequency_hz": lam.imag / (2 * math.pi),
-        "residual": eta,
-        "trusted": eta <= eta_max,
-    }
-    if vectors:
-        out["vector"] = reduced.V @ Y
-    return out
+    return lam, Y, _reduced_backward_error(reduced, coef, lam, Y)
 
 
 def _refs(reduced: ReducedModel) -> tuple[float, float, float]:
@@ -536,42 +477,76 @@ def reduced_sweep(
     *,
     band: tuple[float, float] = (1e3, 16e3),
     eta_max: float = 1e-8,
+    track: bool = True,
 ):
     """Reduced eigenvalues over a speed x friction grid, as an ``xarray.Dataset``.
+
+    Parameters
+    ----------
+    reduced : ReducedModel
+        From :func:`reduce`.
+    omegas, mus : sequences of float
+        Disc speeds [rad/s] and friction coefficients of the grid.
+    band : (float, float)
+        Frequencies [Hz] kept.
+    eta_max : float
+        Backward error up to which an eigenvalue is ``trusted``.
+    track : bool
+        Follow each mode across the grid by MAC on its eigenvector, as
+        :func:`~squealkit.stability.fe_stability_map` does (the first column along omega,
+        then each row along mu; computed in the basis's coordinates, where the MAC is the
+        full model's because the basis is orthonormal). Otherwise modes are numbered by
+        frequency at each point.
 
     Returns
     -------
     xarray.Dataset
-        Dims ``(omega, mu, mode)`` (``mode`` counts the eigenvalues in the band by
-        frequency, padded with NaN where a point has fewer): ``growth_rate`` [1/s],
-        ``frequency_hz`` [Hz], ``residual`` (full-model backward error), ``trusted``; per
-        point ``any_unstable`` (a trusted eigenvalue with positive growth rate),
-        ``max_growth_rate`` and ``all_trusted``; coordinate ``rpm``.
+        Dims ``(omega, mu, mode)`` (``mode`` a tracked mode, NaN where it is outside the
+        band; or, without tracking, the eigenvalues in the band by frequency, padded with
+        NaN): ``growth_rate`` [1/s], ``frequency_hz`` [Hz], ``residual`` (full-model
+        backward error), ``trusted``; per point ``any_unstable`` (a trusted eigenvalue with
+        positive growth rate), ``max_growth_rate`` and ``all_trusted``; coordinate ``rpm``.
     """
     import xarray as xr
 
+    lo, hi = _validate_band(band)
     omegas = np.atleast_1d(np.asarray(omegas, dtype=float))
     mus = np.atleast_1d(np.asarray(mus, dtype=float))
+    tracker = _MacTracker()
+    results = {}
     with _one_blas_thread():  # many small dense solves: serial BLAS measured 5x faster on 2 shared cores
-        results = [[reduced_eigs(reduced, om, mu, band=band, eta_max=eta_max) for mu in mus] for om in omegas]
-    m = max((len(r["eigenvalue"]) for row in results for r in row), default=0)
+        column = None
+        for i, om in enumerate(omegas):
+            prev = column
+            for j, mu in enumerate(mus):
+                lam, Y, eta = _reduced_solve(reduced, om, mu, lo, hi)
+                if not track:
+                    slots = np.arange(lam.size)
+                    tracker.n_slots = max(tracker.n_slots, lam.size)
+                elif prev is None:
+                    slots = tracker.first(lam.size)
+                else:
+                    slots = tracker.match(prev, lam, Y)
+                prev = (slots, lam, Y)
+                if j == 0:
+                    column = prev
+                results[i, j] = (slots, lam, eta)
+    m = tracker.n_slots
     shape = (len(omegas), len(mus), m)
-    arrays = {key: np.full(shape, np.nan) for key in ("growth_rate", "frequency_hz", "residual")}
-    trusted = np.zeros(shape, dtype=bool)
-    for i, row in enumerate(results):
-        for j, res in enumerate(row):
-            k = len(res["eigenvalue"])
-            for key in arrays:
-                arrays[key][i, j, :k] = res[key]
-            trusted[i, j, :k] = res["trusted"]
+    lam_a = np.full(shape, np.nan + 1j * np.nan)
+    res = np.full(shape, np.nan)
+    for (i, j), (slots, lam, eta) in results.items():
+        lam_a[i, j, slots] = lam
+        res[i, j, slots] = eta
+    valid = ~np.isnan(res)
+    trusted = valid & (res <= eta_max)
+    gr = lam_a.real
     dims = ("omega", "mu", "mode")
-    gr = arrays["growth_rate"]
-    valid = ~np.isnan(gr)
     ds = xr.Dataset(
         {
             "growth_rate": (dims, gr, {"units": "1/s", "long_name": "growth rate (real part)"}),
-            "frequency_hz": (dims, arrays["frequency_hz"], {"units": "Hz"}),
-            "residual": (dims, arrays["residual"], {"long_name": "full-model backward error"}),
+            "frequency_hz": (dims, lam_a.imag / (2 * math.pi), {"units": "Hz"}),
+            "residual": (dims, res, {"long_name": "full-model backward error"}),
             "trusted": (dims, trusted, {"long_name": f"residual <= {eta_max:g}"}),
             "any_unstable": (dims[:2], np.any(trusted & (np.nan_to_num(gr, nan=-np.inf) > 0), axis=2)),
             "max_growth_rate": (dims[:2], np.max(np.where(valid, gr, -np.inf), axis=2, initial=-np.inf)),
@@ -581,9 +556,10 @@ def reduced_sweep(
             "omega": ("omega", omegas, {"units": "rad/s", "long_name": "disc speed"}),
             "rpm": ("omega", omegas * 60 / (2 * math.pi), {"units": "1/min"}),
             "mu": ("mu", mus),
-            "mode": ("mode", np.arange(m)),
+            "mode": ("mode", np.arange(m),
+                     {"long_name": "mode index (tracked by MAC)" if track else "mode index (by frequency)"}),
         },
-        attrs={"band_hz": list(band), "eta_max": eta_max, "n_reduced": reduced.n_reduced,
-               "n_full": reduced.V.shape[0]},
+        attrs={"band_hz": [lo, hi], "eta_max": eta_max, "n_reduced": reduced.n_reduced,
+               "n_full": reduced.V.shape[0], "tracked": int(track)},
     )
     return ds

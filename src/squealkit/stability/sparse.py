@@ -20,6 +20,7 @@ converged pair whatever its conditioning.
 from __future__ import annotations
 
 import math
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,6 +30,7 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
+from .._threads import thread_limit
 from .._validation import InputError, validate_finite, validate_positive
 from ..models.fe import FEModel
 
@@ -229,16 +231,29 @@ def dense_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, 
     return EigenSolution(lam, X, _backward(parts.parts["M"], C, K, lam, X))
 
 
+def _factorize(P) -> spla.SuperLU:
+    """Sparse LU of ``P(s)`` for a structurally symmetric FE matrix.
+
+    Minimum degree on ``A^T + A`` fills far less than SuperLU's default COLAMD, and
+    SuperLU's symmetric mode (diagonal pivots preferred, threshold 0.1) keeps that ordering
+    instead of letting row pivoting undo it. Measured on the built-in brake at 8 kHz,
+    one BLAS thread: 8 802 DOFs, factor 0.27 s CPU and 2.5e6 entries in L + U against 0.6 s
+    and 3.1e6 with partial pivoting; 33 966 DOFs, 3.3 s and 1.6e7 against 27 s and 6.3e7
+    with COLAMD. Every
+    eigenpair is checked by its backward error, so a less stable pivot cannot go unnoticed.
+    """
+    return spla.splu(sp.csc_matrix(P, dtype=np.complex128), permc_spec="MMD_AT_PLUS_A",
+                     diag_pivot_thresh=0.1, options={"SymmetricMode": True})
+
+
 def _shift_operator(M, C, K, s: complex) -> spla.LinearOperator:
     """``(A - s B)^-1 B`` of the companion form ``A = [[0, I], [-K, -C]]``, ``B = diag(I, M)``,
     applied with one sparse LU of ``P(s) = s^2 M + s C + K``:
     ``w1 = -P(s)^-1 (M v2 + (C + s M) v1)``, ``w2 = v1 + s w1``."""
     n = M.shape[0]
     P = (s * s) * M + s * C + K
-    # FE matrices are structurally symmetric: minimum degree on A^T + A fills far less than
-    # SuperLU's default COLAMD (disc + pads, 1566 DOFs: factor 0.06 s against 2.4-5.9 s)
     try:
-        lu = spla.splu(sp.csc_matrix(P, dtype=np.complex128), permc_spec="MMD_AT_PLUS_A")
+        lu = _factorize(P)
     except RuntimeError as e:  # exactly singular: an eigenvalue at the shift itself
         raise InputError(f"P(s) is singular at the shift s = {s:.6g} (an eigenvalue there): {e}") from e
     CsM = (C + s * M).tocsr()
@@ -273,7 +288,7 @@ def _nearest(op: spla.LinearOperator, s: complex, k: int):
 
 def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *,
               band: tuple[float, float] = BAND_HZ, k: int = 24, sigma_reach: float = 0.0,
-              max_shifts: int = 400) -> EigenSolution:
+              max_shifts: int = 400, workers: int | None = None) -> EigenSolution:
     """Eigenvalues with frequency in ``band`` [Hz], by shift-invert with one sparse LU per shift.
 
     Shifts ``s = j 2 pi f`` start at the band's lower edge. At each, ARPACK finds the ``k``
@@ -300,6 +315,10 @@ def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *
         damped models need it; unstable modes near the axis are found whatever its value).
     max_shifts : int
         Give up (InputError) past this many shifts.
+    workers : int, optional
+        Split the band into this many equal sub-bands walked at once, each in its own
+        thread with its own sparse LU (SuperLU releases the GIL); peak memory grows with
+        it. Default: the thread limit of :mod:`squealkit._threads`.
 
     Returns
     -------
@@ -315,13 +334,31 @@ def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *
     M = model.mass_matrix().tocsr()
     C = model.damping_matrix(omega, mu, tan_theta)
     K = model.stiffness_matrix(omega, mu, tan_theta)
-    w_lo, w_hi = 2 * math.pi * lo, 2 * math.pi * hi
-    with threadpool_limits(1, user_api="blas"):  # ARPACK's BLAS-2 calls: threads only stall on shared cores
-        return _band_walk(model, omega, mu, tan_theta, M, C, K, n, w_lo, w_hi, k, sigma_reach, max_shifts)
+    workers = thread_limit() if workers is None else max(1, int(workers))
+    edges = 2 * math.pi * np.linspace(lo, hi, workers + 1)
+
+    def walk(i):
+        return _band_walk(M, C, K, n, edges[i], edges[i + 1], k, sigma_reach, max_shifts, closed=i == workers - 1)
+
+    # ARPACK's BLAS-2 calls: threads only stall on shared cores
+    with threadpool_limits(1, user_api="blas"):
+        if workers == 1:
+            parts = [walk(0)]
+        else:
+            with ThreadPoolExecutor(max_workers=workers) as pool:
+                parts = list(pool.map(walk, range(workers)))
+    lam = np.concatenate([p[0] for p in parts])
+    X = np.concatenate([p[1] for p in parts], axis=1)
+    order = np.lexsort((lam.real, lam.imag))
+    lam, X = lam[order], X[:, order]
+    X = X / np.linalg.norm(X, axis=0) if X.shape[1] else X
+    res = backward_errors(model, omega, mu, lam, X, tan_theta)
+    return EigenSolution(lam, X, res, covered_growth=min(p[2] for p in parts))
 
 
-def _band_walk(model, omega, mu, tan_theta, M, C, K, n, w_lo, w_hi, k, sigma_reach, max_shifts) -> EigenSolution:
-    """The shift walk of :func:`band_eigs`."""
+def _band_walk(M, C, K, n, w_lo, w_hi, k, sigma_reach, max_shifts, *, closed: bool = True):
+    """The shift walk of :func:`band_eigs` over ``[w_lo, w_hi)`` [rad/s] (``]`` if ``closed``):
+    eigenvalues, right eigenvectors and the least covered growth rate."""
     lams, xs, chords = [], [], []
     edge = w_lo  # lower edge of the current shift's slice
     center = w_lo
@@ -344,7 +381,7 @@ def _band_walk(model, omega, mu, tan_theta, M, C, K, n, w_lo, w_hi, k, sigma_rea
         if short and kk < 2 * n - 3:  # the disc misses part of its slice: more eigenvalues
             kk *= 2
             continue
-        sel = (dist < r) & (lam.imag >= edge) & ((lam.imag <= top) if last else (lam.imag < top))
+        sel = (dist < r) & (lam.imag >= edge) & ((lam.imag <= top) if last and closed else (lam.imag < top))
         lams.append(lam[sel])
         xs.append(X[:, sel])
         reach = max(below, top - center)
@@ -357,8 +394,4 @@ def _band_walk(model, omega, mu, tan_theta, M, C, K, n, w_lo, w_hi, k, sigma_rea
                          f"{max_shifts} shifts; narrow it.")
     lam = np.concatenate(lams) if lams else np.zeros(0, complex)
     X = np.concatenate(xs, axis=1) if xs else np.zeros((n, 0), complex)
-    order = np.lexsort((lam.real, lam.imag))
-    lam, X = lam[order], X[:, order]
-    X = X / np.linalg.norm(X, axis=0) if X.shape[1] else X
-    res = backward_errors(model, omega, mu, lam, X, tan_theta)
-    return EigenSolution(lam, X, res, covered_growth=min(chords) if chords else math.inf)
+    return lam, X, min(chords) if chords else math.inf
