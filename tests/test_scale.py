@@ -221,3 +221,21 @@ def test_cli_scheduler_errors_are_one_line(args, message, tmp_path, monkeypatch)
     res = CliRunner().invoke(cli, args)
     assert res.exit_code == 2
     assert message in res.output and res.output.count("\n") == 1 and "Traceback" not in res.output
+
+
+def _statuses(arg):
+    words = ["completed", "diverged"] if arg == 0 else ["diverged", "diverged"]
+    return xr.Dataset({"status": ("run", np.array(words)), "x": ("run", np.arange(2.0) + arg)},
+                      coords={"run": [2 * arg, 2 * arg + 1]})
+
+
+def test_text_of_data_dependent_width_streams_to_zarr(tmp_path, recwarn):
+    # issue 15: `simulate --mu 0.2:0.8:64 --out b64.zarr` crashed (status '<U9' in the store, '<U8'
+    # in a later piece whose runs had all diverged), and zarr v3 warned about fixed-width text
+    from squealkit.scale import lazy_template, stream_to_zarr
+
+    template = lazy_template(_statuses(0), "run", np.arange(6), 2)
+    ds = stream_to_zarr(tmp_path / "s.zarr", template, "run", [(_statuses, k, 2 * k, 2 * k + 2) for k in range(3)])
+    assert ds["status"].values.tolist() == ["completed"] + ["diverged"] * 5
+    assert ds["x"].values.tolist() == [0, 1, 1, 2, 2, 3]
+    assert not [w for w in recwarn if "Specification" in type(w.message).__name__]

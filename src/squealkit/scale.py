@@ -281,10 +281,23 @@ def lazy_template(sample: xr.Dataset, dim: str, index: np.ndarray, chunk: int) -
     return xr.Dataset(data_vars, coords, attrs=sample.attrs)
 
 
+def _text_as_object(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` with its text variables as variable-length strings.
+
+    Fixed-width text (numpy ``<U``) takes its width from the data, so a piece whose statuses
+    are all ``"diverged"`` (``<U8``) does not fit a store laid out from a ``"completed"`` one
+    (``<U9``), and zarr v3 has no stable specification for fixed-width text (it warns on every
+    write); variable-length strings have neither problem.
+    """
+    text = [k for k, v in ds.variables.items() if v.dtype.kind == "U"]
+    return ds.assign({k: ds[k].astype(object) for k in text if k in ds.data_vars}).assign_coords(
+        {k: ds[k].astype(object) for k in text if k in ds.coords and k not in ds.dims})
+
+
 def _write_region(item: tuple) -> int:
     """Compute one piece and write it into its region of the zarr store."""
     fn, arg, path, dim, start, stop = item
-    piece: xr.Dataset = fn(arg)
+    piece: xr.Dataset = _text_as_object(fn(arg))
     drop = [k for k, v in piece.variables.items() if dim not in v.dims]
     with deferred_interrupts():  # no background writer outlives an interrupt
         piece.drop_vars(drop).to_zarr(path, region={dim: slice(start, stop)}, consolidated=False)
@@ -327,7 +340,7 @@ def stream_to_zarr(
     final = Path(store)
     with atomic_path(final, directory=True) as tmp:
         with deferred_interrupts():
-            template.to_zarr(tmp, mode="w", compute=False, consolidated=False)
+            _text_as_object(template).to_zarr(tmp, mode="w", compute=False, consolidated=False)
         path = str(tmp.resolve())
         items = [(fn, arg, path, dim, a, b) for fn, arg, a, b in pieces]
         w = weights if weights is not None else [b - a for *_, a, b in pieces]
