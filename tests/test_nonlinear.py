@@ -8,6 +8,7 @@ Guckenheimer & Holmes, *Nonlinear Oscillations* (1983), eq. (3.4.11), with ``l1 
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -16,6 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
+from squealkit import InputError
 from squealkit.nonlinear import SecondOrderSystem, harmonic_balance
 from squealkit.nonlinear.hopf import hopf_point
 
@@ -534,3 +536,37 @@ def test_report_section_how_loud_is_written_from_its_numbers(tmp_path):
     assert f"{100 * num['fig4_envelope_ratio']:.2g} %" in text
     assert (tmp_path / "f" / "how_loud.png").stat().st_size > 10_000
     assert {p.name for p in (tmp_path / "d").iterdir()} == set(sec.data)
+
+
+def test_adaptive_harmonics_double_until_the_amplitude_settles():
+    # issue 13: "an adaptive number of harmonics (convergence of the amplitude stated)"
+    import xarray as xr
+
+    from squealkit.nonlinear.continuation import MAX_HARMONICS, _enough_harmonics
+
+    tried = []
+    changes = {2: 0.3, 4: 0.04, 8: 0.004}  # amplitude change at 2H for each H; 0.2 for any other
+
+    def solve(H):
+        tried.append(H)
+        return xr.Dataset(attrs={"harmonics": H, "harmonics_change": changes.get(H, 0.2)})
+
+    ds = _enough_harmonics(solve, 2, 0.01, True)
+    assert tried == [2, 4, 8] and ds.attrs["harmonics"] == 8 and ds.attrs["harmonics_converged"] == 1
+    tried.clear()
+    with pytest.warns(RuntimeWarning, match="more than harmonics_tol = 0.001, at the most harmonics"):
+        ds = _enough_harmonics(solve, 10, 1e-3, True)
+    assert tried[-1] <= MAX_HARMONICS < 2 * tried[-1] and ds.attrs["harmonics_converged"] == 0
+    assert _enough_harmonics(solve, 3, None, True).attrs["harmonics"] == 3  # fixed H: one solve
+    with pytest.raises(InputError, match="check_harmonics"):
+        _enough_harmonics(solve, 3, 0.01, False)
+
+
+def test_adaptive_branch_of_the_paper_model_converges_in_the_harmonics(run):
+    # the paper's cycles lose contact (kinks): H = 2 is far off, the adaptive branch raises H until
+    # the amplitudes change by at most 1 % at 2H, and says so in its JSON
+    r = run("limitcycle", "--mu", "0.39:0.6:5", "--harmonics", "2", "--harmonics-tol", "0.01", "--json")
+    assert r.exit_code == 0, r.output
+    out = json.loads(r.stdout)
+    assert out["harmonics"] > 2 and out["harmonics_change"] <= 0.01
+    assert out["harmonics_tol"] == 0.01 and out["harmonics_converged"] is True

@@ -20,6 +20,9 @@ from ._options import build_model_from_options, check_output_suffix, emit_json, 
                    "branch over theta at the one --mu value instead (mu_e = mu + tan(theta) acts like friction).")
 @click.option("--harmonics", type=click.IntRange(min=1, max=200), default=10, show_default=True,
               help="Harmonics H of every cycle (the change of the amplitude at 2H is reported).")
+@click.option("--harmonics-tol", type=click.FloatRange(min=0.0, min_open=True), default=None, metavar="TOL",
+              help="Adapt H: double it (from --harmonics, up to 80) until the amplitudes change by at most TOL "
+                   "(relative, e.g. 0.01) at 2H; a warning if they never do.")
 @click.option("--contact", type=click.Choice(["nonlinear"]), default="nonlinear", show_default=True,
               help="Contact law: loss of contact and velocity-sign friction (the transient's law).")
 @click.option("--stribeck", "stribeck_spec", default=None, metavar="MU_STATIC,V_STRIBECK",
@@ -38,8 +41,8 @@ from ._options import build_model_from_options, check_output_suffix, emit_json, 
 @click.option("--level-dof", default=None, metavar="NAME",
               help="DOF whose velocity radiates (default the first DOF: the pin's x1).")
 @output_options()
-def limitcycle(preset, config, sets, mu_spec, theta_spec, harmonics, contact, stribeck_spec, speed, stability,
-               radiation_factor, transfer_path, level_dof, as_json, out_path, plot_path) -> None:
+def limitcycle(preset, config, sets, mu_spec, theta_spec, harmonics, harmonics_tol, contact, stribeck_spec, speed,
+               stability, radiation_factor, transfer_path, level_dof, as_json, out_path, plot_path) -> None:
     """How loud: squeal limit cycles over friction or run-out slope (harmonic balance + continuation).
 
     Starts at the Hopf point (the damped critical friction, onset frequency
@@ -110,10 +113,11 @@ def limitcycle(preset, config, sets, mu_spec, theta_spec, harmonics, contact, st
     if over_theta:
         t = [math.tan(math.radians(float(v))) for v in (theta.min(), theta.max())]
         ds = limit_cycle_branch_slope(model, t, mu=float(mu[0]), contact=ct, speed=speed, harmonics=harmonics,
-                                      n_points=theta.size, stability=stability)
+                                      n_points=theta.size, stability=stability, harmonics_tol=harmonics_tol)
     else:
         ds = limit_cycle_branch(model, (float(mu.min()), float(mu.max())), theta=math.radians(float(theta[0])),
-                                contact=ct, speed=speed, harmonics=harmonics, n_points=mu.size, stability=stability)
+                                contact=ct, speed=speed, harmonics=harmonics, n_points=mu.size, stability=stability,
+                                harmonics_tol=harmonics_tol)
     if radiation_factor is not None or transfer is not None:
         ds = sound_level(ds, radiation_factor=radiation_factor, transfer=transfer, dof=level_dof)
     if out_path is not None:
@@ -134,8 +138,13 @@ def limitcycle(preset, config, sets, mu_spec, theta_spec, harmonics, contact, st
     click.echo(f"Hopf point: {where}, {h['frequency_hz']:.2f} Hz, l1 = {h['lyapunov_coefficient']:.4g} "
                f"-> {h['kind']} (from {h['kind_from']})")
     fixed = f"mu = {out['mu']:g}" if over_theta else f"theta = {out['theta_deg']:g} deg"
+    adaptive = ""
+    if "harmonics_tol" in out:
+        adaptive = (f", adapted to tol {out['harmonics_tol']:g}: "
+                    + ("converged" if out["harmonics_converged"] else "NOT converged"))
     click.echo(f"contact: {out['contact']}; {fixed}; H = {out['harmonics']} "
-               f"(amplitude change at 2H: {out['harmonics_change']:.2g}); stability: {out['stability_method']}")
+               f"(amplitude change at 2H: {out['harmonics_change']:.2g}{adaptive}); "
+               f"stability: {out['stability_method']}")
     dofs = list(out["amplitude"])
     xs = out["theta_deg"] if over_theta else out["mu"]
     level = "level_db" in out

@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import itertools
 import math
+import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -363,6 +365,7 @@ def limit_cycle_branch(
     n_floquet: int | None = None,
     check_harmonics: bool = True,
     stability: str = "monodromy",
+    harmonics_tol: float | None = None,
 ) -> xr.Dataset:
     """Squeal limit cycles of a squealkit model over friction, from the Hopf point (harmonic balance).
 
@@ -398,6 +401,11 @@ def limit_cycle_branch(
     stability : {"monodromy", "hill"}
         Floquet multipliers by the monodromy matrix or by Hill's method (attribute
         ``stability_method``).
+    harmonics_tol : float, optional
+        Adapt the number of harmonics: ``harmonics`` is doubled (up to :data:`MAX_HARMONICS`)
+        until the amplitude changes by at most this much (relative) at 2H; attributes
+        ``harmonics_tol`` and ``harmonics_converged`` (with a warning when it is not).
+        None (default): H stays ``harmonics`` and the change is only reported.
 
     Returns
     -------
@@ -433,12 +441,47 @@ def limit_cycle_branch(
         raise InputError(f"The squeal onset mu_crit = {crit.mu_critical:.6g} (theta = {math.degrees(theta):g} deg) "
                          f"lies outside the friction range [{lo:g}, {hi:g}]; the branch starts there: widen the range.")
     hopf = hopf_point(system, crit.mu_critical)
-    br = continue_branch(system, hopf, (lo, hi), harmonics=harmonics, step=(hi - lo) / (n_points - 1),
-                         max_points=max_points or 10 * n_points, n_floquet=n_floquet, stability=stability)
-    return branch_dataset(system, br, harmonics=harmonics, check_harmonics=check_harmonics,
-                          attrs={"model": model.to_json(), "stability_method": stability, "theta": theta,
-                                 "theta_deg": math.degrees(theta), "tan_theta": t, "speed": speed, "speed_units": "m/s",
-                                 "contact": contact.describe(), "mu_range": [lo, hi]})
+
+    def solve(H: int) -> xr.Dataset:
+        br = continue_branch(system, hopf, (lo, hi), harmonics=H, step=(hi - lo) / (n_points - 1),
+                             max_points=max_points or 10 * n_points, n_floquet=n_floquet, stability=stability)
+        return branch_dataset(system, br, harmonics=H, check_harmonics=check_harmonics,
+                              attrs={"model": model.to_json(), "stability_method": stability, "theta": theta,
+                                     "theta_deg": math.degrees(theta), "tan_theta": t, "speed": speed,
+                                     "speed_units": "m/s", "contact": contact.describe(), "mu_range": [lo, hi]})
+
+    return _enough_harmonics(solve, harmonics, harmonics_tol, check_harmonics)
+
+
+#: Most harmonics an adaptive branch (``harmonics_tol``) goes to.
+MAX_HARMONICS = 80
+
+
+def _enough_harmonics(solve: Callable[[int], xr.Dataset], harmonics: int, tol: float | None,
+                      check: bool) -> xr.Dataset:
+    """``solve(H)`` with H doubled from ``harmonics`` until the amplitude changes by at most
+    ``tol`` (relative) at 2H, or H would pass :data:`MAX_HARMONICS`; ``tol`` None: one solve."""
+    if tol is None:
+        return solve(int(harmonics))
+    tol = validate_positive("harmonics_tol", tol)
+    if not check:
+        raise InputError("Parameter harmonics_tol needs check_harmonics=True: the amplitude change at 2H is "
+                         "what measures convergence in the harmonics.")
+    H = int(harmonics)
+    while True:
+        ds = solve(H)
+        change = float(ds.attrs["harmonics_change"])
+        converged = change <= tol
+        if converged or not math.isfinite(change) or 2 * H > MAX_HARMONICS:
+            break
+        H *= 2
+    ds.attrs.update(harmonics_tol=tol, harmonics_converged=int(converged))
+    if not converged:
+        warnings.warn(f"The limit-cycle amplitudes changed by {change:.3g} (relative) from H = {H} to {2 * H} "
+                      f"harmonics, more than harmonics_tol = {tol:g}"
+                      + (f", at the most harmonics tried (MAX_HARMONICS = {MAX_HARMONICS})" if 2 * H > MAX_HARMONICS
+                         else " (the change could not be measured)") + ".", RuntimeWarning, stacklevel=3)
+    return ds
 
 
 def limit_cycle_branch_slope(
@@ -455,6 +498,7 @@ def limit_cycle_branch_slope(
     check_harmonics: bool = True,
     scan: int = 81,
     stability: str = "monodromy",
+    harmonics_tol: float | None = None,
 ) -> xr.Dataset:
     """Squeal limit cycles over the run-out slope tan(theta) at a fixed friction ``mu``.
 
@@ -470,7 +514,7 @@ def limit_cycle_branch_slope(
         Slope range ``(start, stop)``.
     mu : float
         Friction coefficient.
-    contact, speed, harmonics, n_points, max_points, n_floquet, check_harmonics, stability
+    contact, speed, harmonics, n_points, max_points, n_floquet, check_harmonics, stability, harmonics_tol
         As for :func:`limit_cycle_branch`.
     scan : int
         Slopes scanned for the onset.
@@ -496,12 +540,16 @@ def limit_cycle_branch_slope(
                          "there is no Hopf point to start a limit-cycle branch from.")
     k = up[0]
     hopf = hopf_point(system, float(grid[k] - g[k] * (grid[k + 1] - grid[k]) / (g[k + 1] - g[k])))
-    br = continue_branch(system, hopf, (lo, hi), harmonics=harmonics, step=(hi - lo) / (n_points - 1),
-                         max_points=max_points or 10 * n_points, n_floquet=n_floquet, stability=stability)
-    ds = branch_dataset(system, br, harmonics=harmonics, check_harmonics=check_harmonics,
-                        attrs={"model": model.to_json(), "stability_method": stability, "mu": float(mu),
-                               "speed": speed, "speed_units": "m/s", "contact": contact.describe(),
-                               "tan_theta_range": [lo, hi], "hopf_theta_deg": math.degrees(math.atan(hopf.p))})
+
+    def solve(H: int) -> xr.Dataset:
+        br = continue_branch(system, hopf, (lo, hi), harmonics=H, step=(hi - lo) / (n_points - 1),
+                             max_points=max_points or 10 * n_points, n_floquet=n_floquet, stability=stability)
+        return branch_dataset(system, br, harmonics=H, check_harmonics=check_harmonics,
+                              attrs={"model": model.to_json(), "stability_method": stability, "mu": float(mu),
+                                     "speed": speed, "speed_units": "m/s", "contact": contact.describe(),
+                                     "tan_theta_range": [lo, hi], "hopf_theta_deg": math.degrees(math.atan(hopf.p))})
+
+    ds = _enough_harmonics(solve, harmonics, harmonics_tol, check_harmonics)
     theta_deg = np.degrees(np.arctan(ds["tan_theta"].values))
     return ds.assign_coords(theta_deg=("point", theta_deg, {"units": "deg", "long_name": "run-out incline theta"}))
 
@@ -605,7 +653,8 @@ def limit_cycle_summary(ds: xr.Dataset) -> dict[str, object]:
         ``frequency_hz``, ``lyapunov_coefficient``, ``kind``, ``kind_from``; and
         ``theta_deg`` over a slope branch), ``folds`` (list of mu, or of theta_deg),
         ``hysteresis_mu`` (or ``hysteresis_theta_deg``: [start, end] or []), ``harmonics``,
-        ``harmonics_change``, ``stability_method``, ``stop_reason``, ``contact``; with a
+        ``harmonics_change``, ``stability_method``, ``stop_reason``, ``contact``; with
+        ``harmonics_tol``: ``harmonics_tol`` and ``harmonics_converged``; with a
         level: ``level_db`` (list, dB SPL re 20 uPa), ``level_dof``, ``level_from``.
     """
     a = ds.attrs
@@ -642,6 +691,9 @@ def limit_cycle_summary(ds: xr.Dataset) -> dict[str, object]:
         "stop_reason": str(a["stop_reason"]),
         "contact": str(a.get("contact", "")),
     })
+    if "harmonics_tol" in a:  # an adaptive branch
+        out["harmonics_tol"] = float(a["harmonics_tol"])
+        out["harmonics_converged"] = bool(a["harmonics_converged"])
     if "level_db" in ds:
         out["level_db"] = [float(v) for v in ds["level_db"].values]
         out["level_dof"] = str(a["level_dof"])
