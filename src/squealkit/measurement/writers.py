@@ -47,9 +47,14 @@ def write_recording(rec: xr.Dataset, path: str | Path) -> Path:
     pathlib.Path
         ``path`` as a ``Path``.
     """
+    from ..io import save_dataset
+
+    if Path(path).suffix.lower() == ".nc":  # in memory already: the Dataset as it is (its own time axis)
+        return save_dataset(rec, Path(path))
     names = [str(n) for n in rec.data_vars if rec[n].dims == ("time",)]
     units = {n: str(rec[n].attrs.get("units", "")) for n in names}
-    block = (0, {n: rec[n].values for n in names})
+    # the recording's own time axis goes where the format stores one (CSV, MDF4)
+    block = (0, {"time": rec["time"].values, **{n: rec[n].values for n in names}})
     return write_recording_blocks([block], path, fs=float(rec.attrs["fs"]), n_samples=rec.sizes["time"],
                                   units=units, attrs=dict(rec.attrs))
 
@@ -67,7 +72,9 @@ def write_recording_blocks(blocks: Iterable[Block], path: str | Path, *, fs: flo
     ----------
     blocks : iterable of (int, dict)
         ``(first sample, {channel: samples})`` in order, e.g.
-        :meth:`~squealkit.measurement.synthetic.SyntheticSource.iter_blocks`.
+        :meth:`~squealkit.measurement.synthetic.SyntheticSource.iter_blocks`; an entry ``"time"``
+        [s], if given, is the time axis where the format stores one (CSV, MDF4), else
+        ``sample / fs``.
     path : path-like
         The output file; its suffix picks the format (:data:`FORMATS`).
     fs : float
@@ -103,8 +110,7 @@ def write_recording_blocks(blocks: Iterable[Block], path: str | Path, *, fs: flo
             with open(tmp, "w", encoding="utf-8") as fh:
                 fh.write(",".join(["time [s]"] + [f"{n} [{units[n]}]" for n in names]) + "\n")
                 for start, data in blocks:
-                    k = len(data[names[0]])
-                    cols = np.column_stack([np.arange(start, start + k) / fs] + [data[n] for n in names])
+                    cols = np.column_stack([_block_time(start, data, names, fs)] + [data[n] for n in names])
                     np.savetxt(fh, cols, delimiter=",", fmt="%.8g")
         elif suffix == ".wav":
             _write_wav(tmp, blocks, fs, n_samples, names)
@@ -125,7 +131,7 @@ def write_recording_blocks(blocks: Iterable[Block], path: str | Path, *, fs: flo
             mdf = MDF(version="4.10")
             mdf.header.comment = "SYNTHETIC recording (squealkit), not a measurement" if synthetic else ""
             for start, data in blocks:
-                t = np.arange(start, start + len(data[names[0]])) / fs
+                t = _block_time(start, data, names, fs)
                 if start == 0:
                     mdf.append([Signal(np.asarray(data[n]), t, name=n, unit=units[n]) for n in names],
                                comment="squealkit recording")
@@ -141,6 +147,13 @@ def write_recording_blocks(blocks: Iterable[Block], path: str | Path, *, fs: flo
         else:
             _write_uff(tmp, blocks, fs, n_samples, names, units, synthetic)
     return p
+
+
+def _block_time(start: int, data: Mapping[str, NDArray], names: list[str], fs: float) -> NDArray:
+    """The block's time axis [s]: its own ``"time"`` entry, else ``sample / fs``."""
+    if "time" in data:
+        return np.asarray(data["time"], dtype=np.float64)
+    return np.arange(start, start + len(data[names[0]])) / fs
 
 
 def _datasets(blocks: Iterable[Block], fs: float, units: Mapping[str, str], attrs: Mapping[str, Any]
