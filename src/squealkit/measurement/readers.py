@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numba as nb
 import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
@@ -94,6 +95,24 @@ def _sample_where(k: int) -> str:
     return f"sample {k}"
 
 
+@nb.njit(cache=True, nogil=True)
+def _first_bad_time(t, last, has_last, dt):  # pragma: no cover - compiled
+    """The first problem of a block of times, in time order, in one pass: ``k`` if ``t[k]`` is
+    not finite, ``-2 - k`` if the step ending at ``t[k]`` goes back or is not ``dt`` within half
+    an interval plus 8-significant-digit rounding; -1 when all is well."""
+    prev = last
+    for i in range(t.shape[0]):
+        ti = t[i]
+        if not np.isfinite(ti):
+            return i
+        if i > 0 or has_last:
+            step = ti - prev
+            if step < 0.0 or abs(step - dt) > 0.5 * dt + 2e-7 * abs(ti):
+                return -2 - i
+        prev = ti
+    return -1
+
+
 @dataclass
 class _TimeAxis:
     """A recording's own time axis, checked block by block as it streams.
@@ -111,22 +130,17 @@ class _TimeAxis:
     last: float | None = None
 
     def check(self, start: int, t: NDArray[np.float64]) -> None:
-        t = np.asarray(t, dtype=np.float64)
+        t = np.ascontiguousarray(t, dtype=np.float64)
         if t.size == 0:
             return
-        bad_t = ~np.isfinite(t)
-        if bad_t.any():
-            i = int(np.argmax(bad_t))
-            raise _fail(self.path, f"{self.label} is {float(t[i])!r} at {self.where(start + i)}.")
-        prev = np.concatenate(([self.last], t[:-1])) if self.last is not None else t[:-1]
-        cur = t if self.last is not None else t[1:]
-        first = start if self.last is not None else start + 1
-        steps = cur - prev
-        tol = 0.5 * self.dt + 2e-7 * np.abs(cur)
-        bad = (steps < 0) | (np.abs(steps - self.dt) > tol)
-        if bad.any():
-            i = int(np.argmax(bad))
-            a, b, k = float(prev[i]), float(cur[i]), first + i
+        has_last = self.last is not None
+        found = int(_first_bad_time(t, self.last if has_last else 0.0, has_last, self.dt))
+        if found >= 0:
+            raise _fail(self.path, f"{self.label} is {float(t[found])!r} at {self.where(start + found)}.")
+        if found <= -2:
+            k_t = -2 - found  # the step ends at t[k_t]
+            a = float(t[k_t - 1]) if k_t > 0 else float(self.last)
+            b, k = float(t[k_t]), start + k_t
             if b < a:
                 what = (f"goes back from {a:.9g} s to {b:.9g} s at {self.where(k)}; it must increase by one sample "
                         f"interval ({self.dt:.6g} s) per sample.")
