@@ -9,7 +9,10 @@ stiffness and damping, skew gyroscopic matrix, centrifugal stiffening), any spee
 - the band solve finds exactly the pencil's eigenvalues in its band and covered strip.
 """
 
+import time
+
 import numpy as np
+import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 from hypothesis import given, settings
@@ -17,6 +20,7 @@ from hypothesis import strategies as st
 
 from squealkit.models import FEModel, MatrixModel
 from squealkit.stability import eigenvalues
+from squealkit.stability import sparse
 from squealkit.stability.sparse import band_eigs, dense_eigs
 
 
@@ -90,8 +94,11 @@ def test_fe_model_matches_matrix_model(seed, n, mu):
 
 
 @settings(max_examples=15, deadline=None)
-@given(seed=st.integers(0, 10**6), omega=st.floats(1.0, 100.0), mu=st.floats(0.0, 1.0))
-def test_band_solve_matches_qz(seed, omega, mu):
+@given(seed=st.integers(0, 10**6), omega=st.floats(1.0, 100.0), mu=st.floats(0.0, 1.0),
+       workers=st.integers(1, 5))
+def test_band_solve_matches_qz(seed, omega, mu, workers):
+    # with several workers, walks from both ends of each sub-band meet: still every eigenvalue
+    # once
     n = 30
     rng = np.random.default_rng(seed)
     w = 2 * np.pi * np.sort(rng.uniform(100.0, 3000.0, n))
@@ -99,10 +106,43 @@ def test_band_solve_matches_qz(seed, omega, mu):
     G = sp.random(n, n, density=0.1, random_state=(seed + 1) % 2**32, format="csr")
     model = FEModel.from_matrices(M=sp.eye(n), K1=sp.diags(w**2), KR=KR, DG=G - G.T, D1=sp.diags(1e-3 * w))
     band = (500.0, 2000.0)
-    sol = band_eigs(model, omega, mu, band=band, k=8)
+    sol = band_eigs(model, omega, mu, band=band, k=8, workers=workers)
     ref = upper(qz(model, omega, mu))
     f = ref.imag / (2 * np.pi)
     in_band = ref[(f >= band[0]) & (f <= band[1])]
     must = in_band[np.abs(in_band.real) < sol.covered_growth]
     assert close(must, sol.eigenvalues, 1e-9) and close(sol.eigenvalues, in_band, 1e-9)
     assert np.all(sol.residuals < 1e-10)
+    gaps = np.abs(sol.eigenvalues[:, None] - sol.eigenvalues[None, :]) + np.eye(sol.eigenvalues.size)
+    assert np.all(gaps > 1e-9 * np.abs(in_band).max())  # none found twice
+
+
+@pytest.mark.parametrize("slow", ["up", "down"])
+def test_band_walks_meet_whatever_their_pace(monkeypatch, slow):
+    # two walks share a band: one is held back at every shift so that the other claims most of
+    # the band while it is still solving; together they still find every eigenvalue once
+    n, seed = 40, 7
+    rng = np.random.default_rng(seed)
+    w = 2 * np.pi * np.sort(rng.uniform(100.0, 3000.0, n))
+    KR = sp.random(n, n, density=0.1, random_state=seed, format="csr") * 1e5
+    model = FEModel.from_matrices(M=sp.eye(n), K1=sp.diags(w**2), KR=KR, D1=sp.diags(1e-3 * w))
+    band = (300.0, 2800.0)
+    one = band_eigs(model, 10.0, 0.4, band=band, k=6, workers=1)
+    nearest = sparse._nearest
+    mid = np.pi * (band[0] + band[1])
+
+    def paced(op, s, k):
+        if (s.imag > mid) == (slow == "down"):
+            time.sleep(0.3)
+        return nearest(op, s, k)
+
+    monkeypatch.setattr(sparse, "_nearest", paced)
+    two = band_eigs(model, 10.0, 0.4, band=band, k=6, workers=2)
+    ref = upper(qz(model, 10.0, 0.4))
+    f = ref.imag / (2 * np.pi)
+    in_band = ref[(f >= band[0]) & (f <= band[1])]
+    for sol in (one, two):
+        must = in_band[np.abs(in_band.real) < sol.covered_growth]
+        assert close(must, sol.eigenvalues, 1e-9) and close(sol.eigenvalues, in_band, 1e-9)
+        gaps = np.abs(sol.eigenvalues[:, None] - sol.eigenvalues[None, :]) + np.eye(sol.eigenvalues.size)
+        assert np.all(gaps > 1e-9 * np.abs(in_band).max())

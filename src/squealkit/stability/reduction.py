@@ -43,7 +43,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .._validation import InputError
-from .sparse import band_eigs
+from .sparse import _factorize, band_eigs
 from .tracking import _MacTracker
 
 __all__ = [
@@ -189,10 +189,7 @@ def modal_basis(
         w, V = sla.eigh(_dense(K1), _dense(M))
         freq = np.sqrt(np.maximum(w, 0.0)) / (2 * math.pi)
     else:
-        # minimum degree on the symmetric pattern with diagonal pivots (stability.sparse._factorize):
-        # SuperLU's default COLAMD fills 4x more on FE matrices
-        lu = spla.splu(sp.csc_matrix(K1), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.1,
-                       options={"SymmetricMode": True})
+        lu = _factorize(K1)  # nested dissection, diagonal pivots: SuperLU's default fills 4x more
         op = spla.LinearOperator((n, n), matvec=lu.solve, dtype=float)
         k = n_modes if n_modes is not None else 40
         while True:
