@@ -397,3 +397,47 @@ def test_time_axis_check_finds_each_fault_at_its_sample_whatever_the_blocks(fs, 
         fault = "none"
     found = _first_fault(t, 1.0 / fs, block)
     assert found == (None if fault == "none" else k)
+
+
+def test_branch_free_time_check_agrees_with_the_scan_that_locates_a_fault():
+    # _time_steps_ok (vectorised, no early exit) must pass exactly the blocks _first_bad_time passes
+    from squealkit.measurement.readers import _first_bad_time, _time_steps_ok
+
+    rng = np.random.default_rng(7)
+    dt = 1 / 48000.0
+    for trial in range(400):
+        t = 3.0 + np.arange(int(rng.integers(1, 300))) * dt
+        k = int(rng.integers(0, t.size))
+        fault = trial % 7
+        if fault == 1:
+            t[k] = rng.choice([np.nan, np.inf, -np.inf])
+        elif fault == 2:
+            t[k:] -= 1.5 * dt
+        elif fault == 3:
+            t[k:] += 2.0 * dt
+        elif fault == 4 and k > 0:
+            t[k] = t[k - 1]
+        elif fault == 5:
+            t[k] += 0.49 * dt  # within tolerance either side
+        has_last = fault == 6
+        last = 3.0 - dt * (1.0 if rng.random() < 0.5 else 3.0)
+        assert bool(_time_steps_ok(t, last, has_last, dt)) == (_first_bad_time(t, last, has_last, dt) == -1), trial
+
+
+def test_time_axis_is_checked_on_the_first_complete_pass_only(tmp_path, signals):
+    # a second pass (the analysis after the tacho pass) neither reads nor checks the time coordinate,
+    # but only once a pass has gone through the whole axis
+    p, q = signals
+    f = tmp_path / "rec.nc"
+    recording_dataset({"mic": p, "disp": q}, FS, {"mic": "Pa", "disp": "m"}).to_netcdf(f, engine="h5netcdf")
+    src = open_recording(f)
+    reads = []
+    blocks = src._blocks_netcdf
+    object.__setattr__(src, "_blocks_netcdf", lambda names, block, with_time: reads.append(with_time) or
+                       blocks(names, block, with_time))
+    next(src.iter_blocks(["mic"], block=1000))  # stopped early: the axis is not yet known good
+    for _ in src.iter_blocks(["mic"], block=1000):
+        pass
+    first = [blk["disp"] for _, blk in src.iter_blocks(["disp"], block=1000)]
+    assert reads == [True, True, False]
+    assert np.array_equal(np.concatenate(first), q)
