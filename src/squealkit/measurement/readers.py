@@ -412,7 +412,7 @@ class RecordingSource:
                                 raise _fail(self.path, f"{what} could not be read at samples {start}-"
                                                        f"{min(start + block, self.n_samples) - 1}: "
                                                        f"{_library_error(e)} (a damaged or truncated file?)") from e
-                        if with_time:
+                        if with_time and scale != 1.0:  # (in seconds: _TimeAxis.check takes them as they are)
                             data[_TIME] = np.asarray(data[_TIME], dtype=np.float64) * scale
                         yield start, data
                     return
