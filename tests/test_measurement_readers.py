@@ -441,3 +441,17 @@ def test_time_axis_is_checked_on_the_first_complete_pass_only(tmp_path, signals)
     first = [blk["disp"] for _, blk in src.iter_blocks(["disp"], block=1000)]
     assert reads == [True, True, False]
     assert np.array_equal(np.concatenate(first), q)
+
+
+def test_netcdf_time_coordinate_in_milliseconds_is_scaled_then_checked(tmp_path, signals):
+    p, _ = signals
+    t_ms = np.arange(N) * (1e3 / FS)
+    t_ms[3000:] += 2e3 / FS  # a gap of two intervals at sample 3000
+    f = tmp_path / "rec.nc"
+    ds = xr.Dataset({"mic": ("time", p)}, coords={"time": ("time", t_ms, {"units": "milliseconds"})})
+    ds.to_netcdf(f, engine="h5netcdf")
+    src = open_recording(f)
+    assert src.fs == pytest.approx(FS)
+    with pytest.raises(InputError, match="jumps .* at sample 3000"):
+        for _ in src.iter_blocks(["mic"], block=1000):
+            pass
