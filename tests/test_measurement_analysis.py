@@ -293,3 +293,14 @@ def test_event_phase_plot_places_each_event_at_its_runout_phase(rising):
     assert np.allclose(r, [e.peak_dba for e in res.events])
     quiet = analyze_recording(synthetic_recording(duration=0.5, seed=3, squeal_on="none"), **KW)
     assert not event_phase_plot(quiet).axes[0].collections  # no events: no points, a note instead
+
+
+@pytest.mark.parametrize("dec", [1, 3, 8, 16])
+def test_mean_squares_kernel_matches_numpy(dec):
+    from squealkit.measurement.analysis import _mean_squares
+
+    x = (np.random.default_rng(dec).standard_normal(1000 * dec + dec // 2) * 40.0).astype(np.float32)
+    m = x.size // dec
+    ref = np.square(x[:m * dec], dtype=np.float32).reshape(-1, dec).mean(axis=1, dtype=np.float64)
+    got = _mean_squares(x, dec)
+    assert got.shape == ref.shape and np.allclose(got, ref, rtol=1e-15, atol=0)
