@@ -901,14 +901,15 @@ def _accumulate_runout(
         acc.slope_f[f0:f1] = (cs_t[b] - cs_t[a]) / (b - a)
     # the probe sees disc position turns + probe offset (angle 0: the first mark, under the pin)
     turns = rotation.turns(ro.t_d[ci]) + plan.off_turns
-    rev = np.floor(turns).astype(np.int64) - plan.rev0
+    whole = np.floor(turns)
+    rev = whole.astype(np.int64) - plan.rev0
     rev = np.clip(rev, 0, plan.n_rev - 1)
     starts = np.concatenate([[0], np.flatnonzero(np.diff(rev)) + 1])
     r = rev[starts]  # distinct revolutions of this core; the next core may continue the last one
     for j, sig in enumerate((ro.sro[ci], ro.macro[ci], ro.micro[ci])):
         acc.rev_max[j, r] = np.maximum(acc.rev_max[j, r], np.maximum.reduceat(sig, starts))
         acc.rev_min[j, r] = np.minimum(acc.rev_min[j, r], np.minimum.reduceat(sig, starts))
-    abin = ((turns % 1.0) * nb).astype(np.int64) % nb
+    abin = ((turns - whole) * nb).astype(np.int64) % nb  # (turns % 1.0, exactly, at a third of the cost)
     acc.ang_q += np.bincount(abin, ro.sro[ci], nb)
     acc.ang_macro += np.bincount(abin, ro.macro[ci], nb)
     acc.ang_cnt += np.bincount(abin, minlength=nb)
