@@ -469,3 +469,32 @@ def test_all_finite_kernel_matches_numpy():
             v32 = v.astype(np.float32)
         for arr in (v, v[::3], v32):
             assert bool(_all_finite(arr)) == bool(np.isfinite(arr).all()), trial
+
+
+def test_contiguous_datasets_are_mapped_as_h5py_reads_them(tmp_path):
+    # blocks of a contiguous dataset are mapped from the file: the same numbers as h5py reads (any byte
+    # order and type), writable without touching the file; chunked or unwritten datasets are not mapped
+    import h5py
+
+    from squealkit.measurement.readers import _mapped_block, _stored_as_is
+
+    f = tmp_path / "d.h5"
+    rng = np.random.default_rng(5)
+    with h5py.File(f, "w") as h:
+        h["le"] = rng.standard_normal(5000)
+        h.create_dataset("be", data=rng.standard_normal(5000), dtype=">f8")
+        h["i16"] = rng.integers(-30000, 30000, 5000).astype(np.int16)
+        h.create_dataset("chunked", data=np.arange(5000.0), chunks=(1000,))
+        h.create_dataset("unwritten", shape=(5000,), dtype="f8")
+    before = f.read_bytes()
+    with h5py.File(f, "r") as h:
+        assert _stored_as_is(f, h["chunked"]) is None and _stored_as_is(f, h["unwritten"]) is None
+        for name in ("le", "be", "i16"):
+            d = h[name]
+            off = _stored_as_is(f, d)
+            assert off is not None
+            for start, stop in ((0, 5000), (1234, 4321), (4999, 5000)):
+                blk = _mapped_block(f, d.dtype, off, start, stop)
+                assert blk.dtype == d.dtype and np.array_equal(blk, d[start:stop])
+            blk[0] += 1
+    assert f.read_bytes() == before

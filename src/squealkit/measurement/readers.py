@@ -104,6 +104,28 @@ def _as_samples(path: Path, name: str, values: Any) -> NDArray[np.float64]:
     return arr.astype(np.float64, copy=False)
 
 
+def _stored_as_is(path: Path, dset: Any) -> int | None:
+    """Byte offset in the file of an HDF5 dataset's numbers where they lie there as they are: one
+    contiguous run (not chunked, hence not filtered), written, and within the file; else None."""
+    if dset.chunks is not None or dset.dtype.kind not in "biuf":
+        return None
+    offset = dset.id.get_offset()
+    if offset is None or offset + dset.size * dset.dtype.itemsize > path.stat().st_size:
+        return None
+    return int(offset)
+
+
+def _mapped_block(path: Path, dtype: np.dtype, offset: int, start: int, stop: int) -> NDArray:
+    """Values ``[start, stop)`` of a contiguous dataset stored at byte ``offset``, mapped from the file.
+
+    Mapping a block instead of reading it saves copying it out of the operating system's cache
+    (three quarters of the time of an h5py read). Copy on write: the array is writable and the file
+    never changes. The mapping goes with the block's last reference, so memory stays bounded.
+    """
+    return np.asarray(np.memmap(path, dtype=dtype, mode="c", offset=offset + start * dtype.itemsize,
+                                shape=(stop - start,)))
+
+
 def _sample_where(k: int) -> str:
     return f"sample {k}"
 
@@ -415,15 +437,18 @@ class RecordingSource:
                     and not d.attrs.get("add_offset") for d in dsets.values())
                 if plain:
                     scale = self._extra.get("time_scale", 1.0)
+                    offsets = {k: _stored_as_is(self.path, d) for k, d in dsets.items()}
                     for start in range(0, self.n_samples, block):
                         data = {}
+                        stop = min(start + block, self.n_samples)
                         for k, d in dsets.items():  # a damaged chunk is named with its channel
                             try:
-                                data[k] = d[start:start + block]
+                                data[k] = d[start:stop] if offsets[k] is None else _mapped_block(
+                                    self.path, d.dtype, offsets[k], start, stop)
                             except Exception as e:
                                 what = f"time coordinate {dim!r}" if k == _TIME else f"channel {k!r}"
                                 raise _fail(self.path, f"{what} could not be read at samples {start}-"
-                                                       f"{min(start + block, self.n_samples) - 1}: "
+                                                       f"{stop - 1}: "
                                                        f"{_library_error(e)} (a damaged or truncated file?)") from e
                         if with_time and scale != 1.0:  # (in seconds: _TimeAxis.check takes them as they are)
                             data[_TIME] = np.asarray(data[_TIME], dtype=np.float64) * scale
