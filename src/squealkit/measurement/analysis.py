@@ -785,7 +785,9 @@ def _frame_components(plan: _Plan, s: AnalysisSettings, win: _Window, sp: _Spect
     share_scale = acc.level[f0:f1][loud] / np.maximum(pa_tw[loud].sum(axis=1, dtype=np.float64), 1e-300)
     # phase advance of every band bin from the previous frame (zero for frame 0)
     prev = loud + (f0 - sp.fp - 1)
-    cross = sp.spec[loud] * np.conj(sp.spec_p[np.maximum(prev, 0)])
+    cross = sp.spec[loud]  # X_m conj(X_m-1), in place: two fresh arrays of this size fewer per window
+    before = sp.spec_p[np.maximum(prev, 0)]
+    cross *= np.conjugate(before, out=before)
     cross[prev < 0] = 0
     acc.mic_cross_sum[lo:hi] += cross.sum(axis=0, dtype=np.complex128)
     ptw = pa_tw[loud]
