@@ -1253,7 +1253,7 @@ def analyze_recording(
     plan = _plan(s, fs_, src.n_samples, rotation)
     acc = _Accumulators.empty(plan)
     # an in-memory recording is one block (windows are views of it); files are read in blocks of four
-    # cores, so most windows are views too (copying a window cost as much as 10 % of the analysis)
+    # cores, so most windows are views too (copying every window cost about 7 % of the analysis)
     block = plan.total if isinstance(src, _DatasetSource) else max(4 * plan.core, DEFAULT_BLOCK)
     for c0, c1, w0, data in _windows(src, [mic_n, disp_n], plan.core, plan.margin, block):
         win = _Window.at(plan, c0, c1, w0)

@@ -105,8 +105,8 @@ def _as_samples(path: Path, name: str, values: Any) -> NDArray[np.float64]:
 
 
 def _stored_as_is(path: Path, dset: Any) -> int | None:
-    """Byte offset in the file of an HDF5 dataset's numbers where they lie there as they are: one
-    contiguous run (not chunked, hence not filtered), written, and within the file; else None."""
+    """Byte offset in the file of an HDF5 dataset's numbers if they are stored there as they are (one
+    contiguous run: not chunked, hence not filtered; written; within the file), else None."""
     if dset.chunks is not None or dset.dtype.kind not in "biuf":
         return None
     offset = dset.id.get_offset()
