@@ -1166,6 +1166,16 @@ def _assemble(
     )
 
 
+def _read_block(src: Any, plan: _Plan) -> int:
+    """Samples per block to read from ``src``: an in-memory recording is one block (windows are views
+    of it); a file is read in blocks of four cores, so most windows are views too (copying every window
+    cost about 7 % of the analysis); a generated source in blocks of one core (its temporaries scale
+    with the block: bounded memory first)."""
+    if isinstance(src, _DatasetSource):
+        return plan.total
+    return max((4 if isinstance(src, RecordingSource) else 1) * plan.core, DEFAULT_BLOCK)
+
+
 def analyze_recording(
     recording: str | Path | xr.Dataset | RecordingSource,
     *,
@@ -1252,9 +1262,7 @@ def analyze_recording(
         raise InputError(f"The microphone and displacement channels are the same ({mic_n!r}).")
     plan = _plan(s, fs_, src.n_samples, rotation)
     acc = _Accumulators.empty(plan)
-    # an in-memory recording is one block (windows are views of it); files are read in blocks of four
-    # cores, so most windows are views too (copying every window cost about 7 % of the analysis)
-    block = plan.total if isinstance(src, _DatasetSource) else max(4 * plan.core, DEFAULT_BLOCK)
+    block = _read_block(src, plan)
     for c0, c1, w0, data in _windows(src, [mic_n, disp_n], plan.core, plan.margin, block):
         win = _Window.at(plan, c0, c1, w0)
         p, q = data[mic_n].astype(np.float32), data[disp_n]  # the band level and the frames: single precision
