@@ -397,3 +397,104 @@ def test_time_axis_check_finds_each_fault_at_its_sample_whatever_the_blocks(fs, 
         fault = "none"
     found = _first_fault(t, 1.0 / fs, block)
     assert found == (None if fault == "none" else k)
+
+
+def test_branch_free_time_check_agrees_with_the_scan_that_locates_a_fault():
+    # _time_steps_ok (vectorised, no early exit) must pass exactly the blocks _first_bad_time passes
+    from squealkit.measurement.readers import _first_bad_time, _time_steps_ok
+
+    rng = np.random.default_rng(7)
+    dt = 1 / 48000.0
+    for trial in range(400):
+        t = 3.0 + np.arange(int(rng.integers(1, 300))) * dt
+        k = int(rng.integers(0, t.size))
+        fault = trial % 7
+        if fault == 1:
+            t[k] = rng.choice([np.nan, np.inf, -np.inf])
+        elif fault == 2:
+            t[k:] -= 1.5 * dt
+        elif fault == 3:
+            t[k:] += 2.0 * dt
+        elif fault == 4 and k > 0:
+            t[k] = t[k - 1]
+        elif fault == 5:
+            t[k] += 0.49 * dt  # within tolerance either side
+        has_last = fault == 6
+        last = 3.0 - dt * (1.0 if rng.random() < 0.5 else 3.0)
+        assert bool(_time_steps_ok(t, last, has_last, dt)) == (_first_bad_time(t, last, has_last, dt) == -1), trial
+
+
+def test_time_axis_is_checked_on_the_first_complete_pass_only(tmp_path, signals):
+    # a second pass (the analysis after the tacho pass) neither reads nor checks the time coordinate,
+    # but only once a pass has gone through the whole axis
+    p, q = signals
+    f = tmp_path / "rec.nc"
+    recording_dataset({"mic": p, "disp": q}, FS, {"mic": "Pa", "disp": "m"}).to_netcdf(f, engine="h5netcdf")
+    src = open_recording(f)
+    reads = []
+    blocks = src._blocks_netcdf
+    object.__setattr__(src, "_blocks_netcdf", lambda names, block, with_time: reads.append(with_time) or
+                       blocks(names, block, with_time))
+    next(src.iter_blocks(["mic"], block=1000))  # stopped early: the axis is not yet known good
+    for _ in src.iter_blocks(["mic"], block=1000):
+        pass
+    first = [blk["disp"] for _, blk in src.iter_blocks(["disp"], block=1000)]
+    assert reads == [True, True, False]
+    assert np.array_equal(np.concatenate(first), q)
+
+
+def test_netcdf_time_coordinate_in_milliseconds_is_scaled_then_checked(tmp_path, signals):
+    p, _ = signals
+    t_ms = np.arange(N) * (1e3 / FS)
+    t_ms[3000:] += 2e3 / FS  # a gap of two intervals at sample 3000
+    f = tmp_path / "rec.nc"
+    ds = xr.Dataset({"mic": ("time", p)}, coords={"time": ("time", t_ms, {"units": "milliseconds"})})
+    ds.to_netcdf(f, engine="h5netcdf")
+    src = open_recording(f)
+    assert src.fs == pytest.approx(FS)
+    with pytest.raises(InputError, match=r"jumps .* at sample 3000"):
+        for _ in src.iter_blocks(["mic"], block=1000):
+            pass
+
+
+def test_all_finite_kernel_matches_numpy():
+    from squealkit.measurement.readers import _all_finite
+
+    rng = np.random.default_rng(11)
+    for trial in range(200):
+        v = rng.standard_normal(int(rng.integers(0, 500))) * 10.0 ** rng.integers(-300, 300)
+        if v.size and trial % 2:
+            v[int(rng.integers(0, v.size))] = rng.choice([np.nan, np.inf, -np.inf])
+        with np.errstate(over="ignore"):  # (beyond float32's range: inf, one more case)
+            v32 = v.astype(np.float32)
+        for arr in (v, v[::3], v32):
+            assert bool(_all_finite(arr)) == bool(np.isfinite(arr).all()), trial
+
+
+def test_contiguous_datasets_are_mapped_as_h5py_reads_them(tmp_path):
+    # blocks of a contiguous dataset are mapped from the file: the same numbers as h5py reads (any byte
+    # order and type), writable without touching the file; chunked or unwritten datasets are not mapped
+    import h5py
+
+    from squealkit.measurement.readers import _mapped_block, _stored_as_is
+
+    f = tmp_path / "d.h5"
+    rng = np.random.default_rng(5)
+    with h5py.File(f, "w") as h:
+        h["le"] = rng.standard_normal(5000)
+        h.create_dataset("be", data=rng.standard_normal(5000), dtype=">f8")
+        h["i16"] = rng.integers(-30000, 30000, 5000).astype(np.int16)
+        h.create_dataset("chunked", data=np.arange(5000.0), chunks=(1000,))
+        h.create_dataset("unwritten", shape=(5000,), dtype="f8")
+    before = f.read_bytes()
+    with h5py.File(f, "r") as h:
+        assert _stored_as_is(f, h["chunked"]) is None and _stored_as_is(f, h["unwritten"]) is None
+        for name in ("le", "be", "i16"):
+            d = h[name]
+            off = _stored_as_is(f, d)
+            assert off is not None
+            for start, stop in ((0, 5000), (1234, 4321), (4999, 5000)):
+                blk = _mapped_block(f, d.dtype, off, start, stop)
+                assert blk.dtype == d.dtype and np.array_equal(blk, d[start:stop])
+            blk[0] += 1
+    assert f.read_bytes() == before

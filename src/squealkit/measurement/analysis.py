@@ -318,6 +318,26 @@ def _ewma_rows(p, a, state, out):  # pragma: no cover - compiled
         state[j] = y
 
 
+@njit(cache=True)
+def _mean_squares_kernel(x, dec, out):  # pragma: no cover - compiled
+    for i in range(out.shape[0]):
+        acc = 0.0
+        for j in range(i * dec, (i + 1) * dec):
+            acc += np.float64(x[j] * x[j])
+        out[i] = acc / dec
+
+
+def _mean_squares(x: NDArray[np.float32], dec: int) -> NDArray[np.float64]:
+    """Mean square of each run of ``dec`` samples (``x.size // dec`` of them), squared in single precision
+    and summed in double: ``np.square(x).reshape(-1, dec).mean(axis=1, dtype=np.float64)``.
+
+    A compiled loop, four times faster than NumPy's reduction over short rows.
+    """
+    out = np.empty(x.size // dec)
+    _mean_squares_kernel(x, dec, out)
+    return out
+
+
 def _time_weight_rows(p: NDArray, a: float, state: NDArray[np.float64]) -> tuple[NDArray, NDArray[np.float64]]:
     """Exponential average over rows (frames): ``y_m = a y_(m-1) + (1 - a) p_m``; returns y and its last row.
 
@@ -650,7 +670,7 @@ def _band_level(plan: _Plan, s: AnalysisSettings, win: _Window, p: NDArray, acc:
     plan : _Plan
     s : AnalysisSettings
     win : _Window
-    p : ndarray
+    p : ndarray of float32
         The window's sound pressure [Pa].
     acc : _Accumulators
         Updated in place.
@@ -664,7 +684,7 @@ def _band_level(plan: _Plan, s: AnalysisSettings, win: _Window, p: NDArray, acc:
     pw = band_weighted_signal(p[win.o:], plan.fs, s.band, workers=plan.n_threads)
     m_full = pw.size // dec
     ms = np.zeros(-(-(p.size - win.o) // dec))
-    ms[:m_full] = np.square(pw[:m_full * dec], dtype=np.float32).reshape(-1, dec).mean(axis=1, dtype=np.float64)
+    ms[:m_full] = _mean_squares(pw, dec)
     laf = exponential_average(ms[ci.start:], dec / plan.fs, s.criteria.time_constant_s, initial=acc.laf_state)
     if ci.stop > ci.start:
         acc.laf_state = float(laf[ci.stop - ci.start - 1])
@@ -703,7 +723,7 @@ def _frame_spectra(plan: _Plan, win: _Window, p: NDArray, acc: _Accumulators) ->
     plan : _Plan
     win : _Window
         Must hold at least one frame (``f1 > f0``).
-    p : ndarray
+    p : ndarray of float32
         The window's sound pressure [Pa].
     acc : _Accumulators
         Updated in place.
@@ -717,7 +737,7 @@ def _frame_spectra(plan: _Plan, win: _Window, p: NDArray, acc: _Accumulators) ->
     # every frame but the recording's first has its predecessor for the phase advance
     fp = max(f0 - 1, 0)
     seg = p[fp * hop - w0: (f1 - 1) * hop + n - w0]
-    frames_ = np.lib.stride_tricks.sliding_window_view(seg.astype(np.float32), n)[::hop]
+    frames_ = np.lib.stride_tricks.sliding_window_view(seg, n)[::hop]
     spec_p = sp_fft.rfft(frames_ * plan.win32, axis=-1, workers=plan.n_threads)[:, plan.lo:plan.hi]
     spec = spec_p[f0 - fp:]  # frames [f0, f1)
     pb = spec.real**2
@@ -765,7 +785,9 @@ def _frame_components(plan: _Plan, s: AnalysisSettings, win: _Window, sp: _Spect
     share_scale = acc.level[f0:f1][loud] / np.maximum(pa_tw[loud].sum(axis=1, dtype=np.float64), 1e-300)
     # phase advance of every band bin from the previous frame (zero for frame 0)
     prev = loud + (f0 - sp.fp - 1)
-    cross = sp.spec[loud] * np.conj(sp.spec_p[np.maximum(prev, 0)])
+    cross = sp.spec[loud]  # X_m conj(X_m-1), in place: two fresh arrays of this size fewer per window
+    before = sp.spec_p[np.maximum(prev, 0)]
+    cross *= np.conjugate(before, out=before)
     cross[prev < 0] = 0
     acc.mic_cross_sum[lo:hi] += cross.sum(axis=0, dtype=np.complex128)
     ptw = pa_tw[loud]
@@ -881,14 +903,15 @@ def _accumulate_runout(
         acc.slope_f[f0:f1] = (cs_t[b] - cs_t[a]) / (b - a)
     # the probe sees disc position turns + probe offset (angle 0: the first mark, under the pin)
     turns = rotation.turns(ro.t_d[ci]) + plan.off_turns
-    rev = np.floor(turns).astype(np.int64) - plan.rev0
+    whole = np.floor(turns)
+    rev = whole.astype(np.int64) - plan.rev0
     rev = np.clip(rev, 0, plan.n_rev - 1)
     starts = np.concatenate([[0], np.flatnonzero(np.diff(rev)) + 1])
     r = rev[starts]  # distinct revolutions of this core; the next core may continue the last one
     for j, sig in enumerate((ro.sro[ci], ro.macro[ci], ro.micro[ci])):
         acc.rev_max[j, r] = np.maximum(acc.rev_max[j, r], np.maximum.reduceat(sig, starts))
         acc.rev_min[j, r] = np.minimum(acc.rev_min[j, r], np.minimum.reduceat(sig, starts))
-    abin = ((turns % 1.0) * nb).astype(np.int64) % nb
+    abin = ((turns - whole) * nb).astype(np.int64) % nb  # (turns % 1.0, exactly, at a third of the cost)
     acc.ang_q += np.bincount(abin, ro.sro[ci], nb)
     acc.ang_macro += np.bincount(abin, ro.macro[ci], nb)
     acc.ang_cnt += np.bincount(abin, minlength=nb)
@@ -1143,6 +1166,16 @@ def _assemble(
     )
 
 
+def _read_block(src: Any, plan: _Plan) -> int:
+    """Samples per block to read from ``src``: an in-memory recording is one block (windows are views
+    of it); a file is read in blocks of four cores, so most windows are views too (copying every window
+    cost about 7 % of the analysis); a generated source in blocks of one core (its temporaries scale
+    with the block: bounded memory first)."""
+    if isinstance(src, _DatasetSource):
+        return plan.total
+    return max((4 if isinstance(src, RecordingSource) else 1) * plan.core, DEFAULT_BLOCK)
+
+
 def analyze_recording(
     recording: str | Path | xr.Dataset | RecordingSource,
     *,
@@ -1229,11 +1262,10 @@ def analyze_recording(
         raise InputError(f"The microphone and displacement channels are the same ({mic_n!r}).")
     plan = _plan(s, fs_, src.n_samples, rotation)
     acc = _Accumulators.empty(plan)
-    # an in-memory recording is one block (windows are views of it); files are read block by block
-    block = plan.total if isinstance(src, _DatasetSource) else max(plan.core, DEFAULT_BLOCK)
+    block = _read_block(src, plan)
     for c0, c1, w0, data in _windows(src, [mic_n, disp_n], plan.core, plan.margin, block):
         win = _Window.at(plan, c0, c1, w0)
-        p, q = data[mic_n], data[disp_n]
+        p, q = data[mic_n].astype(np.float32), data[disp_n]  # the band level and the frames: single precision
         ms = _band_level(plan, s, win, p, acc)
         if win.f1 > win.f0:
             _frame_components(plan, s, win, _frame_spectra(plan, win, p, acc), acc)
