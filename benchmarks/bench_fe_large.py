@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import resource
 import subprocess
 import sys
@@ -63,7 +64,7 @@ def run(label: str, src: str, size: int, workers: int) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         out = str(Path(tmp) / "sol.npz")
         subprocess.run([sys.executable, __file__, "--child", out, "--size", str(size), "--workers", str(workers)],
-                       check=True, env={"PYTHONPATH": src, "PATH": "/usr/bin:/bin"})
+                       check=True, env={**os.environ, "PYTHONPATH": src})
         r = dict(np.load(out))
     lam = r["lam"]
     print(f"{label} ({Path(str(r['source'])).parents[1]}): {int(r['n'])} unknowns "

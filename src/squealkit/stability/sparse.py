@@ -54,6 +54,7 @@ BAND_HZ = (1000.0, 16000.0)
 RESIDUAL_TOL = 1e-8
 
 
+
 @dataclass(frozen=True)
 class EigenSolution:
     """Eigenvalues of an FE model at one operating point.
