@@ -135,6 +135,20 @@ def test_missing_recording_is_a_failed_application_not_a_crash(tmp_path):
     assert s["applications"] == 2 and [f["application"] for f in s["failed"]] == ["A0002"]
 
 
+def test_no_application_analysed_has_no_occurrence(tmp_path):
+    # nothing analysed: an occurrence of 0 % would read as "no squeal"; it is unknown (null)
+    synthetic_campaign(tmp_path, n_applications=2, duration=0.5, seed=1)
+    for f in (tmp_path / "recordings").glob("*.nc"):
+        f.unlink()
+    res = run(["campaign", str(tmp_path / "matrix.csv"), "--out", str(tmp_path / "out"), "--mic", "mic",
+               "--displacement", "displacement", "--radius", "0.05", "--rpm", "900"])
+    assert res.exit_code == 1 and "no application could be analysed (2 failed)" in res.output
+    s = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert s["applications"] == 0 and s["occurrence_percent"] is None
+    assert all(b["occurrence_percent"] is None for b in s["by_band"])
+    assert (tmp_path / "out" / "report.html").is_file()
+
+
 @pytest.mark.parametrize(("text", "match"), [
     ("file\na.nc\n", "application"),
     ("application,file\nA,a.nc\nA,b.nc\n", "twice"),

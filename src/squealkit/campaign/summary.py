@@ -77,7 +77,7 @@ def campaign_summary(store, band: tuple[float, float], criteria: str) -> dict[st
     for c, lo, hi in third_octave_bands(band):
         hit = ev.loc[np.isclose(ev["band_center_hz"], c), "application"].nunique() if len(ev) else 0
         by_band.append({"band_hz": [lo, hi], "center_hz": c, "applications_with_squeal": int(hit),
-                        "occurrence_percent": 100.0 * hit / n if n else 0.0})
+                        "occurrence_percent": 100.0 * hit / n if n else None})
 
     def by(col: str, edges: list[float]) -> list[dict[str, Any]]:
         out = []
@@ -93,7 +93,7 @@ def campaign_summary(store, band: tuple[float, float], criteria: str) -> dict[st
         "criteria": criteria,
         "applications": n,
         "applications_with_squeal": n_sq,
-        "occurrence_percent": 100.0 * n_sq / n if n else 0.0,
+        "occurrence_percent": 100.0 * n_sq / n if n else None,  # unknown, not 0 %, with nothing analysed
         "by_band": by_band,
         "by_temperature_c": by("temperature_c", [-math.inf, 50, 100, 150, 200, 250, 300, 400, math.inf]),
         "by_pressure_bar": by("pressure_bar", [-math.inf, 5, 10, 15, 20, 30, 40, math.inf]),

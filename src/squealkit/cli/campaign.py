@@ -86,7 +86,7 @@ def campaign(matrix: Path, out_dir: Path, mic: str, displacement: str, radius: f
     else:
         click.echo(f"no application could be analysed ({n_failed} failed)")
     for b in summary["by_band"]:
-        if b["occurrence_percent"] > 0:
+        if b["occurrence_percent"]:
             click.echo(f"  {b['band_hz'][0]:7.0f}-{b['band_hz'][1]:7.0f} Hz: {b['occurrence_percent']:5.1f} %")
     click.echo(f"wrote {out_dir / 'campaign.duckdb'}, {out_dir / 'summary.json'}"
                + ("" if no_report else f", {out_dir / 'report.html'}"))

@@ -41,12 +41,14 @@ def occurrence_by_band_plot(summary: dict, *, synthetic: bool = False, ax=None):
     bands = summary["by_band"]
     labels = [f"{b['center_hz'] / 1000:.3g}" for b in bands]
     occ = [b["occurrence_percent"] for b in bands]
-    ax.bar(range(len(bands)), occ, color="tab:red")
+    ax.bar(range(len(bands)), [np.nan if o is None else o for o in occ], color="tab:red")
     ax.set_xticks(range(len(bands)), labels)
     ax.set_xlabel("1/3-octave band centre [kHz]")
     ax.set_ylabel("occurrence [% of applications]")
-    ax.set_title(f"Squeal occurrence by band: {summary['occurrence_percent']:.1f} % of "
-                 f"{summary['applications']} applications" + (_SYN if synthetic else ""), fontsize=10)
+    total = summary["occurrence_percent"]
+    head = "unknown: no application analysed" if total is None else (
+        f"{total:.1f} % of {summary['applications']} applications")
+    ax.set_title("Squeal occurrence by band: " + head + (_SYN if synthetic else ""), fontsize=10)
     ax.grid(axis="y", alpha=0.3)
     fig.tight_layout()
     return fig
