@@ -66,6 +66,19 @@ def test_campaign_summary_csv(files, tmp_path):
     assert rows[0].startswith("recording,") and len(rows) == 3
 
 
+def test_a_bad_recording_does_not_stop_the_others(files, tmp_path):
+    bad = tmp_path / "broken.nc"
+    bad.write_bytes(b"not a netCDF file")
+    res = invoke(["analyze", str(files / "rising.nc"), str(bad), str(files / "quiet.nc"), *ARGS, "--json"])
+    assert res.exit_code == 1
+    out = json.loads(res.stdout)
+    assert len(out["recordings"]) == 2 and out["occurrence_percent"] == 50.0
+    assert [f["recording"] for f in out["failed"]] == [str(bad)] and "broken.nc" in out["failed"][0]["error"]
+    assert "1 of 3 recordings could not be analysed" in res.stderr
+    res = invoke(["analyze", str(bad), str(bad), *ARGS])  # none: exit 2 with one line
+    assert res.exit_code == 2 and "None of the 2 recordings could be analysed" in res.output
+
+
 def test_plots_written(files, tmp_path):
     res = invoke(["analyze", str(files / "rising.nc"), *ARGS, "--plot", str(tmp_path / "figs")])
     assert res.exit_code == 0, res.output

@@ -19,8 +19,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from squealkit.models import FEModel, MatrixModel
-from squealkit.stability import eigenvalues
-from squealkit.stability import sparse
+from squealkit.stability import eigenvalues, sparse
 from squealkit.stability.sparse import band_eigs, dense_eigs
 
 

@@ -95,7 +95,7 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float | N
             band: str | None, threshold_dba: float, time_weighting: str, min_duration: float, min_tnr_db: float,
             fs: float | None,
             scales: tuple[str, ...], units: tuple[str, ...], as_json: bool, plot_dir: Path | None,
-            out_path: Path | None, summary_path: Path | None, scheduler: str | None) -> None:
+            out_path: Path | None, summary_path: Path | None, scheduler: str | None) -> int:
     """Find squeal in rig recordings and relate it to the disc run-out (paper §5).
 
     Each FILE is .csv, .wav, .nc/.h5 or .tdms with a microphone and a displacement
@@ -119,9 +119,14 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float | N
     With --scheduler each recording is analysed by a worker of the Dask cluster
     (the files must be readable there under the same paths) and only the campaign
     summary comes back: the output is the campaign, for one file or many.
+
+    \b
+    With several FILEs, one that cannot be read or analysed does not stop the
+    others: it is left out of the summary and listed on stderr at the end, and the
+    exit code is 1 (2 when none could be analysed).
     """
     from ..io import save_dataset, write_text
-    from ..measurement import analyze_recording, open_recording
+    from ..measurement import open_recording
     from ..measurement.campaign import summarize_campaign
 
     crit = criteria_from_options(setup, band, threshold_dba, time_weighting, min_duration)
@@ -143,31 +148,27 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float | N
         plot_dir.mkdir(parents=True, exist_ok=True)
     scale_map = {k: validate_finite(f"--scale {k}", v) for k, v in _pairs("--scale", scales).items()}
     unit_map = _pairs("--unit", units)
-    sources = [open_recording(f, fs=fs, scale=scale_map or None, units=unit_map or None) for f in files]
+    kwargs = dict(mic=mic, displacement=displacement, rpm=rpm, radius=radius, **crit_kw)
     if scheduler is not None:
+        sources = [open_recording(f, fs=fs, scale=scale_map or None, units=unit_map or None) for f in files]
         for src in sources:  # bad channel names fail here, in one line, not on a worker
             src.resolve(mic), src.resolve(displacement)
         if plot_dir is not None or out_path is not None:
             raise InputError("--plot and --out work on this machine only; leave them out with --scheduler.")
         _campaign_on_cluster(files, scheduler, as_json, summary_path, fs=fs, scale=scale_map or None,
-                             units=unit_map or None, mic=mic, displacement=displacement, rpm=rpm, radius=radius,
-                             **crit_kw)
-        return
-    results = []
-    for f, src in zip(files, sources, strict=True):
-        kwargs = dict(mic=mic, displacement=displacement, rpm=rpm, radius=radius, **crit_kw)
-        if src.duration > _PROGRESS_ABOVE_S:
-            from rich.progress import Progress
-
-            with Progress(transient=True, console=_stderr_console()) as bar:
-                task = bar.add_task(f"analysing {f.name}", total=src.n_samples)
-                def report(done: int, total: int, bar=bar, task=task) -> None:
-                    bar.update(task, completed=done)
-
-                res = analyze_recording(src, progress=report, **kwargs)
-        else:
-            res = analyze_recording(src, **kwargs)
-        results.append(res)
+                             units=unit_map or None, **kwargs)
+        return 0
+    done, failed = [], []
+    for f in files:
+        try:
+            src = open_recording(f, fs=fs, scale=scale_map or None, units=unit_map or None)
+            res = _analyse(src, f, kwargs)
+        except InputError as e:
+            if len(files) == 1:
+                raise
+            failed.append((f, str(e)))  # one bad recording does not stop the others
+            continue
+        done.append((f, res))
         if plot_dir is not None:
             if folder:
                 stem, suffix = plot_dir / f.stem, ".png"
@@ -175,18 +176,53 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float | N
                 name = plot_dir.stem if len(files) == 1 else f"{plot_dir.stem}_{f.stem}"
                 stem, suffix = plot_dir.with_name(name), plot_dir.suffix.lower()
             _write_plots(src, res, mic, displacement, stem, suffix)
+    if not done:
+        raise InputError(f"None of the {len(files)} recordings could be analysed; the first: {failed[0][1]}")
+    results = [r for _, r in done]
     if out_path is not None:
         save_dataset(results[0].to_dataset(), out_path)
-    campaign = summarize_campaign(results, [str(f) for f in files]) if len(files) > 1 or summary_path else None
+    campaign = summarize_campaign(results, [str(f) for f, _ in done]) if len(files) > 1 or summary_path else None
     if summary_path is not None and campaign is not None:
         write_text(summary_path, campaign.to_csv())
     if as_json:
-        emit_json(results[0].to_dict() if campaign is None else campaign.to_dict())
-        return
-    for f, r in zip(files, results, strict=True):
-        _print_text(f, r)
-    if campaign is not None:
-        _print_campaign(campaign)
+        out = results[0].to_dict() if campaign is None else campaign.to_dict()
+        if failed:
+            out["failed"] = [{"recording": str(f), "error": e} for f, e in failed]
+        emit_json(out)
+    else:
+        for f, r in done:
+            _print_text(f, r)
+        if campaign is not None:
+            _print_campaign(campaign)
+    return _report_failures(failed, len(files))
+
+
+def _analyse(src, f: Path, kwargs: dict):
+    """One recording's analysis, with a progress bar on stderr for a long one."""
+    from ..measurement import analyze_recording
+
+    if src.duration <= _PROGRESS_ABOVE_S:
+        return analyze_recording(src, **kwargs)
+    from rich.progress import Progress
+
+    with Progress(transient=True, console=_stderr_console()) as bar:
+        task = bar.add_task(f"analysing {f.name}", total=src.n_samples)
+
+        def report(done: int, total: int) -> None:
+            bar.update(task, completed=done)
+
+        return analyze_recording(src, progress=report, **kwargs)
+
+
+def _report_failures(failed: list[tuple[Path, str]], n: int) -> int:
+    """List the recordings that could not be analysed on stderr, last; the exit code: 1 if any, else 0."""
+    if not failed:
+        return 0
+    click.echo(f"squealkit analyze: {len(failed)} of {n} recordings could not be analysed (left out of the "
+               "summary):", err=True)
+    for f, e in failed:
+        click.echo(f"{f}: {e}", err=True)
+    return 1
 
 
 def _print_campaign(campaign) -> None:
