@@ -17,12 +17,14 @@ run, on the same files:
 ``--runs`` picks among ``baseline,serial,dask1,dask2`` (default: all). Prints each time, the ratios
 against the baseline, the 1 -> 2 worker speed-up, and the time a 2,000-application matrix would
 take at the measured rate. The files take about 15 MB per 10 s application (30 GB for 2,000) in
-a temporary folder (``--tmp``), removed at the end.
+a temporary folder, removed at the end, or in ``--data DIR``, kept and reused by later runs.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import json
 import shutil
 import sys
 import tempfile
@@ -55,9 +57,11 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=10.0, help="length of each application [s]")
     ap.add_argument("--fs", type=float, default=48000.0)
     ap.add_argument("--runs", default="baseline,serial,dask1,dask2", help="which timings to take")
-    ap.add_argument("--tmp", default=None, help="folder for the generated files (default: the system's)")
+    ap.add_argument("--data", default=None,
+                    help="keep the generated campaign in this folder and reuse it when it is there already "
+                         "(default: a temporary folder, removed at the end)")
     args = ap.parse_args()
-    runs = set(args.runs.split(","))
+    runs = set(filter(None, args.runs.split(",")))  # empty: only generate (into --data)
     if not runs <= {"baseline", "serial", "dask1", "dask2"}:
         ap.error(f"--runs {args.runs!r}: choose among baseline, serial, dask1, dask2")
 
@@ -68,12 +72,18 @@ def main() -> None:
 
     n, dur = args.applications, args.duration
     t_base = t_serial = None
-    with tempfile.TemporaryDirectory(dir=args.tmp) as d:
-        d = Path(d)
-        t0 = time.perf_counter()
-        truth = synthetic_campaign(d, n_applications=n, duration=dur, fs=args.fs, seed=1)
-        t_gen = time.perf_counter() - t0
-        print(f"generated : {n} SYNTHETIC applications of {dur:g} s @ {args.fs / 1000:g} kHz in {t_gen:.1f} s")
+    with contextlib.ExitStack() as stack:
+        d = Path(args.data) if args.data else Path(stack.enter_context(tempfile.TemporaryDirectory()))
+        if (d / "truth.json").is_file():
+            truth = json.loads((d / "truth.json").read_text())
+            if truth["applications"] != n:
+                ap.error(f"--data {d} holds {truth['applications']} applications, not {n}")
+            print(f"reused    : {n} SYNTHETIC applications in {d}")
+        else:
+            t0 = time.perf_counter()
+            truth = synthetic_campaign(d, n_applications=n, duration=dur, fs=args.fs, seed=1)
+            t_gen = time.perf_counter() - t0
+            print(f"generated : {n} SYNTHETIC applications of {dur:g} s @ {args.fs / 1000:g} kHz in {t_gen:.1f} s")
         apps = read_matrix(d / "matrix.csv")
         analyze_recording(apps[0].file, **KW)  # warm-up (imports, numba caches)
 
@@ -126,7 +136,10 @@ def main() -> None:
         w1, w2 = cpu[1][0], cpu[2][0] / 2
         print(f"scaling   : 1 -> 2 workers in CPU terms (worker CPU per worker, ideal cores): {w1 / w2:.2f}x; "
               f"worker CPU grew {cpu[2][0] / cpu[1][0]:.2f}x from 1 to 2 workers")
-    best = min(t for t in (t_serial, *t_dask.values()) if t)
+    timed = [t for t in (t_serial, *t_dask.values()) if t]
+    if not timed:
+        return
+    best = min(timed)
     print(f"2000 apps : about {2000 / n * best / 60:.1f} min at the best rate measured here "
           f"({2000 * dur / 3600:.1f} h of recordings)")
 
