@@ -304,3 +304,18 @@ def test_mean_squares_kernel_matches_numpy(dec):
     ref = np.square(x[:m * dec], dtype=np.float32).reshape(-1, dec).mean(axis=1, dtype=np.float64)
     got = _mean_squares(x, dec)
     assert got.shape == ref.shape and np.allclose(got, ref, rtol=1e-15, atol=0)
+
+
+def test_time_weight_rows_matches_lfilter_down_each_column():
+    from scipy.signal import lfilter
+
+    from squealkit.measurement.analysis import _time_weight_rows
+
+    rng = np.random.default_rng(5)
+    p = rng.exponential(1.0, (300, 37)).astype(np.float32)
+    state = rng.exponential(1.0, 37)
+    a = 0.93
+    ref = lfilter([1.0 - a], [1.0, -a], p.astype(np.float64), axis=0, zi=(a * state)[None, :])[0]
+    got, last = _time_weight_rows(p, a, state)
+    assert got.dtype == np.float32 and np.array_equal(got, ref.astype(np.float32))
+    assert np.allclose(last, ref[-1], rtol=1e-15, atol=0)
