@@ -319,3 +319,14 @@ def test_time_weight_rows_matches_lfilter_down_each_column():
     got, last = _time_weight_rows(p, a, state)
     assert got.dtype == np.float32 and np.array_equal(got, ref.astype(np.float32))
     assert np.allclose(last, ref[-1], rtol=1e-15, atol=0)
+
+
+@pytest.mark.parametrize("index", [[], [0], [3, 4, 5, 6], [2, 3, 5], [0, 0, 1], [0, 0, 2], [4, 6, 8], [5, 4, 6]])
+def test_rows_select_what_the_index_selects(index):
+    from squealkit.measurement.analysis import _rows
+
+    x = np.arange(40.0).reshape(10, 4)
+    idx = np.array(index, dtype=np.intp)
+    got = x[_rows(idx)]
+    assert np.array_equal(got, x[idx])
+    assert isinstance(_rows(idx), slice) == (idx.size > 0 and np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)))

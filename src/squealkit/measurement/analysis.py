@@ -756,6 +756,14 @@ def _frame_spectra(plan: _Plan, win: _Window, p: NDArray, acc: _Accumulators) ->
     return _Spectra(fp, spec_p, spec, pb, pa, pa_tw)
 
 
+def _rows(index: NDArray[np.intp]) -> slice | NDArray[np.intp]:
+    """Row numbers as a slice where they are consecutive (a view, not a copy, of the rows they select:
+    all frames of a squealing window are loud), else as they are."""
+    if index.size and int(index[-1]) - int(index[0]) + 1 == index.size and bool(np.all(index[1:] > index[:-1])):
+        return slice(int(index[0]), int(index[-1]) + 1)
+    return index
+
+
 def _frame_components(plan: _Plan, s: AnalysisSettings, win: _Window, sp: _Spectra, acc: _Accumulators) -> None:
     """Tonal components of the loud frames (level at or above the threshold), with their frequencies.
 
@@ -783,15 +791,15 @@ def _frame_components(plan: _Plan, s: AnalysisSettings, win: _Window, sp: _Spect
     if not loud.size:
         return
     pa, pa_tw, pb = sp.pa, sp.pa_tw, sp.pb
-    share_scale = acc.level[f0:f1][loud] / np.maximum(pa_tw[loud].sum(axis=1, dtype=np.float64), 1e-300)
+    rows = _rows(loud)
+    share_scale = acc.level[f0:f1][rows] / np.maximum(pa_tw[rows].sum(axis=1, dtype=np.float64), 1e-300)
     # phase advance of every band bin from the previous frame (zero for frame 0)
     prev = loud + (f0 - sp.fp - 1)
-    cross = sp.spec[loud]  # X_m conj(X_m-1), in place: two fresh arrays of this size fewer per window
-    before = sp.spec_p[np.maximum(prev, 0)]
-    cross *= np.conjugate(before, out=before)
+    before = np.conjugate(sp.spec_p[_rows(np.maximum(prev, 0))])
+    cross = np.multiply(sp.spec[rows], before, out=before)  # X_m conj(X_m-1): one fresh array per window
     cross[prev < 0] = 0
     acc.mic_cross_sum[lo:hi] += cross.sum(axis=0, dtype=np.complex128)
-    ptw = pa_tw[loud]
+    ptw = pa_tw[rows]
     fr, ff, fl = tonal_components(ptw, ptw, lo, fs, n, s.threshold_dba, scale=share_scale,
                                   half_width=plan.half_width)
     kc = np.clip(np.rint(ff * (n / fs)).astype(np.intp) - lo, _LOBE, hi - lo - 1 - _LOBE)
@@ -810,7 +818,7 @@ def _frame_components(plan: _Plan, s: AnalysisSettings, win: _Window, sp: _Spect
     acc.comp_level.append(fl)
     acc.comp_pow.append(wc)
     acc.comp_cross.append(np.where(prev[fr] >= 0, c, 0))
-    acc.mic_spec_sum[lo:hi] += pb[loud].sum(axis=0, dtype=np.float64)
+    acc.mic_spec_sum[lo:hi] += pb[rows].sum(axis=0, dtype=np.float64)
 
 
 class _Runout(NamedTuple):
