@@ -16,9 +16,11 @@ The run-out incline needs no speed at all in the angle domain: ``tan(theta) = dq
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import CubicSpline
 
@@ -60,6 +62,30 @@ def pulse_times(x: ArrayLike, fs: float, *, level: float | None = None, t0: floa
     i = np.flatnonzero((v[:-1] < level) & (v[1:] >= level))
     frac = (level - v[i]) / (v[i + 1] - v[i])
     return t0 + (i + frac) / fs
+
+
+@njit(cache=True, nogil=True)
+def _rising_edges(x, before, level):  # pragma: no cover - compiled
+    """Rising crossings of ``level`` in ``[before, *x]`` (``before`` NaN: in ``x`` alone), as
+    :func:`pulse_times` finds them: index ``k`` of the sample before each crossing in that
+    sequence, and its fraction ``(level - v[k]) / (v[k + 1] - v[k])``.
+
+    One pass over the block, without joining ``before`` to it (a copy of the block) and without
+    the temporaries of the array version.
+    """
+    shift = 0 if np.isnan(before) else 1
+    k = np.empty(x.shape[0], np.int64)
+    frac = np.empty(x.shape[0])
+    m = 0
+    prev = before
+    for i in range(x.shape[0]):
+        xi = x[i]
+        if prev < level and xi >= level:
+            k[m] = i - 1 + shift
+            frac[m] = (level - prev) / (xi - prev)
+            m += 1
+        prev = xi
+    return k[:m], frac[:m]
 
 
 @dataclass(frozen=True)
@@ -379,10 +405,9 @@ def read_tacho(source, channel: str | int, *, kind: str = "pulses", pulses_per_r
                 if hi_ <= lo_:
                     raise InputError(f"Tacho channel {name!r} is constant in its first block; give the trigger level.")
                 level = 0.5 * (lo_ + hi_)
-            xx = x if last is None else np.concatenate([[last], x])
             t0 = start / fs if last is None else (start - 1) / fs
-            if xx.size >= 2:
-                times.append(pulse_times(xx, fs, level=level, t0=t0))
+            k, frac = _rising_edges(x, math.nan if last is None else last, float(level))
+            times.append(t0 + (k + frac) / fs)  # as pulse_times of the block after the sample before it
             last = float(x[-1])
         else:
             idx = np.arange((-start) % step, x.size, step)
