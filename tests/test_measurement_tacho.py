@@ -194,7 +194,7 @@ def test_rising_edges_kernel_matches_pulse_times_of_the_joined_block():
         x = rng.choice([0.0, 2.5, 5.0], n) + (rng.standard_normal(n) if trial % 2 else 0.0)
         level, start = 2.5, int(rng.integers(1, 10**6))
         for before in (None, float(rng.choice([0.0, 2.5, 5.0]))):
-            k, frac = _rising_edges(x, np.nan if before is None else before, level)
+            k, frac = _rising_edges(x, 0.0 if before is None else before, before is not None, level)
             t0 = start / FS if before is None else (start - 1) / FS
             joined = x if before is None else np.concatenate([[before], x])
             ref = pulse_times(joined, FS, level=level, t0=t0) if joined.size >= 2 else np.empty(0)

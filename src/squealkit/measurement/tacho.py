@@ -16,7 +16,6 @@ The run-out incline needs no speed at all in the angle domain: ``tan(theta) = dq
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,22 +64,22 @@ def pulse_times(x: ArrayLike, fs: float, *, level: float | None = None, t0: floa
 
 
 @njit(cache=True, nogil=True)
-def _rising_edges(x, before, level):  # pragma: no cover - compiled
-    """Rising crossings of ``level`` in ``[before, *x]`` (``before`` NaN: in ``x`` alone), as
-    :func:`pulse_times` finds them: index ``k`` of the sample before each crossing in that
+def _rising_edges(x, before, has_before, level):  # pragma: no cover - compiled
+    """Rising crossings of ``level`` in ``[before, *x]`` (without ``has_before``: in ``x`` alone),
+    as :func:`pulse_times` finds them: index ``k`` of the sample before each crossing in that
     sequence, and its fraction ``(level - v[k]) / (v[k + 1] - v[k])``.
 
     One pass over the block, without joining ``before`` to it (a copy of the block) and without
     the temporaries of the array version.
     """
-    shift = 0 if np.isnan(before) else 1
+    shift = 1 if has_before else 0
     k = np.empty(x.shape[0], np.int64)
     frac = np.empty(x.shape[0])
     m = 0
     prev = before
     for i in range(x.shape[0]):
         xi = x[i]
-        if prev < level and xi >= level:
+        if (i > 0 or has_before) and prev < level and xi >= level:
             k[m] = i - 1 + shift
             frac[m] = (level - prev) / (xi - prev)
             m += 1
@@ -406,7 +405,7 @@ def read_tacho(source, channel: str | int, *, kind: str = "pulses", pulses_per_r
                     raise InputError(f"Tacho channel {name!r} is constant in its first block; give the trigger level.")
                 level = 0.5 * (lo_ + hi_)
             t0 = start / fs if last is None else (start - 1) / fs
-            k, frac = _rising_edges(x, math.nan if last is None else last, float(level))
+            k, frac = _rising_edges(x, 0.0 if last is None else last, last is not None, float(level))
             times.append(t0 + (k + frac) / fs)  # as pulse_times of the block after the sample before it
             last = float(x[-1])
         else:
