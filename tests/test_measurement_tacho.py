@@ -199,3 +199,18 @@ def test_rising_edges_kernel_matches_pulse_times_of_the_joined_block():
             joined = x if before is None else np.concatenate([[before], x])
             ref = pulse_times(joined, FS, level=level, t0=t0) if joined.size >= 2 else np.empty(0)
             assert np.array_equal(t0 + (k + frac) / FS, ref), (trial, before)
+
+
+@pytest.mark.parametrize("block", [7777, 1 << 12, 10**6])
+def test_tacho_blocks_are_the_sources_blocks(stop, block):
+    # read_tacho reads several blocks at a time, then takes them one by one: the same blocks (starts
+    # and samples) as the source yields them one by one, so the edges and the level are the same
+    from squealkit.measurement.analysis import _DatasetSource
+    from squealkit.measurement.tacho import _tacho_blocks
+
+    src, data = stop
+    source = _DatasetSource(recording_dataset(data, FS, src.units, {}), FS)
+    got = list(_tacho_blocks(source, "tacho", block))
+    ref = list(source.iter_blocks(["tacho"], block=block))
+    assert [s for s, _ in got] == [s for s, _ in ref]
+    assert all(np.array_equal(x, blk["tacho"]) for (_, x), (_, blk) in zip(got, ref, strict=True))
