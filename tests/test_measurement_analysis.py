@@ -304,3 +304,70 @@ def test_mean_squares_kernel_matches_numpy(dec):
     ref = np.square(x[:m * dec], dtype=np.float32).reshape(-1, dec).mean(axis=1, dtype=np.float64)
     got = _mean_squares(x, dec)
     assert got.shape == ref.shape and np.allclose(got, ref, rtol=1e-15, atol=0)
+
+
+def test_time_weight_rows_matches_lfilter_down_each_column():
+    from scipy.signal import lfilter
+
+    from squealkit.measurement.analysis import _time_weight_rows
+
+    rng = np.random.default_rng(5)
+    p = rng.exponential(1.0, (300, 37)).astype(np.float32)
+    state = rng.exponential(1.0, 37)
+    a = 0.93
+    ref = lfilter([1.0 - a], [1.0, -a], p.astype(np.float64), axis=0, zi=(a * state)[None, :])[0]
+    got, last = _time_weight_rows(p, a, state)
+    assert got.dtype == np.float32 and np.array_equal(got, ref.astype(np.float32))
+    assert np.allclose(last, ref[-1], rtol=1e-15, atol=0)
+
+
+@pytest.mark.parametrize("index", [[], [0], [3, 4, 5, 6], [2, 3, 5], [0, 0, 1], [0, 0, 2], [4, 6, 8], [5, 4, 6]])
+def test_rows_select_what_the_index_selects(index):
+    from squealkit.measurement.analysis import _rows
+
+    x = np.arange(40.0).reshape(10, 4)
+    idx = np.array(index, dtype=np.intp)
+    got = x[_rows(idx)]
+    assert np.array_equal(got, x[idx])
+    assert isinstance(_rows(idx), slice) == (idx.size > 0 and np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)))
+
+
+def test_running_sums_kernel_matches_numpy():
+    from squealkit.measurement.analysis import _running_sums
+
+    rng = np.random.default_rng(8)
+    ms, tan_t = rng.exponential(1.0, 5000), rng.standard_normal(5000) * 1e-3
+    tan_t[::7] = 0.0  # (not rising)
+    ref = np.zeros((3, ms.size + 1))
+    np.cumsum(ms, out=ref[0, 1:])
+    np.cumsum(np.where(tan_t > 0, ms, 0.0), out=ref[1, 1:])
+    np.cumsum(tan_t, out=ref[2, 1:])
+    assert np.array_equal(_running_sums(ms, tan_t), ref)
+
+
+def test_angle_sums_kernel_matches_bincount():
+    from squealkit.measurement.analysis import _angle_sums
+
+    rng = np.random.default_rng(9)
+    turns = np.sort(rng.uniform(-1.5, 40.0, 20000))
+    turns[:50] = np.arange(50) / 72.0  # on the bin edges
+    sro, macro, nb = rng.standard_normal(turns.size), rng.standard_normal(turns.size), 72
+    abin = ((turns - np.floor(turns)) * nb).astype(np.int64) % nb
+    ref = [np.bincount(abin, sro, nb), np.bincount(abin, macro, nb), np.bincount(abin, minlength=nb)]
+    got = _angle_sums(turns, sro, macro, nb)
+    assert all(np.array_equal(g, r) for g, r in zip(got, ref, strict=True))
+
+
+def test_bin_powers_kernel_matches_numpy():
+    from squealkit.measurement.analysis import _bin_powers
+
+    rng = np.random.default_rng(10)
+    full = (rng.standard_normal((200, 257)) + 1j * rng.standard_normal((200, 257))).astype(np.complex64) * 1e-3
+    spec = full[:, 22:171]  # band bins: a strided view, as the analysis passes them
+    scale, w_a = np.float32(3.1e-4), rng.uniform(0.01, 1.3, spec.shape[1]).astype(np.float32)
+    ref_pb = spec.real**2
+    ref_pb += spec.imag**2
+    ref_pb *= scale
+    pb, pa = _bin_powers(spec, scale, w_a)
+    assert pb.dtype == pa.dtype == np.float32
+    assert np.array_equal(pb, ref_pb) and np.array_equal(pa, ref_pb * w_a)

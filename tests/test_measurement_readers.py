@@ -498,3 +498,29 @@ def test_contiguous_datasets_are_mapped_as_h5py_reads_them(tmp_path):
                 assert blk.dtype == d.dtype and np.array_equal(blk, d[start:stop])
             blk[0] += 1
     assert f.read_bytes() == before
+
+
+def test_netcdf_head_is_what_h5netcdf_reads(tmp_path):
+    # the time coordinate's first values are read from its HDF5 dataset, as h5netcdf reads them; a
+    # dataset shorter than its (unlimited) dimension is padded by h5netcdf, so it is read through it
+    import h5netcdf
+    import h5py
+
+    from squealkit.measurement.readers import _head
+
+    f = tmp_path / "pad.nc"
+    with h5netcdf.File(f, "w") as nc:
+        nc.dimensions = {"time": None}
+        nc.create_variable("time", ("time",), float)
+        nc.create_variable("mic", ("time",), np.float32)
+        nc.resize_dimension("time", 100)
+        nc.variables["time"][:] = np.arange(100) / 1000.0
+        nc.variables["mic"][:] = np.arange(100, dtype=np.float32)
+    with h5py.File(f, "a") as h5:
+        h5["mic"].resize((40,))
+    with h5py.File(f, "r") as h5, h5netcdf.File(h5, "r") as nc:
+        for name in ("time", "mic"):
+            v = nc.variables[name]
+            got, ref = _head(h5, v, name, 100), v[:64]
+            assert got.dtype == ref.dtype and np.array_equal(got, ref), name
+        assert np.count_nonzero(_head(h5, nc.variables["mic"], "mic", 100)[40:]) == 0  # the padding

@@ -181,3 +181,36 @@ def test_each_event_has_its_own_runout_phase():
         err = (by_f[f].runout_phase_deg - rec.attrs["truth_runout_phase_deg"] + 180) % 360 - 180
         assert abs(err) < 10.0
     assert abs(by_f[3000.0].runout_phase_deg - by_f[7000.0].runout_phase_deg) > 90
+
+
+def test_rising_edges_kernel_matches_pulse_times_of_the_joined_block():
+    # read_tacho finds the edges of a block and the sample before it in one compiled pass; the times
+    # must be those pulse_times gives for the two joined, to the last bit
+    from squealkit.measurement.tacho import _rising_edges
+
+    rng = np.random.default_rng(7)
+    for trial in range(100):
+        n = int(rng.integers(1, 300))
+        x = rng.choice([0.0, 2.5, 5.0], n) + (rng.standard_normal(n) if trial % 2 else 0.0)
+        level, start = 2.5, int(rng.integers(1, 10**6))
+        for before in (None, float(rng.choice([0.0, 2.5, 5.0]))):
+            k, frac = _rising_edges(x, 0.0 if before is None else before, before is not None, level)
+            t0 = start / FS if before is None else (start - 1) / FS
+            joined = x if before is None else np.concatenate([[before], x])
+            ref = pulse_times(joined, FS, level=level, t0=t0) if joined.size >= 2 else np.empty(0)
+            assert np.array_equal(t0 + (k + frac) / FS, ref), (trial, before)
+
+
+@pytest.mark.parametrize("block", [7777, 1 << 12, 10**6])
+def test_tacho_blocks_are_the_sources_blocks(stop, block):
+    # read_tacho reads several blocks at a time, then takes them one by one: the same blocks (starts
+    # and samples) as the source yields them one by one, so the edges and the level are the same
+    from squealkit.measurement.analysis import _DatasetSource
+    from squealkit.measurement.tacho import _tacho_blocks
+
+    src, data = stop
+    source = _DatasetSource(recording_dataset(data, FS, src.units, {}), FS)
+    got = list(_tacho_blocks(source, "tacho", block))
+    ref = list(source.iter_blocks(["tacho"], block=block))
+    assert [s for s, _ in got] == [s for s, _ in ref]
+    assert all(np.array_equal(x, blk["tacho"]) for (_, x), (_, blk) in zip(got, ref, strict=True))

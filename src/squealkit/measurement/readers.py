@@ -819,11 +819,12 @@ _TIME_UNITS = {"s": 1.0, "sec": 1.0, "second": 1.0, "seconds": 1.0, "ms": 1e-3, 
 
 def _open_netcdf(p: Path, fs: float | None) -> RecordingSource:
     import h5netcdf
+    import h5py
 
     # netCDF-4 is HDF5: h5netcdf lists the variables without reading any samples (xarray would
     # load the time coordinate to index it). Data variables, as in xarray: 1-D numeric variables
     # that are neither a dimension's coordinate nor named in a "coordinates" attribute.
-    with h5netcdf.File(p, "r") as f:
+    with h5py.File(p, "r") as h5, h5netcdf.File(h5, "r") as f:
         variables = f.variables
         coords = set(f.dimensions)
         for v in variables.values():
@@ -845,7 +846,8 @@ def _open_netcdf(p: Path, fs: float | None) -> RecordingSource:
                 if scale is None:
                     raise _fail(p, f"time coordinate {dim!r} has units {tunits!r}; use seconds, or give fs.")
                 label = f"time coordinate {dim!r}"
-                dt = _head_interval(p, label, np.asarray(tv[:64], dtype=float) * scale, _sample_where)
+                dt = _head_interval(p, label, np.asarray(_head(h5, tv, dim, n_samples), dtype=float) * scale,
+                                    _sample_where)
                 if "fs" in f.attrs:  # both: the attribute sets the rate, the coordinate must agree
                     rate = _file_rate(p, f.attrs["fs"], "fs attribute")
                     if abs(dt * rate - 1) > 1e-3:
@@ -860,6 +862,22 @@ def _open_netcdf(p: Path, fs: float | None) -> RecordingSource:
                 raise _fail(p, "has no 'fs' attribute or time coordinate; give fs.")
         units = {n: _attr_str(variables[n].attrs.get("units", "")) for n in names}
         return RecordingSource(p, "netcdf", float(fs), n_samples, tuple(names), units, {}, extra)
+
+
+def _head(h5: Any, variable: Any, name: str, n_samples: int, count: int = 64) -> NDArray:
+    """The first ``count`` values of a 1-D netCDF variable of the root group.
+
+    Read from its HDF5 dataset (``h5``, the open file) when that holds all ``n_samples`` numbers:
+    then h5netcdf returns the dataset's values as they are, and reading them through it costs
+    fifteen times as much (0.8 ms). Otherwise (a dataset shorter than its dimension, padded
+    with fill values; strings) through h5netcdf's ``variable``.
+    """
+    import h5py
+
+    dset = h5.get(name)
+    if isinstance(dset, h5py.Dataset) and dset.shape == (n_samples,) and dset.dtype.kind in "biuf":
+        return dset[:count]
+    return variable[:count]
 
 
 def _attr_str(value: Any) -> str:

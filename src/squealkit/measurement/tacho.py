@@ -16,9 +16,11 @@ The run-out incline needs no speed at all in the angle domain: ``tan(theta) = dq
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import CubicSpline
 
@@ -26,6 +28,9 @@ from .._validation import InputError, validate_fs
 
 #: Shortest spacing [s] of the spline knots through the tacho marks.
 _KNOT_S = 0.01
+#: Blocks of :func:`read_tacho` read from the source at a time: a recording mapped from a file
+#: costs half as much per sample in reads of 2**21 samples as in reads of 2**18.
+_BLOCKS_PER_READ = 8
 
 __all__ = ["ConstantSpeed", "DiscAngle", "angular_resample", "pulse_times", "read_tacho", "synchronous_average",
            "tacho_angle"]
@@ -60,6 +65,30 @@ def pulse_times(x: ArrayLike, fs: float, *, level: float | None = None, t0: floa
     i = np.flatnonzero((v[:-1] < level) & (v[1:] >= level))
     frac = (level - v[i]) / (v[i + 1] - v[i])
     return t0 + (i + frac) / fs
+
+
+@njit(cache=True, nogil=True)
+def _rising_edges(x, before, has_before, level):  # pragma: no cover - compiled
+    """Rising crossings of ``level`` in ``[before, *x]`` (without ``has_before``: in ``x`` alone),
+    as :func:`pulse_times` finds them: index ``k`` of the sample before each crossing in that
+    sequence, and its fraction ``(level - v[k]) / (v[k + 1] - v[k])``.
+
+    One pass over the block, without joining ``before`` to it (a copy of the block) and without
+    the temporaries of the array version.
+    """
+    shift = 1 if has_before else 0
+    k = np.empty(x.shape[0], np.int64)
+    frac = np.empty(x.shape[0])
+    m = 0
+    prev = before
+    for i in range(x.shape[0]):
+        xi = x[i]
+        if (i > 0 or has_before) and prev < level and xi >= level:
+            k[m] = i - 1 + shift
+            frac[m] = (level - prev) / (xi - prev)
+            m += 1
+        prev = xi
+    return k[:m], frac[:m]
 
 
 @dataclass(frozen=True)
@@ -356,7 +385,8 @@ def read_tacho(source, channel: str | int, *, kind: str = "pulses", pulses_per_r
     """:func:`tacho_angle` of one channel of a recording read block by block (bounded memory).
 
     ``source`` has the block interface of :class:`~squealkit.measurement.readers.RecordingSource`.
-    A pulse train's trigger level defaults to halfway between the first block's extremes.
+    A pulse train's trigger level defaults to halfway between the first block's extremes. The
+    channel is read ``_BLOCKS_PER_READ`` blocks at a time and taken block by block.
     """
     name = source.resolve(channel)
     fs = float(source.fs)
@@ -371,18 +401,16 @@ def read_tacho(source, channel: str | int, *, kind: str = "pulses", pulses_per_r
     marks: list[NDArray[np.float64]] = []
     last: float | None = None  # the sample before this block (edges across blocks)
     step = max(1, int(fs / 2000))
-    for start, blk in source.iter_blocks([name], block=block):
-        x = np.asarray(blk[name], dtype=np.float64)
+    for start, x in _tacho_blocks(source, name, block):
         if kind == "pulses":
             if level is None:
                 lo_, hi_ = float(x.min()), float(x.max())
                 if hi_ <= lo_:
                     raise InputError(f"Tacho channel {name!r} is constant in its first block; give the trigger level.")
                 level = 0.5 * (lo_ + hi_)
-            xx = x if last is None else np.concatenate([[last], x])
             t0 = start / fs if last is None else (start - 1) / fs
-            if xx.size >= 2:
-                times.append(pulse_times(xx, fs, level=level, t0=t0))
+            k, frac = _rising_edges(x, 0.0 if last is None else last, last is not None, float(level))
+            times.append(t0 + (k + frac) / fs)  # as pulse_times of the block after the sample before it
             last = float(x[-1])
         else:
             idx = np.arange((-start) % step, x.size, step)
@@ -395,3 +423,12 @@ def read_tacho(source, channel: str | int, *, kind: str = "pulses", pulses_per_r
     if turns.size and turns[-1] < turns[0]:
         raise InputError("The angle channel decreases: give the disc's angle in its sense of rotation.")
     return DiscAngle(t, turns - turns[0])
+
+
+def _tacho_blocks(source, name: str, block: int) -> Iterator[tuple[int, NDArray[np.float64]]]:
+    """``(start_sample, samples)`` of channel ``name`` in blocks of ``block`` samples (the last one
+    shorter), read from ``source`` ``_BLOCKS_PER_READ`` blocks at a time."""
+    for start, blk in source.iter_blocks([name], block=block * _BLOCKS_PER_READ):
+        x = np.asarray(blk[name], dtype=np.float64)
+        for offset in range(0, x.size, block):
+            yield start + offset, x[offset:offset + block]
