@@ -30,7 +30,7 @@ import xarray as xr
 from ._validation import InputError
 from .io import atomic_path, deferred_interrupts
 
-__all__ = ["cluster_client", "get_client", "lazy_template", "map_tasks", "stream_to_zarr"]
+__all__ = ["LOCAL_WORKER_CONFIG", "cluster_client", "get_client", "lazy_template", "map_tasks", "stream_to_zarr"]
 
 Progress = Callable[[int, int], None]
 
