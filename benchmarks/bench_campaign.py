@@ -12,7 +12,8 @@ run, on the same files:
 
 1. baseline: a plain loop of ``analyze_recording`` over the files (no database, no summary);
 2. ``run_campaign`` here, one application after another (DuckDB store, summary.json);
-3. ``run_campaign`` on a local Dask cluster with 1 worker, then with 2 workers (1 thread each).
+3. ``run_campaign`` on a local Dask cluster with 1 worker, then with 2 workers (1 thread each),
+   started as ``squealkit campaign --scheduler local`` starts it (``squealkit.scale.cluster_client``).
 
 ``--runs`` picks among ``baseline,serial,dask1,dask2`` (default: all). Prints each time, the ratios
 against the baseline, the 1 -> 2 worker speed-up, and the time a 2,000-application matrix would
@@ -65,10 +66,9 @@ def main() -> None:
     if not runs <= {"baseline", "serial", "dask1", "dask2"}:
         ap.error(f"--runs {args.runs!r}: choose among baseline, serial, dask1, dask2")
 
-    from distributed import Client, LocalCluster
-
     from squealkit.campaign import read_matrix, run_campaign, synthetic_campaign
     from squealkit.measurement import analyze_recording
+    from squealkit.scale import cluster_client
 
     n, dur = args.applications, args.duration
     t_base = t_serial = None
@@ -101,8 +101,7 @@ def main() -> None:
 
         t_dask, cpu = {}, {}
         for workers in [w for w in (1, 2) if f"dask{w}" in runs]:
-            with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                              dashboard_address=None) as cluster, Client(cluster) as client:
+            with cluster_client("local", n_workers=workers) as client:  # as `campaign --scheduler local`
                 client.run(_warm, str(apps[0].file))
                 out = d / f"out-dask{workers}"
                 w0, s0 = client.run(_cpu), client.run_on_scheduler(_cpu)

@@ -198,6 +198,19 @@ def test_cli_analyze_campaign_with_scheduler(cluster, tmp_path):
     assert (tmp_path / "c.csv").read_text().count("\n") >= 3
 
 
+def test_local_cluster_workers_keep_glibc_malloc_defaults(monkeypatch):
+    # Dask's default MALLOC_TRIM_THRESHOLD_=65536 turns off glibc's adaptive mmap threshold:
+    # a campaign's application then costs 10-15 ms more CPU in a worker (page faults)
+    from squealkit.scale import cluster_client
+
+    monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
+    with cluster_client("local", n_workers=1) as client:
+        seen = client.run(os.getenv, "MALLOC_TRIM_THRESHOLD_")
+        hash_seed = client.run(os.getenv, "PYTHONHASHSEED")
+    assert list(seen.values()) == [None]
+    assert list(hash_seed.values()) == ["6640"]  # Dask's other worker settings are kept
+
+
 def test_map_tasks_without_client_runs_in_order():
     assert list(map_tasks(str, [3, 1, 2])) == [(0, "3"), (1, "1"), (2, "2")]
 

@@ -30,7 +30,7 @@ import xarray as xr
 from ._validation import InputError
 from .io import atomic_path, deferred_interrupts
 
-__all__ = ["cluster_client", "get_client", "lazy_template", "map_tasks", "stream_to_zarr"]
+__all__ = ["LOCAL_WORKER_CONFIG", "cluster_client", "get_client", "lazy_template", "map_tasks", "stream_to_zarr"]
 
 Progress = Callable[[int, int], None]
 
@@ -45,6 +45,19 @@ def _distributed():
     return distributed
 
 
+#: Dask configuration in force while :func:`get_client` starts a local cluster's workers.
+#: Dask starts every worker process with ``MALLOC_TRIM_THRESHOLD_=65536``
+#: (``distributed.nanny.pre-spawn-environ``) so that freed memory goes back to the system at
+#: once. Setting it also turns off glibc's adaptive mmap threshold: every array above 128 KiB
+#: is then mapped fresh and unmapped when freed, and its pages are faulted in again on each
+#: use. An application's analysis allocates such arrays throughout (blocks, spectrograms),
+#: which cost 10-15 ms more CPU (system time) per 10 s, 48 kHz application in a worker than
+#: in this process (15,000 page faults instead of 3,500); without the variable a worker frees
+#: memory as this process does (glibc's defaults: at most a few tens of MB kept for reuse).
+#: A value set in this process's environment is still passed on (the workers inherit it).
+LOCAL_WORKER_CONFIG = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
+
+
 def get_client(scheduler: str, *, n_workers: int | None = None):
     """A ``distributed.Client`` for ``scheduler``.
 
@@ -52,7 +65,8 @@ def get_client(scheduler: str, *, n_workers: int | None = None):
     ----------
     scheduler : str
         ``"local"`` starts a local cluster of worker processes (one thread each, one per
-        core unless ``n_workers`` says otherwise); anything else is a scheduler address,
+        core unless ``n_workers`` says otherwise; with glibc's own memory settings, see
+        :data:`LOCAL_WORKER_CONFIG`); anything else is a scheduler address,
         e.g. ``"tcp://10.0.0.5:8786"`` or a scheduler file ``*.json``.
     n_workers : int, optional
         Workers of a local cluster.
@@ -67,10 +81,13 @@ def get_client(scheduler: str, *, n_workers: int | None = None):
         raise InputError(f"Scheduler {scheduler!r} must be 'local' or an address like tcp://HOST:8786.")
     scheduler = scheduler.strip()
     if scheduler == "local":
+        import dask
+
         n = n_workers or os.cpu_count() or 1
         # a failing task reaches the caller as its exception; the workers need not log it too
-        cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                           dashboard_address=None, silence_logs=logging.CRITICAL)
+        with dask.config.set(LOCAL_WORKER_CONFIG):
+            cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                               dashboard_address=None, silence_logs=logging.CRITICAL)
         client = distributed.Client(cluster)
         return client
     if scheduler.endswith(".json"):
