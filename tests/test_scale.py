@@ -252,3 +252,22 @@ def test_text_of_data_dependent_width_streams_to_zarr(tmp_path, recwarn):
     assert ds["status"].values.tolist() == ["completed"] + ["diverged"] * 5
     assert ds["x"].values.tolist() == [0, 1, 1, 2, 2, 3]
     assert not [w for w in recwarn if "Specification" in type(w.message).__name__]
+
+
+def test_streamed_text_is_chunked_like_the_pieces(tmp_path):
+    # pieces written at once by different workers must never share a zarr chunk: a text variable
+    # laid out as one chunk lost whole pieces when two wrote it together (read-modify-write)
+    import zarr
+
+    from squealkit.transient import simulate_batch
+    from squealkit.transient.profiles import SineRunOut
+
+    kw = dict(mu=np.linspace(0.3, 0.7, 7), profiles=SineRunOut(amplitude=0.08e-3, wavelength=1e-3),
+              duration=0.005, perturbation=1e-9)
+    simulate_batch(get_preset("lv2013"), rng=np.random.default_rng(4), store=tmp_path / "runs.zarr",
+                   runs_per_task=2, **kw)
+    group = zarr.open_group(str(tmp_path / "runs.zarr"), mode="r")
+    for name in group.array_keys():
+        arr = group[name]
+        if arr.ndim and arr.shape[0] == 7:
+            assert arr.chunks[0] == 2, name

@@ -356,8 +356,18 @@ def stream_to_zarr(
     """
     final = Path(store)
     with atomic_path(final, directory=True) as tmp:
+        # every variable along dim (text too, and coordinates) chunked as the pieces are: pieces
+        # written at once by different workers must never share a chunk (each write rewrites
+        # its whole chunk, so one piece would silently undo the other's)
+        # (dask chunks alone do not decide it: xarray lays variable-length text out as one chunk)
+        step = max(b - a for *_, a, b in pieces)
+        if any(a % step for *_, a, _b in pieces):
+            raise ValueError(f"stream_to_zarr: pieces along {dim!r} must start at multiples of {step}.")
+        layout = _text_as_object(template)
+        encoding = {k: {"chunks": tuple(step if d == dim else n for d, n in zip(v.dims, v.shape, strict=True))}
+                    for k, v in layout.variables.items() if dim in v.dims}
         with deferred_interrupts():
-            _text_as_object(template).to_zarr(tmp, mode="w", compute=False, consolidated=False)
+            layout.to_zarr(tmp, mode="w", compute=False, consolidated=False, encoding=encoding)
         path = str(tmp.resolve())
         items = [(fn, arg, path, dim, a, b) for fn, arg, a, b in pieces]
         w = weights if weights is not None else [b - a for *_, a, b in pieces]

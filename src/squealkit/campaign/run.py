@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -15,6 +16,10 @@ from .store import CampaignStore
 from .summary import band_of, campaign_summary, third_octave_bands
 
 __all__ = ["run_campaign"]
+
+
+#: Results stored per transaction (at most a second's worth).
+_BATCH = 64
 
 
 def _failure(e: BaseException) -> str:
@@ -175,9 +180,19 @@ def run_campaign(
             items.append({"app": row, "analysis": kw, "bands": bands, "condition_channels": cond})
         from ..scale import map_tasks
 
-        for _, (row, events) in map_tasks(_analyze_application, items, client=client, progress=progress,
-                                          name="squealkit-application"):
-            store.put(row, events)
+        batch: list[tuple[dict[str, Any], list[dict[str, Any]]]] = []
+        flushed = time.monotonic()
+        try:
+            for _, result in map_tasks(_analyze_application, items, client=client, progress=progress,
+                                       name="squealkit-application"):
+                batch.append(result)
+                # stored in batches (a transaction per application would cost the client 5-10 ms
+                # each, CPU the workers need); a killed run loses at most the last second's results
+                if len(batch) >= _BATCH or time.monotonic() - flushed > 1.0:
+                    store.put_many(batch)
+                    batch, flushed = [], time.monotonic()
+        finally:  # also on Ctrl-C: what was analysed is kept
+            store.put_many(batch)
         store.limit_to([a.application for a in apps])  # the summary and report: this matrix's applications
         summary = campaign_summary(store, crit.band, crit.describe())
         summary["analysed_now"] = len(items)

@@ -115,22 +115,43 @@ class CampaignStore:
         events : sequence of mapping
             Its squeal events (keys: :data:`EVENT_COLUMNS`).
         """
-        app = {**app, "status": "ok" if app.get("error") is None else "failed"}
+        self.put_many([(app, events)])
+
+    def put_many(self, results: Sequence[tuple[Mapping[str, Any], Sequence[Mapping[str, Any]]]]) -> None:
+        """Replace several applications' rows in one transaction: all of them or none.
+
+        A transaction per application costs about 5 ms; a campaign's client stores its
+        results in batches this way.
+
+        Parameters
+        ----------
+        results : sequence of (app, events)
+            As for :meth:`put`.
+        """
+        if not results:
+            return
+        import pandas as pd
+
         a_cols, e_cols = list(APPLICATION_COLUMNS), list(EVENT_COLUMNS)
+        apps = pd.DataFrame([[a.get(c) for c in a_cols] for a, _ in results], columns=a_cols, dtype=object)
+        apps["status"] = ["ok" if a.get("error") is None else "failed" for a, _ in results]
+        events = pd.DataFrame([[e.get(c) for c in e_cols] for _, evs in results for e in evs], columns=e_cols,
+                              dtype=object)
+        self.con.register("new_apps", apps)
+        self.con.register("new_events", events)
         self.con.execute("BEGIN TRANSACTION")
-        try:
-            self.con.execute("DELETE FROM events WHERE application = ?", [app["application"]])
-            self.con.execute("DELETE FROM applications WHERE application = ?", [app["application"]])
-            self.con.execute(f"INSERT INTO applications ({', '.join(a_cols)}) VALUES ({', '.join('?' * len(a_cols))})",
-                             [app.get(c) for c in a_cols])
-            if events:
-                self.con.executemany(
-                    f"INSERT INTO events ({', '.join(e_cols)}) VALUES ({', '.join('?' * len(e_cols))})",
-                    [[e.get(c) for c in e_cols] for e in events])
+        try:  # (DuckDB casts the object columns to the tables' types)
+            self.con.execute("DELETE FROM events WHERE application IN (SELECT application FROM new_apps)")
+            self.con.execute("DELETE FROM applications WHERE application IN (SELECT application FROM new_apps)")
+            self.con.execute(f"INSERT INTO applications ({', '.join(a_cols)}) SELECT {', '.join(a_cols)} FROM new_apps")
+            self.con.execute(f"INSERT INTO events ({', '.join(e_cols)}) SELECT {', '.join(e_cols)} FROM new_events")
             self.con.execute("COMMIT")
         except Exception:
             self.con.execute("ROLLBACK")
             raise
+        finally:
+            self.con.unregister("new_apps")
+            self.con.unregister("new_events")
 
     def limit_to(self, applications: Sequence[str]) -> None:
         """Let ``{in_matrix}`` in :meth:`query` select only these applications (the current matrix's).
