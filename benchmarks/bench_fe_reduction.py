@@ -31,7 +31,6 @@ def main() -> None:
     from squealkit.models.fe_demo import build_fe_demo
     from squealkit.stability.reduction import (
         _as_model,
-        _fe_model,
         modal_basis,
         pod_basis,
         reduce,
@@ -53,7 +52,7 @@ def main() -> None:
     n = model["n_dofs"]
     print(f"model: n_theta={args.n_theta}, {n} unknowns, nnz(K1)={model['K1'].nnz}, built in {t_build:.1f} s, "
           f"peak RSS {peak_mb():.0f} MB")
-    m = _fe_model(_as_model(model))
+    m = _as_model(model)
 
     def full_solve(omega, mu):
         sol = band_eigs(m, omega, mu, band=band, workers=1)  # one point per core, like a sweep

@@ -90,13 +90,13 @@ def test_geometric_stiffness_is_signed():
 
 def test_friction_makes_mode_coupling_squeal_in_band(brake):
     # the band solver itself is checked against scipy's shift-invert in test_reduction.py
-    from squealkit.stability.reduction import _as_model, _fe_model
+    from squealkit.stability.reduction import _as_model
     from squealkit.stability.sparse import band_eigs
 
     # on this coarse mesh (1566 unknowns) the pair near 11.4 kHz locks in below mu = 0.3
     omega = 2 * math.pi * 600 / 60  # 600 rpm
     band = (10e3, 12.5e3)
-    model = _fe_model(_as_model(brake))
+    model = _as_model(brake)
     stable = band_eigs(model, omega, 0.0, band=band).eigenvalues
     assert stable.size >= 3 and np.all(stable.real < 0)
     lam = band_eigs(model, omega, 0.3, band=band).eigenvalues

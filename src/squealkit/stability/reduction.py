@@ -32,6 +32,7 @@ Three steps, as industry does it (Graebner, Tiedemann, Schroeder & Mehrmann, ZAM
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -43,6 +44,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .._validation import InputError
+from ..models.fe import FEModel
 from .sparse import DENSE_MAX_DOF, _factorize, band_eigs, dense_eigs
 from .tracking import _MacTracker
 
@@ -64,72 +66,31 @@ _STIFFNESS = ("K1", "KR", "KGeo")
 # ----------------------------------------------------------------------------- model adapter
 
 
-@dataclass(frozen=True)
-class _Model:
-    mats: dict[str, Any]
-    omega_ref: float
-    mu_ref: float
-    f_ref: float
-
-    @property
-    def n(self) -> int:
-        return self.mats["M"].shape[0]
-
-
 def _as_model(matrices: Any, omega_ref: float | None = None, mu_ref: float | None = None,
-              f_ref: float | None = None) -> _Model:
-    """Mapping of matrices (+ reference scalars) or an object with those attributes -> _Model."""
+              f_ref: float | None = None) -> FEModel:
+    """An :class:`~squealkit.models.fe.FEModel` from one, or from a mapping of matrices (+ reference
+    scalars) or an object with those attributes (validated as every FE model is)."""
+    if isinstance(matrices, FEModel) and omega_ref is None and mu_ref is None and f_ref is None:
+        return matrices
+
     def get(name: str, default: Any = None) -> Any:
         if isinstance(matrices, Mapping):
             return matrices.get(name, default)
         return getattr(matrices, name, default)
 
-    mats = {name: get(name) for name in MATRIX_NAMES}
-    if mats["M"] is None or mats["K1"] is None:
+    mats = {name: get(name) for name in MATRIX_NAMES if get(name) is not None}
+    if "M" not in mats or "K1" not in mats:
         raise InputError("FE matrices: M and K1 are required.")
-    n = mats["M"].shape[0]
-    for name, A in mats.items():
-        if A is None:
-            continue
-        if A.shape != (n, n):
-            raise InputError(f"FE matrices: {name} has shape {A.shape}, expected ({n}, {n}) like M.")
-        mats[name] = sp.csr_matrix(A) if sp.issparse(A) else np.asarray(A, dtype=float)
-    refs = {}
-    for key, given in (("omega_ref", omega_ref), ("mu_ref", mu_ref), ("f_ref", f_ref)):
-        value = float(given if given is not None else get(key, 1.0))
-        if not (math.isfinite(value) and value > 0):
-            raise InputError(f"FE matrices: {key}={value!r} must be a finite positive number.")
-        refs[key] = value
-    return _Model(mats, **refs)
+    refs = {key: float(given if given is not None else get(key, 1.0))
+            for key, given in (("omega_ref", omega_ref), ("mu_ref", mu_ref), ("f_ref", f_ref))}
+    return FEModel.from_matrices(**mats, **refs)
 
 
-def _coefficients(model: _Model, omega: float, mu: float) -> dict[str, tuple[int, float]]:
-    """name -> (power of lambda, scalar factor) of each present matrix at (omega, mu)."""
-    if model.mats["DR"] is not None and omega == 0:
-        raise InputError("FE matrices: DR scales with omega_ref/omega and needs omega != 0.")
-    factor = {
-        "M": (2, 1.0),
-        "D1": (1, 1.0),
-        "DG": (1, omega / model.omega_ref),
-        "DR": (1, (mu / model.mu_ref) * (model.omega_ref / omega) if omega else 0.0),
-        "D4": (1, 1.0 / model.f_ref),
-        "K1": (0, 1.0),
-        "KR": (0, mu / model.mu_ref),
-        "KGeo": (0, (omega / model.omega_ref) ** 2),
-    }
-    return {name: factor[name] for name in MATRIX_NAMES if model.mats[name] is not None}
-
-
-def _mck(model: _Model, omega: float, mu: float):
-    """M, C(omega, mu), K(omega, mu) as sparse matrices (C may be None)."""
-    coef = _coefficients(model, omega, mu)
-    C = K = None
-    for name, (power, c) in coef.items():
-        if power == 1:
-            C = c * model.mats[name] if C is None else C + c * model.mats[name]
-        elif power == 0:
-            K = c * model.mats[name] if K is None else K + c * model.mats[name]
-    return model.mats["M"], C, K
+def _coefficients(model: FEModel, omega: float, mu: float) -> dict[str, tuple[int, float]]:
+    """name -> (power of lambda, scalar factor) of each present matrix at (omega, mu)
+    (:meth:`~squealkit.models.fe.FEModel.factors`, with M's power 2)."""
+    f = model.factors(omega, mu)
+    return {name: (2, 1.0) if name == "M" else (1 if name in _DAMPING else 0, f[name]) for name in model.present}
 
 
 def _one_blas_thread():
@@ -183,10 +144,10 @@ def modal_basis(
         raise InputError("modal_basis: give freq_max (Hz) or n_modes.")
     if freq_max is not None and not (math.isfinite(freq_max) and freq_max > 0):
         raise InputError(f"modal_basis: freq_max={freq_max!r} must be a positive frequency in Hz.")
-    n = model.n
+    n = model.n_dof
     if n_modes is not None and not (1 <= n_modes < n - 1):
         raise InputError(f"modal_basis: n_modes={n_modes!r} must be between 1 and {n - 2}.")
-    M, K1 = model.mats["M"], model.mats["K1"]
+    M, K1 = model.M, model.K1
     if not sp.issparse(K1) or n < 400:
         w, V = sla.eigh(_dense(K1), _dense(M))
         freq = np.sqrt(np.maximum(w, 0.0)) / (2 * math.pi)
@@ -221,14 +182,6 @@ def _dense(A: Any) -> np.ndarray:
 
 
 # ----------------------------------------------------------------------------- full band solve
-
-
-def _fe_model(model: _Model):
-    """The :class:`~squealkit.models.fe.FEModel` of the matrices, for :func:`~squealkit.stability.sparse.band_eigs`."""
-    from ..models.fe import FEModel
-
-    return FEModel.from_matrices(**{k: v for k, v in model.mats.items() if v is not None}, omega_ref=model.omega_ref,
-                                 mu_ref=model.mu_ref, f_ref=model.f_ref)
 
 
 # ----------------------------------------------------------------------------- POD basis
@@ -301,11 +254,10 @@ def pod_basis(
     lo, hi = _validate_band(band)
     wide = (max(lo * (1 - band_margin), 1.0), hi * (1 + band_margin))
     cols = [] if extra is None else [np.asarray(extra, dtype=float)]
-    fe = _fe_model(model) if eig_solver is None else None
     for omega in omegas:
         for mu in mus:
             if eig_solver is None:
-                X = _snapshot(fe, float(omega), float(mu), wide)
+                X = _snapshot(model, float(omega), float(mu), wide)
             else:
                 _, X = eig_solver(matrices, float(omega), float(mu), wide)
             cols += [X.real, X.imag]
@@ -359,6 +311,11 @@ class ReducedModel:
     R: np.ndarray
     order: tuple[str, ...]
 
+    @functools.cached_property
+    def projected(self) -> FEModel:
+        """The reduced matrices as an FE model of ``n_reduced`` DOFs (same reference values)."""
+        return FEModel.from_matrices(**self.mats, omega_ref=self.omega_ref, mu_ref=self.mu_ref, f_ref=self.f_ref)
+
     @property
     def n_reduced(self) -> int:
         return self.V.shape[1]
@@ -372,14 +329,14 @@ def reduce(matrices: Any, V: np.ndarray) -> ReducedModel:
     """
     model = _as_model(matrices)
     V = np.asarray(V, dtype=float)
-    if V.ndim != 2 or V.shape[0] != model.n:
-        raise InputError(f"reduce: V has shape {V.shape}, expected ({model.n}, r).")
+    if V.ndim != 2 or V.shape[0] != model.n_dof:
+        raise InputError(f"reduce: V has shape {V.shape}, expected ({model.n_dof}, r).")
     Q, _ = np.linalg.qr(V)
-    order = tuple(name for name in MATRIX_NAMES if model.mats[name] is not None)
-    AV = [np.asarray(model.mats[name] @ Q) for name in order]
+    order = tuple(model.present)
+    AV = [np.asarray(getattr(model, name) @ Q) for name in order]
     red = {name: Q.T @ A for name, A in zip(order, AV, strict=True)}
     R = np.linalg.qr(np.hstack(AV), mode="r")
-    norms = {name: _norm(model.mats[name]) for name in order}
+    norms = {name: _norm(getattr(model, name)) for name in order}
     return ReducedModel(Q, red, model.omega_ref, model.mu_ref, model.f_ref, norms, R, order)
 
 
@@ -430,7 +387,7 @@ def reduced_eigs(
 
 def _reduced_solve(reduced: ReducedModel, omega: float, mu: float, lo: float, hi: float):
     """Eigenvalues in ``[lo, hi]`` Hz, their unit coordinates ``Y`` in the basis and full-model residuals."""
-    coef = _coefficients(_Model({k: reduced.mats.get(k) for k in MATRIX_NAMES}, *_refs(reduced)), omega, mu)
+    coef = _coefficients(reduced.projected, omega, mu)
     r = reduced.n_reduced
     Mr = reduced.mats["M"]
     Cr = np.zeros((r, r))
@@ -457,10 +414,6 @@ def _reduced_solve(reduced: ReducedModel, omega: float, mu: float, lo: float, hi
     Y = sla.solve_triangular(L, U, lower=True, trans="T")
     Y = Y / np.linalg.norm(Y, axis=0)
     return lam, Y, _reduced_backward_error(reduced, coef, lam, Y)
-
-
-def _refs(reduced: ReducedModel) -> tuple[float, float, float]:
-    return reduced.omega_ref, reduced.mu_ref, reduced.f_ref
 
 
 def _reduced_backward_error(reduced: ReducedModel, coef, lam: np.ndarray, Y: np.ndarray) -> np.ndarray:
