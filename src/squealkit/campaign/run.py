@@ -189,8 +189,8 @@ def run_campaign(
                 # stored in batches (a transaction per application would cost the client 5-10 ms
                 # each, CPU the workers need); a killed run loses at most the last second's results
                 if len(batch) >= _BATCH or time.monotonic() - flushed > 1.0:
-                    store.put_many(batch)
-                    batch, flushed = [], time.monotonic()
+                    full, batch, flushed = batch, [], time.monotonic()
+                    store.put_many(full)  # (a failing batch is not tried again below)
         finally:  # also on Ctrl-C: what was analysed is kept
             store.put_many(batch)
         store.limit_to([a.application for a in apps])  # the summary and report: this matrix's applications

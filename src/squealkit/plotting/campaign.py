@@ -40,8 +40,8 @@ def occurrence_by_band_plot(summary: dict, *, synthetic: bool = False, ax=None):
     fig, ax = _fig(ax, figsize=(8, 4))
     bands = summary["by_band"]
     labels = [f"{b['center_hz'] / 1000:.3g}" for b in bands]
-    occ = [b["occurrence_percent"] for b in bands]
-    ax.bar(range(len(bands)), [np.nan if o is None else o for o in occ], color="tab:red")
+    occ = [np.nan if b["occurrence_percent"] is None else b["occurrence_percent"] for b in bands]
+    ax.bar(range(len(bands)), occ, color="tab:red")
     ax.set_xticks(range(len(bands)), labels)
     ax.set_xlabel("1/3-octave band centre [kHz]")
     ax.set_ylabel("occurrence [% of applications]")

@@ -99,11 +99,8 @@ class FESolver:
                                          or self.n_modes < 1):
             raise InputError(f"Parameter n_modes={self.n_modes!r} must be an integer >= 1.")
         self.sigma_reach = validate_positive("sigma_reach", self.sigma_reach, allow_zero=True)
-        self.reduced = None
-        if self.method in ("modal", "pod"):
-            self.reduced = reduction.reduce(self.model, self._basis())
-        else:
-            self.parts = dense_parts(self.model) if self.method == "dense" else None
+        self.reduced = reduction.reduce(self.model, self._basis()) if self.method in ("modal", "pod") else None
+        self.parts = dense_parts(self.model) if self.method == "dense" else None
 
     def _basis(self) -> NDArray[np.float64]:
         """The reduced basis of ``modal`` (real modes of (M, K1) up to 1.5 times the band's top,

@@ -45,7 +45,7 @@ import scipy.sparse.linalg as spla
 
 from .._validation import InputError
 from ..models.fe import FEModel
-from .sparse import DENSE_MAX_DOF, _factorize, band_eigs, dense_eigs
+from .sparse import DENSE_MAX_DOF, DenseParts, _factorize, band_eigs, dense_eigs, dense_parts
 from .tracking import _MacTracker
 
 __all__ = [
@@ -187,12 +187,13 @@ def _dense(A: Any) -> np.ndarray:
 # ----------------------------------------------------------------------------- POD basis
 
 
-def _snapshot(fe, omega: float, mu: float, band: tuple[float, float]) -> np.ndarray:
-    """Right eigenvectors with frequency in ``band`` [Hz]: all modes by LAPACK up to
-    :data:`~squealkit.stability.sparse.DENSE_MAX_DOF` DOFs, the sparse band solve above."""
-    if fe.n_dof > DENSE_MAX_DOF:
+def _snapshot(fe, omega: float, mu: float, band: tuple[float, float], parts: DenseParts | None) -> np.ndarray:
+    """Right eigenvectors with frequency in ``band`` [Hz]: all modes by LAPACK with the model's
+    prepared dense ``parts`` (up to :data:`~squealkit.stability.sparse.DENSE_MAX_DOF` DOFs),
+    else the sparse band solve."""
+    if parts is None:
         return band_eigs(fe, omega, mu, band=band).vectors
-    sol = dense_eigs(fe, omega, mu)
+    sol = dense_eigs(fe, omega, mu, parts=parts)
     f = sol.frequency
     return sol.vectors[:, (f >= band[0]) & (f <= band[1])]
 
@@ -254,10 +255,12 @@ def pod_basis(
     lo, hi = _validate_band(band)
     wide = (max(lo * (1 - band_margin), 1.0), hi * (1 + band_margin))
     cols = [] if extra is None else [np.asarray(extra, dtype=float)]
+    # the dense matrices (and M's Cholesky factor) once for every sample
+    parts = dense_parts(model) if eig_solver is None and model.n_dof <= DENSE_MAX_DOF else None
     for omega in omegas:
         for mu in mus:
             if eig_solver is None:
-                X = _snapshot(model, float(omega), float(mu), wide)
+                X = _snapshot(model, float(omega), float(mu), wide, parts)
             else:
                 _, X = eig_solver(matrices, float(omega), float(mu), wide)
             cols += [X.real, X.imag]
