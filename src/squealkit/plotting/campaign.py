@@ -48,6 +48,9 @@ def occurrence_by_band_plot(summary: dict, *, synthetic: bool = False, ax=None):
     total = summary["occurrence_percent"]
     head = "unknown: no application analysed" if total is None else (
         f"{total:.1f} % of {summary['applications']} applications")
+    if total is None:  # no bars: a 0-100 % axis that says why
+        ax.set_ylim(0.0, 100.0)
+        ax.text(0.5, 0.5, "no application could be analysed", transform=ax.transAxes, ha="center", va="center")
     ax.set_title("Squeal occurrence by band: " + head + (_SYN if synthetic else ""), fontsize=10)
     ax.grid(axis="y", alpha=0.3)
     fig.tight_layout()
