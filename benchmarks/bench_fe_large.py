@@ -45,13 +45,15 @@ def solve(size: int, workers: int, out: str) -> None:
     del demo
     built = time.perf_counter() - t0, time.process_time() - c0
     shifts = []
-    operator = sparse._shift_operator
+    # the shift-invert operator: _ShiftInvert (block Krylov-Schur), _shift_operator in older versions
+    name = "_ShiftInvert" if hasattr(sparse, "_ShiftInvert") else "_shift_operator"
+    operator = getattr(sparse, name)
 
     def counting(*args, **kwargs):
         shifts.append(args[3])
         return operator(*args, **kwargs)
 
-    sparse._shift_operator = counting
+    setattr(sparse, name, counting)
     t0, c0 = time.perf_counter(), time.process_time()
     sol = sparse.band_eigs(model, 2 * math.pi * 600 / 60, 0.45, band=(1e3, 16e3), workers=workers)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0

@@ -159,3 +159,28 @@ def test_fill_reducing_order_is_a_permutation_that_cuts_fill():
     assert nested.nnz < 0.6 * (natural.L.nnz + natural.U.nnz)
     b = np.random.default_rng(0).standard_normal(m * m)
     assert np.allclose(A @ nested.solve(b), b, atol=1e-10)
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 10**6), n=st.integers(3, 40), k=st.integers(1, 12), block=st.integers(1, 3))
+def test_shift_invert_finds_the_nearest_eigenvalues(seed, n, k, block):
+    # block Krylov-Schur at one shift against LAPACK on the dense companion pencil: the k
+    # eigenvalues nearest the shift, each to 1e-10, with backward errors near machine precision
+    rng = np.random.default_rng(seed)
+    w = 2 * np.pi * np.sort(rng.uniform(100.0, 3000.0, n))
+    KR = sp.random(n, n, density=0.2, random_state=seed % 2**32) * 1e6
+    G = sp.random(n, n, density=0.2, random_state=(seed + 1) % 2**32)
+    M, C, K = sp.eye(n).tocsr(), (sp.diags(2e-3 * w) + G - G.T).tocsr(), (sp.diags(w**2) + KR).tocsr()
+    k = min(k, 2 * n - 3)
+    s = 2j * np.pi * rng.uniform(100.0, 3000.0)
+    op = sparse._ShiftInvert(M, C, K, s, sparse.fill_reducing_order(M, C, K), block=block)
+    lam, X = op.nearest(k)
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-K.toarray(), -C.toarray()]])
+    ref = sla.eigvals(A)
+    ref = ref[np.argsort(np.abs(ref - s))]
+    assert lam.size == k
+    d = np.sort(np.abs(lam - s))
+    np.testing.assert_allclose(d, np.abs(ref[:k] - s), rtol=1e-9, atol=1e-9 * abs(s))
+    for x in lam:
+        assert np.min(np.abs(ref - x)) <= 1e-10 * np.abs(ref).max()
+    assert np.all(sparse._backward(M, C, K, lam, X) < 1e-12)
