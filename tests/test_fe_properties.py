@@ -127,15 +127,15 @@ def test_band_walks_meet_whatever_their_pace(monkeypatch, slow):
     model = FEModel.from_matrices(M=sp.eye(n), K1=sp.diags(w**2), KR=KR, D1=sp.diags(1e-3 * w))
     band = (300.0, 2800.0)
     one = band_eigs(model, 10.0, 0.4, band=band, k=6, workers=1)
-    nearest = sparse._nearest
+    nearest = sparse._ShiftInvert.nearest
     mid = np.pi * (band[0] + band[1])
 
-    def paced(op, s, k):
-        if (s.imag > mid) == (slow == "down"):
+    def paced(op, k):
+        if (op.s.imag > mid) == (slow == "down"):
             time.sleep(0.3)
-        return nearest(op, s, k)
+        return nearest(op, k)
 
-    monkeypatch.setattr(sparse, "_nearest", paced)
+    monkeypatch.setattr(sparse._ShiftInvert, "nearest", paced)
     two = band_eigs(model, 10.0, 0.4, band=band, k=6, workers=2)
     ref = upper(qz(model, 10.0, 0.4))
     f = ref.imag / (2 * np.pi)

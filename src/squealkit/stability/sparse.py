@@ -370,13 +370,14 @@ class _ShiftInvert:
         restarts = 0
         while True:
             if self.j + b <= m:
-                self._expand(self.j + b)  # one block
+                self._step()
                 if self.j < k + 2 * b:  # too few Ritz values to judge yet
                     continue
             theta, Y, res = self._ritz()
             order = np.argsort(-np.abs(theta), kind="stable")
             want = order[:k]
-            if np.all(res[want] <= self.tol * np.abs(theta[want])):
+            ok = res[want] <= self.tol * np.abs(theta[want])
+            if ok.all():
                 return self._pairs(theta[want], self.V[:, : self.j] @ Y[:, want])
             if self.j + b > m:  # the basis is full: keep the Schur vectors of the largest
                 if restarts == self.max_restarts:
@@ -385,7 +386,6 @@ class _ShiftInvert:
                 restarts += 1
         # the nearest ones up to the first not converged, so that they are all there are inside
         # the farthest of them; every pair is checked by its backward error like every other
-        ok = res[want] <= self.tol * np.abs(theta[want])
         done = want[: int(np.argmin(ok))]
         if not done.size:
             raise InputError(f"The eigenvalue solver did not converge at the shift {self.s.imag / (2 * math.pi):.6g} "
@@ -411,29 +411,27 @@ class _ShiftInvert:
             H[: self.H.shape[0], : self.H.shape[1]] = self.H
             self.V, self.H = V, H
 
-    def _expand(self, m: int) -> None:
-        """Block Arnoldi steps until the basis has m (up to block - 1 fewer) expanded vectors."""
-        V, H, b = self.V, self.H, self.block
-        while self.j + b <= m:
-            j = self.j
-            W = self.apply(V[:, j : j + b])
-            Vj = V[:, : j + b]
-            for _ in range(2):  # classical Gram-Schmidt twice ("twice is enough")
-                h = (Vj.T @ W.conj()).conj()
-                W -= Vj @ h
-                H[: j + b, j : j + b] += h
-            Q, R = np.linalg.qr(W)
-            lost = np.abs(np.diag(R)) <= 1e-13 * max(np.abs(R).max(), 1e-300)
-            if lost.any():  # an invariant subspace: carry on with new directions, no coupling
-                R[lost] = 0.0
-                fresh = np.random.default_rng(j).standard_normal((W.shape[0], int(lost.sum()))) + 0j
-                basis = np.concatenate([Vj, Q[:, ~lost]], axis=1)
-                for _ in range(2):
-                    fresh -= basis @ (basis.T @ fresh.conj()).conj()
-                Q[:, lost] = np.linalg.qr(fresh)[0]
-            V[:, j + b : j + 2 * b] = Q
-            H[j + b : j + 2 * b, j : j + b] = R
-            self.j = j + b
+    def _step(self) -> None:
+        """One block Arnoldi step: the operator on the last block, orthogonalised against the basis."""
+        V, H, b, j = self.V, self.H, self.block, self.j
+        W = self.apply(V[:, j : j + b])
+        Vj = V[:, : j + b]
+        for _ in range(2):  # classical Gram-Schmidt twice ("twice is enough")
+            h = (Vj.T @ W.conj()).conj()
+            W -= Vj @ h
+            H[: j + b, j : j + b] += h
+        Q, R = np.linalg.qr(W)
+        lost = np.abs(np.diag(R)) <= 1e-13 * max(np.abs(R).max(), 1e-300)
+        if lost.any():  # an invariant subspace: carry on with new directions, no coupling
+            R[lost] = 0.0
+            fresh = np.random.default_rng(j).standard_normal((W.shape[0], int(lost.sum()))) + 0j
+            basis = np.concatenate([Vj, Q[:, ~lost]], axis=1)
+            for _ in range(2):
+                fresh -= basis @ (basis.T @ fresh.conj()).conj()
+            Q[:, lost] = np.linalg.qr(fresh)[0]
+        V[:, j + b : j + 2 * b] = Q
+        H[j + b : j + 2 * b, j : j + b] = R
+        self.j = j + b
 
     def _ritz(self):
         """Ritz values of the basis, their vectors in basis coordinates and residual norms."""
@@ -467,11 +465,6 @@ def _real_times(A, X: NDArray) -> NDArray[np.complex128]:
     shape = X.shape
     Y = A @ X.reshape(shape[0], -1).view(np.float64)
     return np.ascontiguousarray(Y).view(np.complex128).reshape(shape)
-
-
-def _nearest(op: _ShiftInvert, s: complex, k: int):
-    """The k eigenvalues nearest ``s`` (and their x) at the shift ``op`` was built for."""
-    return op.nearest(k)
 
 
 def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *,
@@ -603,7 +596,7 @@ def _band_walk(M, C, K, n, claims: _Claims, d: int, k, sigma_reach, max_shifts, 
         kk = min(kk, 2 * n - 3)
         if op_center != center:  # one LU per shift, its Krylov basis kept when k grows
             op, op_center = _ShiftInvert(M, C, K, 1j * center, perm), center
-        lam, X = _nearest(op, 1j * center, kk)
+        lam, X = op.nearest(kk)
         dist = np.abs(lam - 1j * center)
         r = float(np.max(dist)) * (1.0 - 1e-6)
         behind = abs(center - edge)
