@@ -4,6 +4,9 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -72,6 +75,35 @@ def test_modal_basis_is_mass_normalised_up_to_the_cut_off(brake):
     assert ref[len(freq)] > 15e3
 
 
+@settings(max_examples=25, deadline=None)
+@given(n=st.integers(5, 60), seed=st.integers(0, 2**32 - 1), frac=st.floats(0.0, 1.0))
+def test_sturm_count_matches_lapack(n, seed, frac):
+    # reference: the generalized symmetric eigenvalues of LAPACK (eigh) below the cut-off
+    from squealkit.stability.reduction import _count_below
+    from squealkit.stability.sparse import fill_reducing_order
+
+    rng = np.random.default_rng(seed)
+    A = sp.random(n, n, density=0.2, random_state=rng) + sp.identity(n)
+    K = (A @ A.T).tocsc()  # symmetric positive definite, sparse
+    M = sp.diags(rng.uniform(0.5, 2.0, n)).tocsc()
+    w = sla.eigh(K.toarray(), M.toarray(), eigvals_only=True)
+    w2 = float(np.quantile(w, frac)) * (1 + 1e-6) + 1e-9  # between eigenvalues, not on one
+    count = _count_below(K, M, w2, fill_reducing_order(K, M))
+    assert count == int(np.sum(w < w2))
+
+
+def test_modal_basis_counts_its_modes_before_solving(brake):
+    # the cut-off's Sturm count sizes the single eigsh call: the built-in brake's count agrees
+    # with the dense modes below 15 kHz
+    from squealkit.stability.reduction import _count_below
+    from squealkit.stability.sparse import fill_reducing_order
+
+    w = sla.eigh(brake["K1"].toarray(), brake["M"].toarray(), eigvals_only=True)
+    for f in (3e3, 15e3, 40e3):
+        w2 = (2 * math.pi * f) ** 2
+        assert _count_below(brake["K1"], brake["M"], w2, fill_reducing_order(brake["K1"])) == np.sum(w < w2)
+
+
 def test_pod_reduction_agrees_with_full_solve_where_trusted(brake, pod):
     # between the samples (mu = 0.3, 0.6) and away from their speed
     for omega, mu in ((50.0, 0.45), (20.0, 0.52)):
@@ -96,6 +128,15 @@ def test_residual_flags_a_too_small_basis(brake):
     assert np.all(~red["trusted"][err > 1e-6])
     # and the worse the eigenvalue, the larger its residual: 1e-3 off means ~1e-5 (Frobenius norms)
     assert np.all(red["residual"][err > 1e-3] > 1e-6)
+
+
+def test_reduced_residual_is_the_full_model_backward_error(brake, pod):
+    # the same definition as the sparse and dense solvers (Frobenius norms of the assembled
+    # C(omega, mu) and K(omega, mu)), evaluated on the lifted vector V y in the full model
+    for omega, mu in ((50.0, 0.45), (5.0, 0.0), (200.0, 1.3)):
+        red = reduced_eigs(pod, omega, mu, band=BAND, vectors=True)
+        ref = backward_errors(_as_model(brake), omega, mu, red["eigenvalue"], red["vector"])
+        np.testing.assert_allclose(red["residual"], ref, rtol=1e-6)
 
 
 def test_reduced_sweep_dataset(pod):

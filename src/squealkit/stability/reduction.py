@@ -26,7 +26,8 @@ Three steps, as industry does it (Graebner, Tiedemann, Schroeder & Mehrmann, ZAM
 
    computed without the full matrices at each point (an R factor of ``[A_i V]`` is kept),
    so a reduced answer that cannot be trusted says so (``trusted = eta <= eta_max``).
-   Norms are 1-norms; ``||C||`` and ``||K||`` are bounded by the sum of their parts.
+   Norms are Frobenius norms of the assembled ``C(omega, mu)`` and ``K(omega, mu)``, as in the
+   sparse and dense solvers (from a table of the matrices' Frobenius inner products).
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ import scipy.sparse.linalg as spla
 
 from .._validation import InputError
 from ..models.fe import FEModel
-from .sparse import DENSE_MAX_DOF, DenseParts, _factorize, band_eigs, dense_eigs, dense_parts
+from .sparse import DENSE_MAX_DOF, DenseParts, _factorize, band_eigs, dense_eigs, dense_parts, fill_reducing_order
 from .tracking import _MacTracker
 
 __all__ = [
@@ -102,12 +103,6 @@ def _one_blas_thread():
     return threadpool_limits(1, user_api="blas")
 
 
-def _norm(A: Any) -> float:
-    """Frobenius norm, as in :func:`squealkit.stability.sparse.backward_errors` (one definition of
-    the backward error whichever solver produced the pair)."""
-    return float(spla.norm(A) if sp.issparse(A) else np.linalg.norm(A))
-
-
 # ----------------------------------------------------------------------------- modal basis
 
 
@@ -152,9 +147,13 @@ def modal_basis(
         w, V = sla.eigh(_dense(K1), _dense(M))
         freq = np.sqrt(np.maximum(w, 0.0)) / (2 * math.pi)
     else:
-        lu = _factorize(K1)  # nested dissection, diagonal pivots: SuperLU's default fills 4x more
+        perm = fill_reducing_order(K1, M)
+        lu = _factorize(K1, perm)  # nested dissection, diagonal pivots: SuperLU's default fills 4x more
         op = spla.LinearOperator((n, n), matvec=lu.solve, dtype=float)
         k = n_modes if n_modes is not None else 40
+        if freq_max is not None:  # as many modes as there are below the cut-off (+2: a doublet on it)
+            below = _count_below(K1, M, (2 * math.pi * freq_max) ** 2, perm)
+            k = min(k, below + 2) if n_modes is not None else below + 2
         while True:
             k = min(k, n - 2)
             w, V = spla.eigsh(K1, k=k, M=M, sigma=0.0, which="LM", OPinv=op)
@@ -175,6 +174,20 @@ def modal_basis(
     # mass-normalise (eigsh/eigh already do, up to rounding)
     V = V / np.sqrt(np.einsum("ij,ij->j", V, M @ V))
     return (V, freq) if return_freq else V
+
+
+def _count_below(K: Any, M: Any, w2: float, perm: np.ndarray) -> int:
+    """Eigenvalues of ``(K, M)`` below ``w2`` (both symmetric, M positive definite), by
+    Sylvester's law of inertia: the negative pivots of ``K - w2 M = L D L^T`` (a Sturm count, as
+    FE eigensolvers check their modes with).
+
+    SuperLU in the fill-reducing order ``perm`` with every pivot kept on the diagonal (then
+    ``U = D L^T``). Without pivoting a tiny pivot can miscount, so the count is only used to size
+    the solve; the modes found are checked against the cut-off.
+    """
+    A = sp.csc_matrix(K - w2 * M)[perm][:, perm].tocsc()
+    lu = spla.splu(A, permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    return int(np.count_nonzero(lu.U.diagonal() < 0))
 
 
 def _dense(A: Any) -> np.ndarray:
@@ -296,8 +309,9 @@ class ReducedModel:
     mats : dict
         Reduced dense matrices (r, r) by name (absent ones omitted).
     omega_ref, mu_ref, f_ref : float
-    norms : dict
-        Frobenius norm of each full matrix.
+    gram : ndarray (q, q)
+        Frobenius inner products ``<A_i, A_j>`` of the full matrices (names in ``order``):
+        ``||sum_i c_i A_i||_F^2 = c^T gram c``.
     R : ndarray (q r, q r)
         Triangular factor of ``[A_1 V, ..., A_q V]`` (names in ``order``):
         ``||sum_i c_i A_i V y|| = ||R (c kron y)||`` exactly, without the full matrices.
@@ -310,7 +324,7 @@ class ReducedModel:
     omega_ref: float
     mu_ref: float
     f_ref: float
-    norms: dict[str, float]
+    gram: np.ndarray
     R: np.ndarray
     order: tuple[str, ...]
 
@@ -339,8 +353,18 @@ def reduce(matrices: Any, V: np.ndarray) -> ReducedModel:
     AV = [np.asarray(getattr(model, name) @ Q) for name in order]
     red = {name: Q.T @ A for name, A in zip(order, AV, strict=True)}
     R = np.linalg.qr(np.hstack(AV), mode="r")
-    norms = {name: _norm(getattr(model, name)) for name in order}
-    return ReducedModel(Q, red, model.omega_ref, model.mu_ref, model.f_ref, norms, R, order)
+    return ReducedModel(Q, red, model.omega_ref, model.mu_ref, model.f_ref, _gram(model, order), R, order)
+
+
+def _gram(model: FEModel, order: Sequence[str]) -> np.ndarray:
+    """Frobenius inner products ``<A_i, A_j> = sum(A_i * A_j)`` of the named matrices."""
+    mats = [getattr(model, name) for name in order]
+    G = np.zeros((len(mats), len(mats)))
+    for i, A in enumerate(mats):
+        for j in range(i + 1):
+            B = mats[j]
+            G[i, j] = G[j, i] = float(A.multiply(B).sum() if sp.issparse(A) else np.vdot(A, _dense(B)))
+    return G
 
 
 def reduced_eigs(
@@ -423,17 +447,14 @@ def _reduced_backward_error(reduced: ReducedModel, coef, lam: np.ndarray, Y: np.
     """Full-model backward error of each ``(lam_j, V y_j)`` from the R factor (V orthonormal)."""
     r, m = Y.shape
     stacked = np.empty((len(reduced.order) * r, m), dtype=complex)
-    nC = np.zeros(m)
-    nK = np.zeros(m)
+    weights = np.zeros((3, len(reduced.order)))  # row p: the coefficients of the lambda^p matrix
     for i, name in enumerate(reduced.order):
         power, c = coef[name]
         stacked[i * r:(i + 1) * r] = Y * (c * lam**power)
-        if power == 1:
-            nC += abs(c) * reduced.norms[name]
-        elif power == 0:
-            nK += abs(c) * reduced.norms[name]
+        weights[power, i] = c
+    nK, nC, nM = np.sqrt(np.maximum(np.einsum("pi,ij,pj->p", weights, reduced.gram, weights), 0.0))
     res = np.linalg.norm(reduced.R @ stacked, axis=0)
-    return res / ((np.abs(lam) ** 2 * reduced.norms["M"] + np.abs(lam) * nC + nK) * np.linalg.norm(Y, axis=0))
+    return res / ((np.abs(lam) ** 2 * nM + np.abs(lam) * nC + nK) * np.linalg.norm(Y, axis=0))
 
 
 def reduced_sweep(
