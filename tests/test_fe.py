@@ -491,6 +491,7 @@ def test_reduced_methods_plumbing(reduction_calls):
     assert cut.attrs["basis_size"] == 4 and not bool(cut.trusted.all())
     assert reduction_calls["modal"] == (None, 4)
     pod = fe_stability_map(fe, rpm, mu, theta=math.radians(2.0), method="pod", n_modes=n, band=band)
+    np.testing.assert_allclose(reduction_calls["pod"][0], [2 * math.pi * 120.0 / 60])  # the middle speed
     np.testing.assert_allclose(reduction_calls["pod"][1], np.array(mu) + math.tan(math.radians(2.0)))
     assert pod.attrs["basis_size"] == n and float(np.nanmax(pod.residual.values)) < 1e-10
 

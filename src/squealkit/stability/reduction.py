@@ -508,7 +508,9 @@ def _reduced_backward_error(reduced: ReducedModel, coef, lam: np.ndarray, Y: np.
         stacked[i * r:(i + 1) * r] = Y * (c * lam**power)
         weights[power, i] = c
     nK, nC, nM = np.sqrt(np.maximum(np.einsum("pi,ij,pj->p", weights, reduced.gram, weights), 0.0))
-    res = np.linalg.norm(reduced.R @ stacked, axis=0)
+    # real R times the complex block as one real product on its interleaved parts (R @ stacked
+    # would first copy R to complex and do 4x the work)
+    res = np.linalg.norm((reduced.R @ stacked.view(np.float64)).view(complex), axis=0)
     return res / ((np.abs(lam) ** 2 * nM + np.abs(lam) * nC + nK) * np.linalg.norm(Y, axis=0))
 
 
