@@ -187,3 +187,11 @@ def test_the_accessor_does_not_import_matplotlib():
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr[-2000:]
     assert r.stdout.strip() == "[]"
+
+
+def test_fe_growth_plot_titles_say_which_friction(results):
+    from squealkit.plotting.fe import fe_growth_plot
+
+    # one friction: named as such, not a colour range "0.5 to 0.5"
+    titles = [ax.get_title() for ax in fe_growth_plot(results["fe_stability_map"]).axes]
+    assert titles == ["60 rpm  (mu 0.5)"]

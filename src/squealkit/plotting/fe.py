@@ -42,6 +42,7 @@ def fe_growth_plot(ds: xr.Dataset, *, max_panels: int = 4, fig=None):
     import matplotlib
 
     cmap = matplotlib.colormaps["viridis"]
+    friction = f"mu {mus[0]:g}" if mus.size == 1 else f"colour: mu {mus.min():g} to {mus.max():g}"
     for ax, i in zip(axes, picks, strict=True):
         for j in range(ds.sizes["mu"]):
             f = ds["frequency"].values[i, j]
@@ -52,7 +53,7 @@ def fe_growth_plot(ds: xr.Dataset, *, max_panels: int = 4, fig=None):
                        label="unstable" if j == 0 or not ax.get_legend_handles_labels()[0] else None)
         ax.axhline(0.0, color="k", lw=0.8)
         ax.set_ylabel("growth rate sigma [1/s]")
-        ax.set_title(f"{ds.rpm.values[i]:g} rpm  (colour: mu {mus.min():g} to {mus.max():g})", fontsize=9)
+        ax.set_title(f"{ds.rpm.values[i]:g} rpm  ({friction})", fontsize=9)
         if ax.get_legend_handles_labels()[0]:
             ax.legend(loc="upper right", fontsize=8)
     axes[-1].set_xlabel("frequency [Hz]")

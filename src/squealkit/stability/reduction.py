@@ -53,6 +53,7 @@ from .tracking import _MacTracker
 
 __all__ = [
     "MATRIX_NAMES",
+    "SNAPSHOT_TOL",
     "ReducedModel",
     "modal_basis",
     "pod_basis",
