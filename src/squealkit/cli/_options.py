@@ -268,8 +268,10 @@ def fe_options(*, band: bool = True, rpm_help: str = "Disc speeds in rpm (omega 
                          help="Reduced basis size for --method modal|pod (FE models).")(f)
         f = click.option("--method", type=click.Choice(["auto", "dense", "sparse", "modal", "pod"]), default="auto",
                          show_default=True,
-                         help="FE solver: dense (all modes), sparse (a band, shift-invert), modal or pod (reduced "
-                         "basis, every eigenpair checked in the full model); auto = dense up to 1000 DOFs.")(f)
+                         help="FE solver: dense (all modes), sparse (a band, shift-invert), modal (real modes) or "
+                         "pod (eigenvectors at the middle --rpm and the first and last --mu, with the real "
+                         "modes: the fast path for large sweeps); reduced eigenpairs are each checked in the "
+                         "full model; auto = dense up to 1000 DOFs.")(f)
         if band:
             f = click.option("--band", "band_spec", default=None, metavar="LO:HI",
                              help="Frequency band in Hz (FE models; sparse default 1000:16000, others all modes).")(f)

@@ -176,7 +176,8 @@ def fe_stability_map(
     theta : float
         Run-out incline [rad]: ``mu_e = mu + tan(theta)`` replaces mu in ``KR`` and ``DR``.
     method : {"auto", "dense", "sparse", "modal", "pod"}
-        Solver (module docstring). ``pod`` builds its basis at the grid's corners and centre.
+        Solver (module docstring). ``pod`` builds its basis from the middle speed at the first and
+        last friction (plus the real modes and left corrections).
     band : (float, float), optional
         Frequency band [Hz]: only modes in it are reported (``sparse``: default 1-16 kHz).
     n_modes : int, optional
