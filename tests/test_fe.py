@@ -105,6 +105,17 @@ def test_band_solve_keeps_exact_doublets():
     np.testing.assert_allclose(np.sort(sol.eigenvalues.imag), np.sort(w * np.sqrt(1 - 1e-6)), rtol=1e-9)
 
 
+@pytest.mark.parametrize("workers", [1, 2])
+def test_band_solve_default_k_fits_small_models(workers):
+    # the default eigenvalues per shift (24 for one walk, 32 for two) are capped by the model's
+    # size: a 15-DOF model has 30 eigenvalues, every one of them in the band
+    n = 15
+    w = 2 * np.pi * np.linspace(500.0, 1500.0, n)
+    m = FEModel.from_matrices(M=sp.eye(n), K1=sp.diags(w**2))
+    sol = band_eigs(m, 1.0, 0.3, band=(400.0, 1600.0), workers=workers)
+    np.testing.assert_allclose(np.sort(sol.eigenvalues.imag), w, rtol=1e-10)
+
+
 # -- closed forms: a 2-DOF model in both engines ------------------------------------------------
 
 
