@@ -150,6 +150,30 @@ def test_band_walks_meet_whatever_their_pace(monkeypatch, slow):
         assert np.all(gaps > 1e-9 * np.abs(in_band).max())
 
 
+def test_walks_do_not_solve_the_same_stretch_twice(monkeypatch):
+    # built-in brake, 8 802 DOFs, 32 eigenvalues per shift: the walk from the top used to place
+    # a last shift 89 Hz from the one the walk from the bottom was solving (10 616 against
+    # 10 527 Hz); a walk now stops where the other's shift in progress is nearer than half of
+    # either walk's last disc
+    pytest.importorskip("skfem")
+    from squealkit.models.fe_demo import build_fe_demo
+    from squealkit.stability.reduction import _as_model
+
+    model = _as_model(build_fe_demo(n_theta=48))
+    centers = []
+    init = sparse._ShiftInvert.__init__
+
+    def record(op, M, C, K, s, *args, **kw):
+        centers.append(abs(s) / (2 * np.pi))
+        init(op, M, C, K, s, *args, **kw)
+
+    monkeypatch.setattr(sparse._ShiftInvert, "__init__", record)
+    sol = band_eigs(model, 2 * np.pi * 10.0, 0.45, k=32, workers=2)
+    assert sol.eigenvalues.size == 44
+    gaps = np.diff(np.sort(centers))
+    assert gaps.min() > 500.0, sorted(centers)
+
+
 def test_fill_reducing_order_is_a_permutation_that_cuts_fill():
     # a 2-D grid Laplacian: nested dissection fills far less than the natural (banded) order
     m = 60

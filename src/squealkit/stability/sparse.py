@@ -485,8 +485,8 @@ def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *
 
     With two workers, one walk starts at each end of the band and they stop where they meet,
     so no shift is solved twice; a walk also stops where the other one's shift in progress is
-    nearer than half its own last disc (that shift, or the other walk after it, covers the
-    rest). More workers split the band into that many halves of sub-bands, each walked from
+    nearer than half the larger of the two walks' last discs (that shift, or the other walk
+    after it, covers the rest). More workers split the band into that many halves of sub-bands, each walked from
     both ends.
 
     Parameters
@@ -572,6 +572,7 @@ class _Claims:
         self.w_lo, self.w_hi, self.top_closed = w_lo, w_hi, top_closed
         self.up, self.down = w_lo, w_hi
         self.pending = {+1: None, -1: None}  # centre of the shift each walk is solving
+        self.reach = {+1: 0.0, -1: 0.0}  # each walk's last disc radius
         self.lock = threading.Lock()
 
     def frontier(self, d: int) -> float:
@@ -605,7 +606,7 @@ def _band_walk(M, C, K, n, claims: _Claims, d: int, k, sigma_reach, max_shifts, 
             other = claims.pending[-d]
             if d * (far - edge) <= 0:  # the other walk has been here
                 break
-            if other is not None and abs(other - edge) <= _REACH * reach:
+            if other is not None and abs(other - edge) <= _REACH * max(reach, claims.reach[-d]):
                 break  # the other walk's shift in progress is nearer than ours would be: it finishes
             if d * (center - far) > 0:  # the other walk came nearer since this shift was placed
                 center = 0.5 * (edge + far)
@@ -633,7 +634,7 @@ def _band_walk(M, C, K, n, claims: _Claims, d: int, k, sigma_reach, max_shifts, 
             if not grow:
                 claims.claim(d, top)
                 claims.pending[d] = None
-                reach = r
+                reach = claims.reach[d] = r
         if grow:  # the disc misses part of its slice: more eigenvalues
             kk *= 2
             continue
