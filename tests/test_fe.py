@@ -505,6 +505,13 @@ def test_reduced_methods_plumbing(reduction_calls):
     np.testing.assert_allclose(reduction_calls["pod"][0], [2 * math.pi * 120.0 / 60])  # the middle speed
     np.testing.assert_allclose(reduction_calls["pod"][1], np.array(mu) + math.tan(math.radians(2.0)))
     assert pod.attrs["basis_size"] == n and float(np.nanmax(pod.residual.values)) < 1e-10
+    # the critical-friction search samples the middle speed only (not every speed of the grid),
+    # at three frictions over its range; its onsets are the dense solve's
+    crit = fe_critical_friction(fe, [60.0, 120.0, 240.0], mu_max=1.0, method="pod", band=band)
+    np.testing.assert_allclose(reduction_calls["pod"][0], [2 * math.pi * 120.0 / 60])
+    np.testing.assert_allclose(reduction_calls["pod"][1], [0.0, 0.5, 1.0])
+    np.testing.assert_allclose(crit.mu_critical, fe_critical_friction(fe, [60.0, 120.0, 240.0], mu_max=1.0).mu_critical,
+                               rtol=1e-6)
 
 
 def test_sweep_on_dask_is_identical_to_local(brake):

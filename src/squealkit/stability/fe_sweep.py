@@ -508,7 +508,9 @@ def fe_critical_friction(
     if isinstance(n_scan, bool) or int(n_scan) != n_scan or n_scan < 2:
         raise InputError(f"Parameter n_scan={n_scan!r} must be an integer >= 2.")
     omegas = rpm_to_omega(rpm_a)
-    samples = (omegas, np.array([0.0, mu_max / 2, mu_max]) + t) if method == "pod" else None
+    # the middle speed, as fe_stability_map; three frictions over the search range (one band
+    # solve per speed instead cost as much as the searches it was to speed up)
+    samples = (omegas[[len(omegas) // 2]], np.array([0.0, mu_max / 2, mu_max]) + t) if method == "pod" else None
     solver = FESolver(model, method, band, n_modes, samples)
     grid = np.linspace(0.0, mu_max, int(n_scan))
     with threadpool_limits(1, user_api="blas"):
