@@ -481,7 +481,8 @@ def fe_critical_friction(
     xtol : float, default 1e-6
         Absolute tolerance of the bisection in mu.
     method : {"auto", "dense", "sparse", "modal", "pod"}, default "auto"
-        Solver (see :func:`fe_stability_map` and the module docstring).
+        Solver (see :func:`fe_stability_map` and the module docstring); ``pod`` builds its
+        basis from the middle speed at friction 0, ``mu_max / 2`` and ``mu_max``.
     band : (float, float), optional
         Frequency band [Hz]: only modes in it count (``sparse``: default 1-16 kHz).
     n_modes : int, optional
