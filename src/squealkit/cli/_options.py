@@ -269,8 +269,8 @@ def fe_options(*, band: bool = True, rpm_help: str = "Disc speeds in rpm (omega 
         f = click.option("--method", type=click.Choice(["auto", "dense", "sparse", "modal", "pod"]), default="auto",
                          show_default=True,
                          help="FE solver: dense (all modes), sparse (a band, shift-invert), modal (real modes) or "
-                         "pod (eigenvectors at the middle --rpm and the first and last --mu, with the real "
-                         "modes: the fast path for large sweeps); reduced eigenpairs are each checked in the "
+                         "pod (eigenvectors at the middle --rpm and the ends of the friction range, with the "
+                         "real modes: the fast path for large sweeps); reduced eigenpairs are each checked in the "
                          "full model; auto = dense up to 1000 DOFs.")(f)
         if band:
             f = click.option("--band", "band_spec", default=None, metavar="LO:HI",
