@@ -237,3 +237,15 @@ def test_trusted_reduced_eigenvalues_are_accurate(seed, friction, keep, omega, m
     ref = upper(qz(model, omega, mu))
     err = np.array([np.min(np.abs(ref - x)) / abs(x) for x in got["eigenvalue"]])
     assert np.all(err[got["trusted"]] < 1e-6)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 10**6), rows=st.integers(1, 12), cols=st.integers(1, 12), block=st.integers(0, 4),
+       sparse_a=st.booleans())
+def test_real_times_is_the_complex_product(seed, rows, cols, block, sparse_a):
+    # reference: numpy's complex product; A real, sparse or dense, square or not; X a vector or a block
+    rng = np.random.default_rng(seed)
+    A = rng.normal(size=(rows, cols))
+    X = rng.normal(size=(cols, block) if block else cols) + 1j * rng.normal(size=(cols, block) if block else cols)
+    got = sparse._real_times(sp.csr_matrix(A) if sparse_a else A, X)
+    np.testing.assert_allclose(got, A.astype(complex) @ X, rtol=1e-12, atol=1e-12)

@@ -48,7 +48,17 @@ import scipy.sparse.linalg as spla
 from .._threads import thread_limit
 from .._validation import InputError
 from ..models.fe import FEModel
-from .sparse import DENSE_MAX_DOF, DenseParts, _factorize, band_eigs, dense_eigs, dense_parts, fill_reducing_order
+from .sparse import (
+    DENSE_MAX_DOF,
+    DenseParts,
+    _factorize,
+    _PermutedLU,
+    _real_times,
+    band_eigs,
+    dense_eigs,
+    dense_parts,
+    fill_reducing_order,
+)
 from .tracking import _MacTracker
 
 __all__ = [
@@ -188,8 +198,7 @@ def _count_below(K: Any, M: Any, w2: float, perm: np.ndarray) -> int:
     ``U = D L^T``). Without pivoting a tiny pivot can miscount, so the count is only used to size
     the solve; the modes found are checked against the cut-off.
     """
-    A = sp.csc_matrix(K - w2 * M)[perm][:, perm].tocsc()
-    lu = spla.splu(A, permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    lu = _PermutedLU(K - w2 * M, perm, diag_pivot_thresh=0.0).lu
     return int(np.count_nonzero(lu.U.diagonal() < 0))
 
 
@@ -319,8 +328,8 @@ def pod_basis(
 
 def _left_corrections(model: FEModel, E: np.ndarray) -> list[np.ndarray]:
     """``K1^-1 A^T E`` for each non-symmetric matrix ``A`` of the model (:func:`pod_basis`)."""
-    mats = [getattr(model, name) for name in ("KR", "DR") if name in model.present]
-    mats = [A for A in mats if spla.norm(sp.csr_matrix(A) - sp.csr_matrix(A).T) > 1e-12 * spla.norm(sp.csr_matrix(A))]
+    mats = [sp.csr_matrix(getattr(model, name)) for name in ("KR", "DR") if name in model.present]
+    mats = [A for A in mats if spla.norm(A - A.T) > 1e-12 * spla.norm(A)]
     if not mats or E.shape[1] == 0:
         return []
     K1 = sp.csc_matrix(model.K1)
@@ -509,9 +518,7 @@ def _reduced_backward_error(reduced: ReducedModel, coef, lam: np.ndarray, Y: np.
         stacked[i * r:(i + 1) * r] = Y * (c * lam**power)
         weights[power, i] = c
     nK, nC, nM = np.sqrt(np.maximum(np.einsum("pi,ij,pj->p", weights, reduced.gram, weights), 0.0))
-    # real R times the complex block as one real product on its interleaved parts (R @ stacked
-    # would first copy R to complex and do 4x the work)
-    res = np.linalg.norm((reduced.R @ stacked.view(np.float64)).view(complex), axis=0)
+    res = np.linalg.norm(_real_times(reduced.R, stacked), axis=0)
     return res / ((np.abs(lam) ** 2 * nM + np.abs(lam) * nC + nK) * np.linalg.norm(Y, axis=0))
 
 
