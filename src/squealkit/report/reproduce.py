@@ -12,6 +12,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from .. import _warmup
 from ..io import check_output, output_folder
 from ..models import FrictionModel, PinOnDiscRig, get_preset
 from .document import Section
@@ -20,6 +21,14 @@ from .html import render_html
 __all__ = ["RecordingSpec", "ReproduceResult", "reproduce"]
 
 Step = Callable[[Path, Path], Section]
+
+#: The compiled kernels a step needs beyond the stability ones (see :mod:`squealkit._warmup`).
+_STEP_KERNELS: dict[str, tuple[str, ...]] = {
+    "Figs. 3-4 transients": ("transient",),
+    "how loud": ("transient", "nonlinear"),
+    "Figs. 6-13 measurement": ("measurement",),
+    "Figs. 6-13 your recording": ("measurement",),
+}
 
 
 @dataclass(frozen=True)
@@ -161,6 +170,8 @@ def reproduce(
     paper_model = type(model) is type(paper) and model == paper
     steps = _paper_steps(model, rig, published=paper_model, quick=quick, recording=recording)
     start = time.perf_counter()
+    # a first run compiles the later steps' kernels on the other core while the first steps run
+    _warmup.start(["transient", "nonlinear", "measurement"])
     # staged and moved into place only when complete; never deletes what squealkit did not write
     with output_folder(out, force=force) as stage:
         figures, data = stage / "figures", stage / "data"
@@ -170,6 +181,7 @@ def reproduce(
         for i, (name, step) in enumerate(steps):
             if progress is not None:
                 progress(i, len(steps), name)
+            _warmup.wait(_STEP_KERNELS.get(name, ()))
             sections.append(step(figures, data))
         from .steps_conclusions import conclusions_step
 

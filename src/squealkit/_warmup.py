@@ -1,0 +1,184 @@
+"""Compile the kernels a long run will need later on the other core, while it works on the first.
+
+numba compiles each kernel on its first call and keeps it in its on-disk cache
+(``cache=True``); a later run loads it in milliseconds. On a fresh install the first
+``squealkit reproduce`` therefore spends most of its time compiling, one kernel after the
+other, on one core. :func:`start` hands the kernels of the later steps (the transient
+integrator, the limit-cycle and the measurement kernels) to a child process that compiles
+them into the same cache while this process compiles and runs the stability steps;
+:func:`wait` blocks a step until the child has finished its group, so the two never
+compile the same kernel, and the step then loads the kernel from the cache.
+
+Nothing is started when it would not pay: on one core, with ``SQUEALKIT_THREADS=1`` or
+``--threads 1`` (the user capped squealkit to one thread), or when a stamp file says this
+cache already holds the kernels of this version of squealkit. A child that fails or dies
+costs nothing but time: the step compiles the kernel itself, as without the child.
+
+Private: used by :func:`squealkit.report.reproduce`.
+"""
+
+from __future__ import annotations
+
+import atexit
+import hashlib
+import os
+import subprocess
+import sys
+import threading
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+__all__ = ["GROUPS", "start", "wait"]
+
+
+def _lapack_eigenvalues(model, mu, tan_theta=0.0, *, damped=False, **_ignored):
+    """Stand-in for :func:`squealkit.stability.eigenvalues` in the child (LAPACK, one point at a time).
+
+    The integrator's set-up asks for the linear model's eigenvalues (its step-size bound and
+    the summary's growth rates); the parent is compiling the stability kernels that compute
+    them at that very moment, so the child takes them from LAPACK instead of compiling them
+    a second time. Only the child's throw-away run sees these values.
+    """
+    import numpy as np
+
+    mu, t = np.broadcast_arrays(np.asarray(mu, float), np.asarray(tan_theta, float))
+    M = model.mass_matrix()
+    n = M.shape[0]
+    C = model.damping_matrix() if damped else np.zeros_like(M)
+    out = np.empty((*mu.shape, n), complex)
+    for idx in np.ndindex(mu.shape):
+        K = model.stiffness_matrix(mu[idx], t[idx])
+        A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, C)]])
+        lam = np.linalg.eigvals(A)
+        out[idx] = lam[np.argsort(-lam.imag, kind="stable")[:n]]
+    return out
+
+
+def _transient() -> None:
+    import importlib
+
+    from .models import get_preset
+    from .transient import SineRunOut, simulate
+
+    importlib.import_module("squealkit.transient.simulate").eigenvalues = _lapack_eigenvalues
+    simulate(get_preset("lv2013"), mu=0.4, profile=SineRunOut(0.08e-3, 1e-3), speed=0.02, duration=2e-4)
+
+
+def _nonlinear() -> None:
+    from .models import get_preset
+    from .nonlinear import limit_cycle_branch
+    from .report.steps_nonlinear import HARMONICS, MU_RANGE, SPEED
+
+    limit_cycle_branch(get_preset("lv2013"), MU_RANGE, harmonics=HARMONICS, n_points=2, speed=SPEED)
+
+
+def _measurement() -> None:
+    from .measurement import analyze_recording, synthetic_recording
+    from .report.steps_measurement import FS, RADIUS, RPM
+
+    rec = synthetic_recording(duration=0.25, fs=FS, rpm=RPM, radius=RADIUS, freq=2400.0, seed=1)
+    analyze_recording(rec, mic="mic", displacement="displacement", rpm=RPM, radius=RADIUS)
+
+
+#: Kernel groups the child can compile, in the order a report needs them.
+GROUPS: dict[str, Callable[[], None]] = {
+    "transient": _transient,
+    "nonlinear": _nonlinear,
+    "measurement": _measurement,
+}
+
+_child: dict[str, object] = {"proc": None, "pending": set(), "lock": threading.Lock()}
+
+
+def _kernel_sources() -> list[Path]:
+    root = Path(__file__).parent
+    return sorted(p for p in root.rglob("*.py") if "njit" in p.read_text(encoding="utf-8", errors="replace"))
+
+
+def _stamp() -> Path | None:
+    """The file that says this numba cache holds every group's kernels for these sources."""
+    try:
+        import numba
+        from numba.core.config import CACHE_DIR
+    except ImportError:  # pragma: no cover - numba is a dependency
+        return None
+    h = hashlib.sha256(numba.__version__.encode())
+    for p in _kernel_sources():
+        st = p.stat()  # numba's own cache is keyed by the source files' mtime and size
+        h.update(f"{p}:{st.st_mtime_ns}:{st.st_size}".encode())
+    base = Path(CACHE_DIR) if CACHE_DIR else Path(__file__).parent / "__pycache__"
+    return base / f"squealkit-kernels-{h.hexdigest()[:16]}.stamp"
+
+
+def _worth_starting() -> bool:
+    from ._threads import thread_limit
+
+    if (os.cpu_count() or 1) < 2 or thread_limit() < 2:
+        return False
+    stamp = _stamp()
+    return stamp is not None and not stamp.exists()
+
+
+def start(groups: Iterable[str]) -> bool:
+    """Compile ``groups`` (names in :data:`GROUPS`) in a child process; True if one was started."""
+    names = [g for g in groups if g in GROUPS]
+    if not names or _child["proc"] is not None or not _worth_starting():
+        return False
+    try:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "squealkit._warmup", *names], stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+        )
+    except OSError:  # no process to spare: the steps compile their kernels themselves
+        return False
+    _child["proc"] = proc
+    _child["pending"] = set(names)
+    atexit.register(_stop)
+    return True
+
+
+def wait(groups: Iterable[str]) -> None:
+    """Return once the child has compiled ``groups`` (at once if there is no child or it died)."""
+    proc = _child["proc"]
+    if proc is None:
+        return
+    want = set(groups) & _child["pending"]
+    with _child["lock"]:
+        while want and proc.stdout is not None:
+            line = proc.stdout.readline()
+            if not line:  # the child ended (done or failed): the steps compile what is left
+                _child["pending"].clear()
+                break
+            done = line.strip()
+            _child["pending"].discard(done)
+            want.discard(done)
+
+
+def _stop() -> None:
+    proc = _child["proc"]
+    if proc is not None and proc.poll() is None:
+        proc.kill()
+        proc.wait()
+    _child["proc"] = None
+
+
+def _main(names: list[str]) -> int:
+    import warnings
+
+    warnings.simplefilter("ignore")
+    for name in names:
+        GROUPS[name]()
+        print(name, flush=True)
+    if set(names) == set(GROUPS):
+        stamp = _stamp()
+        if stamp is not None:
+            try:
+                stamp.parent.mkdir(parents=True, exist_ok=True)
+                stamp.touch()
+            except OSError:  # a read-only install: the child runs again next time, as now
+                pass
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover - run as the child
+    sys.exit(_main(sys.argv[1:]))
