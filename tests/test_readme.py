@@ -1,5 +1,6 @@
-"""README's examples print what README says: its Python blocks run in order in one namespace and
-the values shown in their comments come back; the CLI examples shown with output print it.
+"""README's examples, and those of the guide it links to, print what they say: their Python blocks
+run in order in one namespace and the values shown in their comments come back; the CLI examples
+shown with output print it.
 
 The values in README were measured on this project's machine; numbers are compared to the digits
 README shows (one unit in the last shown digit; values below 1e-4, the rounding at onset's double root, as zero).
@@ -16,7 +17,11 @@ import numpy as np
 import pytest
 
 README = Path(__file__).parents[1] / "README.md"
-TEXT = README.read_text(encoding="utf-8")
+#: README's tour continues in the guide's pages, in this order (docs/guide/index.md): one text, one namespace.
+GUIDE = ("models", "stability", "fe-models", "uncertainty", "transient", "measurement", "scale", "fe-brake",
+         "command-line", "speed", "layout")
+TEXT = "\n".join(p.read_text(encoding="utf-8") for p in
+                 (README, *(README.parent / "docs" / "guide" / f"{name}.md" for name in GUIDE)))
 
 # Blocks too slow for every CI run; each is checked by its own module's tests instead:
 # squeal_propensity (tests/test_uncertainty.py), limit_cycle_branch (tests/test_nonlinear.py),
