@@ -1,0 +1,155 @@
+"""Malformed input is refused with one line naming it (issues #29, #31: the adversarial round's readers).
+
+Each case is one of /work/shared/reference/adversarial-2026-12-02.md, rebuilt small in tmp_path.
+The reference for every case is the documented contract: an InputError (a ValueError) from the
+API, exit code 2 and one stderr line from the CLI, and the user's file left as it was.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+import scipy.io
+import scipy.sparse as sp
+
+from squealkit._validation import InputError
+from squealkit.models.fe import FEModel
+from squealkit.models.fe_readers import load_fe_model
+
+
+def _one_line(excinfo, *words):
+    msg = str(excinfo.value)
+    assert "\n" not in msg, msg
+    for w in words:
+        assert w in msg, msg
+
+
+# -- A. FE matrix readers ---------------------------------------------------------------------------
+
+def _v73(path, KR_attrs=None, jc=True, ir=(0, 1), n_rows=6, data=(1.0, 2.0)):
+    """A MATLAB v7.3 file (HDF5) with dense M, K1 (stored transposed) and a sparse KR group."""
+    import h5py
+
+    with h5py.File(path, "w") as f:
+        f["M"] = np.eye(6)
+        f["K1"] = 4.0 * np.eye(6)
+        g = f.create_group("KR")
+        g.attrs["MATLAB_sparse"] = n_rows if KR_attrs is None else KR_attrs
+        g["data"] = np.asarray(data, dtype=np.float64)
+        g["ir"] = np.asarray(ir, dtype=np.uint64)
+        if jc:
+            g["jc"] = np.asarray([0, 1, 2, 2, 2, 2, 2], dtype=np.uint64)
+    return path
+
+
+def _mtx(path, shape, entries):
+    rows = "".join(f"{i + 1} {j + 1} {v!r}\n" for i, j, v in entries)
+    path.write_text(f"%%MatrixMarket matrix coordinate real general\n{shape[0]} {shape[1]} {len(entries)}\n{rows}")
+    return path
+
+
+_OP4_NAN = """\
+       3       3       6       2M       1P,3E23.16
+       1       1       1
+ 1.0000000000000000E+00
+       2       2       1
+ 1.0000000000000000E+00
+       3       3       1
+ 1.0000000000000000E+00
+       4       1       1
+ 1.0000000000000000E+00
+       3       3       6       2K1      1P,3E23.16
+       1       1       1
+ 4.0000000000000000E+00
+       2       2       1
+ 4.0000000000000000E+00
+       3       3       1
+ 4.0000000000000000E+00
+       4       1       1
+ 1.0000000000000000E+00
+       3       3       1       2KR      1P,3E23.16
+       1       2       1
+ 1.0000000000000000E+00
+       2       1       1
+                    NAN
+       4       1       1
+ 1.0000000000000000E+00
+"""
+
+
+def _fe_case(name, tmp_path):
+    """(load arguments, words the message must hold) for one malformed FE input."""
+    if name == "mat-zeros":  # scipy: MatReadError "Mat file appears to be corrupt (first 20 bytes == 0)"
+        (tmp_path / "z.mat").write_bytes(bytes(200))
+        return {"file": tmp_path / "z.mat"}, ("z.mat", "not a readable MATLAB file")
+    if name == "v73-nojc":
+        return {"file": _v73(tmp_path / "a.mat", jc=False)}, ("a.mat", "KR", "jc")
+    if name == "v73-bigrows":  # MATLAB_sparse = 1e12 rows: 7.28 TiB if a CSR index were built
+        return {"file": _v73(tmp_path / "a.mat", n_rows=10**12)}, ("a.mat", "KR", "1000000000000")
+    if name == "v73-strattr":
+        return {"file": _v73(tmp_path / "a.mat", KR_attrs=np.bytes_(b"abc"))}, ("a.mat", "KR", "MATLAB_sparse")
+    if name == "v73-badir":  # row indices 99, 100 in a 6-row matrix (KR was silently empty)
+        return {"file": _v73(tmp_path / "a.mat", ir=(99, 100))}, ("a.mat", "KR", "row ind")
+    if name == "mat-cplx-sparse":
+        scipy.io.savemat(tmp_path / "c.mat", {"M": sp.eye(3, format="csc"), "K1": sp.eye(3, format="csc"),
+                                              "KR": sp.csc_matrix(np.eye(3) * (1 + 0.5j))})
+        return {"file": tmp_path / "c.mat"}, ("c.mat", "KR", "complex")
+    if name == "mat-cplx-M-sparse":
+        scipy.io.savemat(tmp_path / "c.mat", {"M": sp.csc_matrix(np.eye(3) * (1 + 0.5j)),
+                                              "K1": sp.eye(3, format="csc")})
+        return {"file": tmp_path / "c.mat"}, ("c.mat", "Matrix M", "complex")
+    if name == "op4-nan":  # pyNastran's ASCII reader drops the NAN entry (KR nnz 2 -> 1)
+        pytest.importorskip("pyNastran")
+        (tmp_path / "n.op4").write_text(_OP4_NAN)
+        return {"file": tmp_path / "n.op4"}, ("n.op4", "non-finite")
+    if name == "tiny-M":  # M = 1e-300 I: onset reported at 4.8e-17 Hz (true ~1e152 Hz)
+        files = {"M": _mtx(tmp_path / "M.mtx", (2, 2), [(0, 0, 1e-300), (1, 1, 1e-300)]),
+                 "K1": _mtx(tmp_path / "K1.mtx", (2, 2), [(0, 0, 1.0), (1, 1, 2.0)])}
+        return {"files": files}, ("Matrix M",)
+    if name == "huge-decl":  # 1e8 x 1e8 with one entry each: 7.2 GB then MemoryError
+        files = {"M": _mtx(tmp_path / "M.mtx", (10**8, 10**8), [(0, 0, 1.0)]),
+                 "K1": _mtx(tmp_path / "K1.mtx", (10**8, 10**8), [(0, 0, 1.0)])}
+        return {"files": files}, ("100000000", "DOF")
+    raise AssertionError(name)
+
+
+@pytest.mark.parametrize("case", ["mat-zeros", "v73-nojc", "v73-bigrows", "v73-strattr", "v73-badir",
+                                  "mat-cplx-sparse", "mat-cplx-M-sparse", "op4-nan", "tiny-M", "huge-decl"])
+def test_malformed_fe_files_refused_in_one_line(tmp_path, case):
+    kwargs, words = _fe_case(case, tmp_path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # numpy's ComplexWarning alone is not a refusal
+        with pytest.raises(InputError) as e:
+            load_fe_model(**kwargs)
+    _one_line(e, *words)
+
+
+@pytest.mark.parametrize(
+    ("mats", "words"),
+    [
+        ({"M": np.eye(2), "K1": np.eye(2) * (1 + 1j)}, ("Matrix K1", "complex")),
+        ({"M": sp.eye(2, format="csr") * (1 + 0.5j), "K1": np.eye(2)}, ("Matrix M", "complex")),
+        ({"M": np.eye(2), "K1": np.eye(2), "KR": sp.csr_matrix(np.eye(2) * 1j)}, ("Matrix KR", "complex")),
+        ({"M": 1e-300 * np.eye(2), "K1": np.eye(2)}, ("Matrix M",)),
+        ({"M": sp.coo_matrix(([1.0], ([0], [0])), shape=(10**8, 10**8)),
+          "K1": sp.coo_matrix(([1.0], ([0], [0])), shape=(10**8, 10**8))}, ("100000000", "DOF")),
+    ],
+    ids=["complex-dense", "complex-sparse-M", "complex-sparse-KR", "tiny-M", "huge-decl"],
+)
+def test_from_matrices_same_checks_as_readers(mats, words):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(InputError) as e:
+            FEModel.from_matrices(**mats)
+    _one_line(e, *words)
+
+
+def test_plausible_fe_models_still_accepted():
+    # a massless DOF held by stiffness only, and a model in scaled units (NLEVP: f ~ 0.16 Hz)
+    m = FEModel.from_matrices(M=np.diag([1.0, 0.0]), K1=np.diag([1.0, 1.0]))
+    assert m.n_dof == 2
+    from squealkit.data import nlevp_path
+
+    assert load_fe_model(nlevp_path("disk_brake100.mat")).n_dof == 100
