@@ -153,3 +153,86 @@ def test_plausible_fe_models_still_accepted():
     from squealkit.data import nlevp_path
 
     assert load_fe_model(nlevp_path("disk_brake100.mat")).n_dof == 100
+
+
+# -- B. TOML of the wrong type -----------------------------------------------------------------------
+
+def _cli_refuses(r, *words):
+    """Exit 2, one stderr line holding ``words``, no traceback (the CLI's contract for user errors)."""
+    assert r.exit_code == 2, (r.exit_code, r.output, r.exception)
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1, r.stderr
+    for w in words:
+        assert w in lines[0], lines[0]
+    assert "Traceback" not in r.output
+
+
+@pytest.mark.parametrize(
+    ("toml", "words"),
+    [
+        ('model = ["fe"]\n', ("model", "array", "string")),
+        ('preset = ["lv2013"]\n', ("preset", "array", "string")),
+        ("rig = 5\n", ("rig", "integer", "table")),
+        ('model = "fe"\n[fe]\nfile = 5\n', ("[fe] file", "integer", "string")),
+        ('model = "fe"\n[fe]\nfiles = {M = 5, K1 = "K1.mtx"}\n', ("[fe] files.M", "integer", "string")),
+        ('model = "fe"\n[fe]\nfile = "a.mat"\nomega_ref = "fast"\n', ("[fe] omega_ref", "string", "number")),
+        ('model = "fe"\n[fe]\nfile = "a.mat"\nnames = {M = ["MAA"]}\n', ("[fe] names.M", "array", "string")),
+        ("description = 3.5\n", ("description", "float", "string")),
+        ("parameters = [1, 2]\n", ("parameters", "array", "table")),
+    ],
+    ids=["model-list", "preset-list", "rig-int", "fe-file-int", "fe-files-int", "fe-ref-str", "fe-names-list",
+         "description-float", "parameters-list"],
+)
+def test_toml_of_the_wrong_type_one_line(run, tmp_path, toml, words):
+    (tmp_path / "m.toml").write_text(toml)
+    _cli_refuses(run("critical", "--config", str(tmp_path / "m.toml")), "m.toml", *words)
+
+
+@pytest.mark.parametrize(
+    ("call", "words"),
+    [
+        (lambda: __import__("squealkit.models.config", fromlist=["x"]).model_from_dict({"model": ["fe"]}),
+         ("model", "array", "string")),
+        (lambda: __import__("squealkit.models.config", fromlist=["x"]).model_from_dict(["fe"]),
+         ("doc", "list")),
+        (lambda: __import__("squealkit.models.config", fromlist=["x"]).parse_assignments([5]),
+         ("5", "NAME=VALUE")),
+        (lambda: __import__("squealkit.models.config", fromlist=["x"]).parse_assignments("m1=0.05"),
+         ("items", "str")),
+    ],
+    ids=["model_from_dict-list", "model_from_dict-not-mapping", "parse_assignments-int", "parse_assignments-str"],
+)
+def test_config_api_wrong_types(call, words):
+    with pytest.raises((InputError, TypeError)) as e:
+        call()
+    _one_line(e, *words)
+
+
+# -- F. the demo's brake.toml names its mesh and DOF names ---------------------------------------------
+
+def test_fe_demo_mesh_reaches_modes_vtk(run, tmp_path):
+    meshio = pytest.importorskip("meshio")
+    out = tmp_path / "b"
+    r = run("fe-demo", "--size", "16", "--out", str(out))
+    assert r.exit_code == 0, r.output
+    from squealkit.models.config import load_model
+
+    model = load_model(out / "brake.toml")
+    names = (out / "dof_names.txt").read_text().split()
+    assert model.dof_names == tuple(names) and model.mesh is not None
+    vtu = tmp_path / "m.vtu"
+    r = run("modes", "--config", str(out / "brake.toml"), "--rpm", "1000", "--mu", "0.5", "--vtk", str(vtu))
+    assert r.exit_code == 0, (r.output, r.exception)
+    got = meshio.read(vtu)
+    shapes = [k for k in got.point_data if k.endswith("_re")]
+    assert shapes, got.point_data.keys()
+    # reference: each DOF named node{k}.{x,y,z} on a mesh vertex k lands on that point and component;
+    # the clamped vertices (r = r_inner) carry no DOF, so their displacement is exactly zero
+    v = got.point_data[shapes[0]]
+    assert v.shape == (len(got.points), 3)
+    on_vertex = [(int(n[4:].split(".")[0]), "xyz".index(n[-1])) for n in names
+                 if int(n[4:].split(".")[0]) < len(got.points)]
+    free_pts = {k for k, _ in on_vertex}
+    clamped = [p for p in range(len(got.points)) if p not in free_pts]
+    assert clamped and np.all(v[clamped] == 0.0)
+    assert np.abs(v[sorted(free_pts)]).max() > 0.0

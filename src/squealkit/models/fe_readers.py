@@ -206,6 +206,8 @@ def load_fe_model(
     mu_ref: float = 1.0,
     f_ref: float = 1.0,
     base_dir: str | Path | None = None,
+    mesh: str | Path | None = None,
+    dof_names: str | Path | None = None,
 ) -> FEModel:
     """An FE model read from exported matrices.
 
@@ -222,6 +224,11 @@ def load_fe_model(
         Reference values (see :class:`~squealkit.models.fe.FEModel`).
     base_dir : path, optional
         Folder relative paths start from (the model file's folder).
+    mesh : path, optional
+        The mesh the DOFs live on (any format meshio reads, e.g. ``mesh.vtu``), for mode shape
+        export (:func:`~squealkit.stability.fe_sweep.modes_to_vtk`); needs meshio.
+    dof_names : path, optional
+        A text file with one DOF name per line (``node12.x`` puts that DOF on mesh point 12).
 
     Returns
     -------
@@ -277,7 +284,35 @@ def load_fe_model(
                 m = next(iter(found.values()))
             mats[key] = m
         source = ", ".join(str(v) for v in dict(files).values())
+    extra = {"mesh": _read_mesh(resolve(mesh)) if mesh is not None else None,
+             "dof_names": _read_dof_names(resolve(dof_names)) if dof_names is not None else None}
     try:
-        return FEModel.from_matrices(**mats, omega_ref=omega_ref, mu_ref=mu_ref, f_ref=f_ref, source=source)
+        return FEModel.from_matrices(**mats, omega_ref=omega_ref, mu_ref=mu_ref, f_ref=f_ref, source=source,
+                                     **extra)
     except InputError as e:
         raise InputError(f"{source}: {e}") from e
+
+
+def _read_mesh(path: Path) -> Any:
+    """A mesh file through meshio, or one line saying why not."""
+    try:
+        import meshio
+    except ImportError:
+        raise InputError(f"{path.name}: reading a mesh needs meshio: pip install meshio.") from None
+    if not path.is_file():
+        raise InputError(f"Mesh file {str(path)!r} does not exist.")
+    try:
+        return meshio.read(path)
+    except Exception as e:  # meshio raises many kinds on a malformed or unknown file
+        raise InputError(f"{path.name}: not a readable mesh: {e}") from e
+
+
+def _read_dof_names(path: Path) -> tuple[str, ...]:
+    """DOF names, one per line (blank lines ignored)."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(f"DOF names file {str(path)!r} does not exist.") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise InputError(f"DOF names file {str(path)!r} cannot be read: {e}") from e
+    return tuple(line.strip() for line in text.splitlines() if line.strip())
