@@ -236,3 +236,33 @@ def test_fe_demo_mesh_reaches_modes_vtk(run, tmp_path):
     clamped = [p for p in range(len(got.points)) if p not in free_pts]
     assert clamped and np.all(v[clamped] == 0.0)
     assert np.abs(v[sorted(free_pts)]).max() > 0.0
+
+
+# -- C. campaign matrix CSV ------------------------------------------------------------------------------
+
+@pytest.mark.parametrize(
+    ("content", "words"),
+    [
+        (b"\x89HDF\r\n\x1a\n\x00\x00\x00\x00\x00\x08\x08\x00\x04\x00\x10\x00" * 50, ("m.csv", "not a text")),
+        (b"application,file,section\nA1,rec.nc,\xe9t\xe9\n", ("m.csv", "UTF-8", "line 2")),
+        (b"application,file\nA1,\n", ("m.csv", "line 2", "no file")),
+        (b"application,file,temperature_c\nA1,rec.nc,inf\n", ("m.csv", "line 2", "temperature_c")),
+        (b"application,file,rpm\nA1,rec.nc,-900\n", ("m.csv", "line 2", "rpm", "> 0")),
+        (b"application,file,pressure_bar\nA1,rec.nc,nan\n", ("m.csv", "line 2", "pressure_bar")),
+        (b"application,file,speed_kmh\nA1,rec.nc,-5\n", ("m.csv", "line 2", "speed_kmh")),
+    ],
+    ids=["binary", "latin1", "empty-file-cell", "temperature-inf", "rpm-negative", "pressure-nan", "speed-negative"],
+)
+def test_bad_matrix_csv_refused_before_any_analysis(run, tmp_path, content, words):
+    from squealkit.campaign.matrix import read_matrix
+
+    m = tmp_path / "m.csv"
+    m.write_bytes(content)
+    with pytest.raises(InputError) as e:
+        read_matrix(m)
+    _one_line(e, *words)
+    out = tmp_path / "o"
+    r = run("campaign", str(m), "--out", str(out), "--mic", "mic", "--displacement", "displacement",
+            "--radius", "0.05", "--rpm", "900", "--no-report")
+    _cli_refuses(r, "m.csv")
+    assert not out.exists()  # nothing written
