@@ -266,3 +266,155 @@ def test_bad_matrix_csv_refused_before_any_analysis(run, tmp_path, content, word
             "--radius", "0.05", "--rpm", "900", "--no-report")
     _cli_refuses(r, "m.csv")
     assert not out.exists()  # nothing written
+
+
+# -- D. DuckDB campaign store ----------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def good_store(tmp_path_factory):
+    """A valid store of about 1 MB (3 000 applications of 20 events), written by CampaignStore itself."""
+    pytest.importorskip("duckdb")
+    from squealkit.campaign.store import CampaignStore
+
+    p = tmp_path_factory.mktemp("store") / "good.duckdb"
+    with CampaignStore(p) as s:
+        s.put_many([({"application": f"A{i}", "file": "x" * 50, "peak_dba": float(i)},
+                     [{"application": f"A{i}", "event": j, "frequency_hz": 1.0 * j} for j in range(20)])
+                    for i in range(3000)])
+    return p
+
+
+def _make_store(kind, path, good):
+    import shutil
+
+    import duckdb
+
+    if kind == "random":
+        path.write_bytes(np.random.default_rng(1).bytes(300_000))
+    elif kind == "zero":
+        path.write_bytes(b"")
+    elif kind == "truncated":
+        shutil.copy(good, path)
+        with open(path, "r+b") as f:
+            f.truncate(path.stat().st_size // 2)
+    elif kind == "flipped":
+        shutil.copy(good, path)
+        with open(path, "r+b") as f:
+            f.seek(12288)
+            f.write(b"\xff" * 4096)
+    elif kind == "folder":
+        path.mkdir()
+    elif kind == "sqlite":
+        import sqlite3
+
+        c = sqlite3.connect(path)
+        c.execute("create table t(x)")
+        c.commit()
+        c.close()
+    elif kind == "text":
+        path.write_text("application,file\n")
+    elif kind == "other-columns":
+        c = duckdb.connect(str(path))
+        c.execute("create table applications(id int, name varchar)")
+        c.close()
+    elif kind == "view-events":
+        c = duckdb.connect(str(path))
+        c.execute("create view events as select 1 as x")
+        c.close()
+    elif kind == "user-table":
+        c = duckdb.connect(str(path))
+        c.execute("create table budget(x int)")
+        c.execute("insert into budget values (42)")
+        c.close()
+    else:
+        raise AssertionError(kind)
+
+
+_STORE_CASES = {
+    "random": "not a DuckDB", "zero": "empty", "truncated": "damaged", "flipped": "damaged",
+    "folder": "folder", "sqlite": "SQLite", "text": "not a DuckDB", "other-columns": "applications",
+    "view-events": "events", "user-table": "budget",
+}
+
+
+def _snapshot(path):
+    return sorted(p.name for p in path.iterdir()) if path.is_dir() else path.read_bytes()
+
+
+@pytest.mark.parametrize("kind", list(_STORE_CASES))
+def test_bad_store_refused_and_left_unchanged(tmp_path, good_store, kind):
+    from squealkit.campaign.store import CampaignStore
+
+    p = tmp_path / "campaign.duckdb"
+    _make_store(kind, p, good_store)
+    before = _snapshot(p)
+    with pytest.raises(InputError) as e:
+        CampaignStore(p)
+    _one_line(e, "campaign.duckdb", _STORE_CASES[kind])
+    assert _snapshot(p) == before
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["campaign.duckdb"]  # no WAL or other file left
+
+
+def test_bad_store_cli_exit_2(run, tmp_path, good_store):
+    # one CLI case (the rest share the API's path): a SQLite file must not make DuckDB fetch an extension
+    from squealkit.campaign.synthetic import synthetic_campaign  # noqa: F401  (the campaign extra is there)
+
+    out = tmp_path / "o"
+    out.mkdir()
+    _make_store("sqlite", out / "campaign.duckdb", good_store)
+    before = _snapshot(out / "campaign.duckdb")
+    m = tmp_path / "m.csv"
+    (tmp_path / "r.nc").write_bytes(b"")
+    m.write_text("application,file\nA1,r.nc\n")
+    r = run("campaign", str(m), "--out", str(out), "--mic", "mic", "--displacement", "displacement",
+            "--radius", "0.05", "--rpm", "900", "--no-report")
+    _cli_refuses(r, "campaign.duckdb", "SQLite")
+    assert _snapshot(out / "campaign.duckdb") == before
+
+
+def test_store_locked_by_another_process(tmp_path, good_store):
+    import shutil
+    import subprocess
+    import sys
+
+    from squealkit.campaign.store import CampaignStore
+
+    p = tmp_path / "campaign.duckdb"
+    shutil.copy(good_store, p)
+    holder = subprocess.Popen([sys.executable, "-c", "import duckdb, sys, time; c = duckdb.connect(sys.argv[1]); "
+                               "print('held', flush=True); time.sleep(60)", str(p)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        with pytest.raises(InputError) as e:
+            CampaignStore(p)
+        _one_line(e, "campaign.duckdb", "in use")
+    finally:
+        holder.kill()
+        holder.wait()
+
+
+def test_read_only_store(tmp_path, good_store):
+    import os
+    import shutil
+    import subprocess
+    import sys
+
+    p = tmp_path / "campaign.duckdb"
+    shutil.copy(good_store, p)
+    code = ("import sys\nfrom squealkit.campaign.store import CampaignStore\nfrom squealkit._validation import "
+            "InputError\ntry:\n    CampaignStore(sys.argv[1])\nexcept InputError as e:\n    print(e)\n    sys.exit(3)\n")
+    if os.geteuid() == 0:  # root writes read-only files: drop the capability that lets it
+        if not shutil.which("setpriv"):
+            pytest.skip("needs setpriv to drop root's dac_override")
+        prefix = ["setpriv", "--bounding-set=-dac_override,-dac_read_search", "--"]
+    else:
+        prefix = []
+    p.chmod(0o444)
+    tmp_path.chmod(0o555)
+    try:
+        r = subprocess.run([*prefix, sys.executable, "-c", code, str(p)], capture_output=True, text=True,
+                           env={**os.environ}, timeout=120)
+    finally:
+        tmp_path.chmod(0o755)
+    assert r.returncode == 3, (r.returncode, r.stdout, r.stderr)
+    assert "campaign.duckdb" in r.stdout and "\n" not in r.stdout.strip()
