@@ -418,3 +418,94 @@ def test_read_only_store(tmp_path, good_store):
         tmp_path.chmod(0o755)
     assert r.returncode == 3, (r.returncode, r.stdout, r.stderr)
     assert "campaign.duckdb" in r.stdout and "\n" not in r.stdout.strip()
+
+
+# -- E. public API given the wrong type ------------------------------------------------------------------
+
+def _public_functions_taking_a_model():
+    import importlib
+    import inspect
+
+    out = {}
+    for m in ("squealkit.stability", "squealkit.transient", "squealkit.nonlinear", "squealkit.uncertainty",
+              "squealkit.stability.sparse", "squealkit.stability.fe_sweep"):
+        mod = importlib.import_module(m)
+        for name in mod.__all__:
+            f = getattr(mod, name)
+            if inspect.isfunction(f) and next(iter(inspect.signature(f).parameters), None) == "model":
+                out[f"{f.__module__}.{name}"] = f
+    return out
+
+
+_REQUIRED = {"theta": 0.0, "mu": 0.3, "parameter": "k1", "rpm": 100.0, "duration": 0.01, "tan_theta": 0.0,
+             "uncertain": {}, "samples": 8, "omega": 1.0, "lam": [1j], "X": [[1.0]]}
+_TAKING_A_MODEL = _public_functions_taking_a_model()
+
+
+@pytest.mark.parametrize("name", sorted(_TAKING_A_MODEL))
+def test_every_public_function_taking_a_model_checks_its_type(name):
+    import inspect
+
+    from squealkit._validation import InputTypeError
+
+    f = _TAKING_A_MODEL[name]
+    params = list(inspect.signature(f).parameters.values())[1:]
+    kwargs = {p.name: _REQUIRED[p.name] for p in params
+              if p.default is p.empty and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
+    with pytest.raises(InputTypeError) as e:  # both an InputError and a TypeError
+        f("lv2013", **kwargs)
+    _one_line(e, "model must be", "str", "'lv2013'")
+    assert isinstance(e.value, TypeError) and isinstance(e.value, InputError)
+
+
+def _lc_model():
+    from squealkit.models.config import get_preset
+
+    return get_preset("lv2013")
+
+
+def _e_case(name, tmp_path):
+    import xarray as xr
+
+    from squealkit.io import load_dataset, save_blocks
+    from squealkit.nonlinear import limit_cycle_branch
+    from squealkit.stability.sparse import band_eigs
+    from squealkit.transient import transient_summary
+
+    if name == "band-k-0":
+        from squealkit.data import nlevp_path
+
+        m = load_fe_model(nlevp_path("disk_brake100.mat"))
+        return lambda: band_eigs(m, 6.28, 1.0, band=(0.1, 0.5), k=0), ("k=0", ">= 1")
+    if name == "band-friction-model":
+        return lambda: band_eigs(_lc_model(), 6.28, 1.0), ("model must be an FEModel", "PinOnDisc3DOF")
+    if name == "summary-dict":
+        return lambda: transient_summary({"a": 1}), ("ds must be an xarray.Dataset", "dict")
+    if name == "summary-other-dataset":
+        return (lambda: transient_summary(xr.Dataset({"a": ("x", [1.0])})), ("ds", "simulate"))
+    if name == "lc-harmonics-0":
+        return lambda: limit_cycle_branch(_lc_model(), (0.3, 0.8), harmonics=0), ("harmonics=0", ">= 1")
+    if name == "lc-harmonics-float":
+        return lambda: limit_cycle_branch(_lc_model(), (0.3, 0.8), harmonics=2.5), ("harmonics=2.5", "integer")
+    if name == "load-garbage":
+        (tmp_path / "g.nc").write_bytes(np.random.default_rng(2).bytes(5000))
+        return lambda: load_dataset(tmp_path / "g.nc"), ("g.nc",)
+    if name == "load-empty-zarr":
+        (tmp_path / "e.zarr").mkdir()
+        return lambda: load_dataset(tmp_path / "e.zarr"), ("e.zarr",)
+    if name == "save-blocks-mismatch":
+        b1 = xr.Dataset({"a": ("time", [1.0, 2.0])})
+        b2 = xr.Dataset({"b": ("time", [1.0])})
+        return lambda: save_blocks([b1, b2], tmp_path / "x.nc"), ("block 1", "'b'", "'a'")
+    raise AssertionError(name)
+
+
+@pytest.mark.parametrize("case", ["band-k-0", "band-friction-model", "summary-dict", "summary-other-dataset",
+                                  "lc-harmonics-0", "lc-harmonics-float", "load-garbage", "load-empty-zarr",
+                                  "save-blocks-mismatch"])
+def test_public_api_wrong_argument_one_line(tmp_path, case):
+    call, words = _e_case(case, tmp_path)
+    with pytest.raises((InputError, TypeError)) as e:
+        call()
+    _one_line(e, *words)
+    assert not (tmp_path / "x.nc").exists()

@@ -25,7 +25,7 @@ from threadpoolctl import threadpool_limits
 
 from .. import __version__
 from .._threads import thread_limit
-from .._validation import InputError, validate_angle, validate_array_finite, validate_positive
+from .._validation import InputError, validate_angle, validate_array_finite, validate_model, validate_positive
 from ..models.fe import FEModel, rpm_to_omega
 from . import reduction
 from ._kernels import derived_quantities
@@ -217,6 +217,7 @@ def fe_stability_map(
     >>> sorted(ds.sizes.items())
     [('mode', 100), ('mu', 2), ('rpm', 2)]
     """
+    validate_model(model, kind="fe")
     rpm_a = _validate_grid("rpm", rpm)
     mu_a = _validate_grid("mu", model.mu_ref if mu is None else mu)
     t = _tan_theta(theta)
@@ -503,6 +504,7 @@ def fe_critical_friction(
     >>> float(fe_critical_friction(m, [60.0], mu_max=1.0).mu_critical[0].round(4))  # 2 |KR12| mu = 1.2 - 1
     0.1
     """
+    validate_model(model, kind="fe")
     rpm_a = _validate_grid("rpm", rpm)
     mu_max = validate_positive("mu_max", 2.0 * model.mu_ref if mu_max is None else mu_max)
     t = _tan_theta(theta)
@@ -576,6 +578,7 @@ def fe_modes(
         ``(dof, mode)``: ``shape_real``, ``shape_imag`` (largest amplitude 1, real there).
         Attributes ``verdict``, ``rpm``, ``mu``, ``theta``.
     """
+    validate_model(model, kind="fe")
     rpm = float(_validate_grid("rpm", rpm)[0])
     mu = float(model.mu_ref if mu is None else mu)
     t = _tan_theta(theta)
