@@ -126,6 +126,17 @@ def test_malformed_fe_files_refused_in_one_line(tmp_path, case):
     _one_line(e, *words)
 
 
+@pytest.mark.parametrize("case", ["mat-zeros", "v73-bigrows", "mat-cplx-sparse", "huge-decl"])
+def test_malformed_fe_files_cli_exit_2(run, tmp_path, case):
+    kwargs, words = _fe_case(case, tmp_path)
+    if "file" in kwargs:
+        fe = f'file = "{kwargs["file"].name}"'
+    else:
+        fe = "files = {" + ", ".join(f'{k} = "{v.name}"' for k, v in kwargs["files"].items()) + "}"
+    (tmp_path / "fe.toml").write_text(f'model = "fe"\n[fe]\n{fe}\n')
+    _cli_refuses(run("critical", "--config", str(tmp_path / "fe.toml"), "--rpm", "100"), "fe.toml", *words)
+
+
 @pytest.mark.parametrize(
     ("mats", "words"),
     [

@@ -53,7 +53,8 @@ def _h5_sparse(key: str, obj: Any, path: Path) -> sp.csc_matrix:
     try:
         n_rows = int(np.asarray(raw).reshape(-1)[0])
     except (TypeError, ValueError, IndexError):
-        raise bad(f"its MATLAB_sparse attribute (the number of rows) is {raw!r}, not an integer") from None
+        shown = raw.decode(errors="replace") if isinstance(raw, bytes) else raw
+        raise bad(f"its MATLAB_sparse attribute (the number of rows) is {shown!r}, not an integer") from None
     if n_rows < 0:
         raise bad(f"its MATLAB_sparse attribute (the number of rows) is {n_rows}")
     if "jc" not in obj:
@@ -102,6 +103,8 @@ def read_mat(path: str | Path) -> dict[str, Any]:
 
         if h5py.is_hdf5(p):
             return _h5_matrices(p)
+    except InputError:
+        raise
     except (OSError, KeyError, ValueError) as e:  # h5py: damaged or truncated file, a missing object
         raise InputError(f"{p.name}: cannot be read: {e}") from e
     try:
