@@ -112,10 +112,13 @@ def _fe_case(name, tmp_path):
         files = {"M": _mtx(tmp_path / "M.mtx", (10**8, 10**8), [(0, 0, 1.0)]),
                  "K1": _mtx(tmp_path / "K1.mtx", (10**8, 10**8), [(0, 0, 1.0)])}
         return {"files": files}, ("100000000", "DOF")
+    if name == "mtx-dense-decl":  # a 1e5 x 1e5 dense array declared in a few bytes: 74.5 GiB, MemoryError
+        (tmp_path / "K1.mtx").write_text("%%MatrixMarket matrix array real general\n100000 100000\n1.0\n")
+        return {"files": {"M": tmp_path / "K1.mtx", "K1": tmp_path / "K1.mtx"}}, ("K1.mtx", "10000000000")
     raise AssertionError(name)
 
 
-@pytest.mark.parametrize("case", ["mat-zeros", "v73-nojc", "v73-bigrows", "v73-strattr", "v73-badir",
+@pytest.mark.parametrize("case", ["mtx-dense-decl", "mat-zeros", "v73-nojc", "v73-bigrows", "v73-strattr", "v73-badir",
                                   "mat-cplx-sparse", "mat-cplx-M-sparse", "op4-nan", "tiny-M", "huge-decl"])
 def test_malformed_fe_files_refused_in_one_line(tmp_path, case):
     kwargs, words = _fe_case(case, tmp_path)
