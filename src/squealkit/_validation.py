@@ -18,13 +18,17 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "InputError",
+    "InputTypeError",
     "available_memory",
     "check_memory",
     "parse_range",
     "validate_angle",
     "validate_array_finite",
+    "validate_dataset",
     "validate_finite",
     "validate_fs",
+    "validate_int",
+    "validate_model",
     "validate_positive",
     "validate_sign",
 ]
@@ -36,6 +40,63 @@ class InputError(ValueError):
     Subclasses ``ValueError`` so library users can catch it as such; the CLI reports it
     in one line and exits with code 2.
     """
+
+
+class InputTypeError(InputError, TypeError):
+    """An argument of the wrong type (a string where a model is wanted, a dict for a Dataset).
+
+    Both an :class:`InputError` (the CLI's exit 2) and a ``TypeError`` (Python's convention).
+    """
+
+
+def _short(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def validate_model(model: object, name: str = "model", *, kind: str = "any") -> object:
+    """Return ``model`` if it is a squealkit model, else one line naming the argument and its type.
+
+    ``kind``: ``"any"`` (a friction model or an :class:`~squealkit.models.fe.FEModel`), ``"friction"``
+    (a preset, a rig's model, a matrix model) or ``"fe"``.
+    """
+    from .models._base import FrictionModel
+    from .models.fe import FEModel
+
+    kinds = {"any": ((FrictionModel, FEModel), "a squealkit model (get_preset, load_model, FEModel)"),
+             "friction": ((FrictionModel,), "a squealkit model (get_preset, load_model; not an FE model here)"),
+             "fe": ((FEModel,), "an FEModel (load_fe_model, FEModel.from_matrices)")}[kind]
+    if not isinstance(model, kinds[0]):
+        raise InputTypeError(f"{name} must be {kinds[1]}, not {type(model).__name__} {_short(model)}.")
+    return model
+
+
+def validate_dataset(ds: object, name: str = "ds", *, variables: Sequence[str] = (), attrs: Sequence[str] = (),
+                     what: str = "") -> object:
+    """Return ``ds`` if it is an ``xarray.Dataset`` holding ``variables`` and ``attrs``, else one line naming it.
+
+    ``what`` names the function whose result is wanted (``"simulate"``), for the message.
+    """
+    import xarray as xr
+
+    if not isinstance(ds, xr.Dataset):
+        of = f" ({what})" if what else ""
+        raise InputTypeError(f"{name} must be an xarray.Dataset{of}, not {type(ds).__name__} {_short(ds)}.")
+    missing = [v for v in variables if v not in ds.variables] + [a for a in attrs if a not in ds.attrs]
+    if missing:
+        of = f" {what}" if what else ""
+        raise InputError(f"{name} is not a{of} result: it has no {', '.join(map(repr, missing))}.")
+    return ds
+
+
+def validate_int(name: str, value: object, minimum: int, maximum: int | None = None) -> int:
+    """Return ``value`` as an int in ``[minimum, maximum]``, rejecting bools, floats and text."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise InputTypeError(f"Parameter {name}={_short(value)} must be an integer, not {type(value).__name__}.")
+    if value < minimum or (maximum is not None and value > maximum):
+        upper = f" and <= {maximum}" if maximum is not None else ""
+        raise InputError(f"Parameter {name}={value!r} must be an integer >= {minimum}{upper}.")
+    return int(value)
 
 
 def _as_float(name: str, value: object) -> float:

@@ -23,7 +23,7 @@ from typing import Any
 import xarray as xr
 
 from . import _accessor  # noqa: F401  (registers ds.squeal.plot(), also on loaded results)
-from ._validation import InputError
+from ._validation import InputError, validate_dataset
 
 __all__ = ["atomic_path", "check_output", "load_dataset", "output_folder", "save_blocks", "save_dataset",
            "save_figure", "write_text"]
@@ -352,7 +352,14 @@ def save_blocks(blocks: Iterable[xr.Dataset], path: str | Path, *, dim: str = "t
     with atomic_path(final, directory=engine == "zarr") as tmp:
         last: xr.Dataset | None = None
         n = 0
-        for block in blocks:
+        names: list[str] | None = None
+        for i, block in enumerate(blocks):
+            validate_dataset(block, f"block {i}")
+            here = sorted(str(v) for v in block.data_vars if dim in block[v].dims)
+            names = here if names is None else names
+            if here != names:
+                raise InputError(f"Cannot write {str(final)!r}: block {i} has the variables {here} along {dim!r}, "
+                                 f"block 0 has {names}; every block needs the same ones.")
             along = block[[v for v in block.data_vars if dim in block[v].dims]]
             along = along.drop_vars([c for c in along.coords if dim not in along[c].dims])
             along.attrs = {}
@@ -410,16 +417,26 @@ def load_dataset(path: str | Path) -> xr.Dataset:
     -------
     xarray.Dataset
         The dataset, loaded; the file is closed.
+
+    Raises
+    ------
+    InputError
+        If the file does not exist or is not a readable netCDF file / zarr store (one line naming it).
     """
     p = Path(path)
     engine = _engine_for(p)
     if not p.exists():
         raise InputError(f"Dataset {str(p)!r} does not exist.")
-    if engine == "zarr":
-        with xr.open_zarr(p, consolidated=False) as ds:
+    try:
+        if engine == "zarr":
+            with xr.open_zarr(p, consolidated=False) as ds:
+                return ds.load()
+        with xr.open_dataset(p, engine="h5netcdf") as ds:
             return ds.load()
-    with xr.open_dataset(p, engine="h5netcdf") as ds:
-        return ds.load()
+    except (OSError, ValueError, KeyError, TypeError) as e:  # h5py, h5netcdf and zarr on a foreign or damaged file
+        kind = "zarr store" if engine == "zarr" else "netCDF file"
+        text = str(e).splitlines()[0] if str(e) else type(e).__name__
+        raise InputError(f"Dataset {str(p)!r} is not a readable {kind}: {text}") from e
 
 
 def save_figure(fig: Any, path: str | Path, **kwargs: Any) -> Path:

@@ -44,7 +44,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from . import __version__
-from ._validation import InputError, check_memory, validate_angle, validate_finite
+from ._validation import InputError, check_memory, validate_angle, validate_dataset, validate_finite, validate_model
 from .models import FrictionModel, load_model
 from .models.config import _read_toml
 from .stability import ONSET_STATUS
@@ -496,12 +496,11 @@ def squeal_propensity(
     >>> ds.sobol_total.values.round(2).tolist()          # k3 drives mu_critical, m does not
     [1.03, 0.0]
     """
+    validate_model(model, kind="friction")
     from .scale import map_tasks
     from .stability import ModelEnsemble, ensemble_onset, ensemble_unstable
     from .stability.ensemble import _grid
 
-    if not isinstance(model, FrictionModel):
-        raise InputError(f"model must be a squealkit model, not {type(model).__name__}.")
     unc = parse_uncertain(uncertain, model) if isinstance(uncertain, Mapping) else tuple(uncertain)
     if not unc or not all(isinstance(p, UncertainParameter) for p in unc):
         raise InputError("uncertain must be a non-empty sequence of UncertainParameter (or an [uncertain] table).")
@@ -667,6 +666,7 @@ def propensity_summary(ds: xr.Dataset) -> dict[str, Any]:
         parameter ``first_order``, ``first_order_ci``, ``total``, ``total_ci``,
         ``spearman`` and ``unit`` (None without sensitivity).
     """
+    validate_dataset(ds, what="squeal_propensity")
     mc = ds["mu_critical"].values
     st = ds["onset_status"].values
     # order statistics with the censored samples at -inf (below the range) / +inf (above):

@@ -9,6 +9,7 @@ recording, relative to the matrix's folder or absolute). Known optional columns:
 from __future__ import annotations
 
 import csv
+import io
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,7 +18,16 @@ from .._validation import InputError
 
 __all__ = ["Application", "read_matrix"]
 
-_NUMBERS = ("pressure_bar", "temperature_c", "speed_kmh", "rpm")
+#: The numeric columns and the values each accepts (all finite): (lowest, lowest included, words).
+_NUMBER_RANGES = {
+    "pressure_bar": (0.0, True, ">= 0"),
+    "temperature_c": (-273.15, True, ">= -273.15 (absolute zero)"),
+    "speed_kmh": (0.0, True, ">= 0"),
+    "rpm": (0.0, False, "> 0"),
+}
+_NUMBERS = tuple(_NUMBER_RANGES)
+#: A matrix is a few MB of text at most (2,000 rows for a J2521 matrix are 200 kB).
+_MAX_BYTES = 64 * 2**20
 _MODES = ("drag", "stop")
 
 
@@ -60,7 +70,7 @@ def read_matrix(path: str | Path) -> tuple[Application, ...]:
     Parameters
     ----------
     path : str or Path
-        The matrix CSV (UTF-8, header row).
+        The matrix CSV (UTF-8, header row; another encoding is refused, not guessed).
 
     Returns
     -------
@@ -70,9 +80,10 @@ def read_matrix(path: str | Path) -> tuple[Application, ...]:
     Raises
     ------
     InputError
-        If the file is missing or empty, lacks the ``application`` or ``file`` column, or a
-        row has an empty or repeated id, no file, an unknown mode or a non-numeric condition;
-        the message names the line.
+        If the file is missing, empty, binary or not UTF-8, lacks the ``application`` or
+        ``file`` column, or a row has an empty or repeated id, no file, an unknown mode or a
+        condition that is not a finite number in its range (``rpm > 0``, ``pressure_bar`` and
+        ``speed_kmh >= 0``, ``temperature_c >= -273.15``); the message names the line.
 
     Examples
     --------
@@ -85,8 +96,7 @@ def read_matrix(path: str | Path) -> tuple[Application, ...]:
     p = Path(path)
     if not p.is_file():
         raise InputError(f"Test matrix {str(p)!r} does not exist.")
-    with open(p, newline="", encoding="utf-8-sig") as fh:
-        rows = list(csv.DictReader(fh))
+    rows = list(csv.DictReader(io.StringIO(_read_text(p), newline="")))
     if not rows:
         raise InputError(f"Test matrix {str(p)!r} has no application rows.")
     cols = set(rows[0])
@@ -101,9 +111,10 @@ def read_matrix(path: str | Path) -> tuple[Application, ...]:
         if app in seen:
             raise InputError(f"Test matrix {str(p)!r} line {line}: application {app!r} appears twice.")
         seen.add(app)
-        f = Path((r.get("file") or "").strip())
-        if not str(f):
+        f_text = (r.get("file") or "").strip()
+        if not f_text:  # (Path("") is ".": check the text)
             raise InputError(f"Test matrix {str(p)!r} line {line}: application {app!r} has no file.")
+        f = Path(f_text)
         mode = (r.get("mode") or "").strip().lower()
         if mode and mode not in _MODES:
             raise InputError(f"Test matrix {str(p)!r} line {line}: mode={mode!r} must be 'drag' or 'stop'.")
@@ -114,8 +125,37 @@ def read_matrix(path: str | Path) -> tuple[Application, ...]:
                 nums[c] = float(text) if text else math.nan
             except ValueError:
                 raise InputError(f"Test matrix {str(p)!r} line {line}: {c}={text!r} is not a number.") from None
+            low, inclusive, words = _NUMBER_RANGES[c]
+            x = nums[c]
+            if text and not (math.isfinite(x) and (x >= low if inclusive else x > low)):
+                raise InputError(f"Test matrix {str(p)!r} line {line}: column {c}={text!r} must be finite and "
+                                 f"{words} (application {app!r}).")
         extra = {k: str(v) for k, v in r.items()
                  if k not in ("application", "file", "section", "mode", *_NUMBERS) and k is not None}
         apps.append(Application(app, f if f.is_absolute() else (p.parent / f), (r.get("section") or "").strip(),
                                 mode, extra=extra, **nums))
     return tuple(apps)
+
+
+def _read_text(p: Path) -> str:
+    """The matrix's text: UTF-8 (a BOM allowed); anything else is refused, not guessed.
+
+    A Latin-1 or Windows-1252 file is refused rather than decoded with a fallback: a guessed
+    encoding can turn a file name into another one, and re-saving as UTF-8 is one step.
+    """
+    try:
+        with open(p, "rb") as fh:
+            raw = fh.read(_MAX_BYTES + 1)
+    except OSError as e:
+        raise InputError(f"Test matrix {str(p)!r} cannot be read: {e.strerror or e}.") from e
+    if len(raw) > _MAX_BYTES:
+        raise InputError(f"Test matrix {str(p)!r} is larger than {_MAX_BYTES // 2**20} MiB; a matrix is a CSV of "
+                         "one row per application.")
+    if b"\0" in raw[:8192]:
+        raise InputError(f"Test matrix {str(p)!r} is not a text CSV (binary data: a NUL byte near the start).")
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        line = raw[: e.start].count(b"\n") + 1
+        raise InputError(f"Test matrix {str(p)!r} line {line}: byte 0x{raw[e.start]:02x} is not UTF-8; "
+                         "save the matrix as UTF-8 (the encoding is not guessed).") from None

@@ -43,6 +43,41 @@ EVENT_COLUMNS = {
 }
 
 
+#: DuckDB's file header: 8 bytes of checksum, then the magic bytes.
+_DUCKDB_MAGIC = (8, b"DUCK")
+_SQLITE_MAGIC = b"SQLite format 3\0"
+
+
+def _check_file(path: Path) -> None:
+    """An existing store path is a non-empty DuckDB file (by its header), else one line saying what it is."""
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder, not a campaign store (a DuckDB file); give another --out.")
+    try:
+        with open(path, "rb") as f:
+            head = f.read(64)
+    except OSError as e:
+        raise InputError(f"{path}: the campaign store cannot be read: {e.strerror or e}.") from e
+    if not head:
+        raise InputError(f"{path}: the campaign store is empty (0 bytes), not a DuckDB file; remove it or give "
+                         "another --out.")
+    if head.startswith(_SQLITE_MAGIC):
+        raise InputError(f"{path}: is a SQLite database, not a DuckDB campaign store; give another --out.")
+    at, magic = _DUCKDB_MAGIC
+    if head[at:at + len(magic)] != magic:
+        raise InputError(f"{path}: is not a DuckDB file (no DuckDB header), so not a campaign store; "
+                         "give another --out.")
+
+
+def _store_error(path: Path, e: Exception) -> InputError:
+    """One line for a DuckDB error on opening or reading a store: in use, no permission, or damaged."""
+    text = str(e).splitlines()[0] if str(e) else type(e).__name__
+    if "could not set lock" in text.lower() or "conflicting lock" in text.lower():
+        return InputError(f"{path}: the campaign store is in use by another process (DuckDB could not lock it).")
+    if "permission denied" in text.lower() or "read-only" in text.lower():
+        return InputError(f"{path}: the campaign store cannot be opened for writing: permission denied.")
+    return InputError(f"{path}: the campaign store is damaged or not a DuckDB store: {text}")
+
+
 class CampaignStore:
     """A DuckDB file holding a campaign's applications and events (see the module docstring).
 
@@ -56,7 +91,11 @@ class CampaignStore:
     Raises
     ------
     InputError
-        If DuckDB is not installed (the ``campaign`` extra).
+        If DuckDB is not installed (the ``campaign`` extra), or ``path`` is not a squealkit
+        campaign store: a folder, an empty, damaged or non-DuckDB file (a SQLite file is
+        recognised and refused before DuckDB sees it), a store holding other tables or
+        columns, a read-only store or one in use by another process. The message is one line
+        naming the file; the file is left as it was.
     """
 
     def __init__(self, path: str | Path):
@@ -65,8 +104,53 @@ class CampaignStore:
         except ImportError as e:
             raise InputError("Campaigns need DuckDB: pip install 'squealkit[campaign]'.") from e
         self.path = Path(path)
-        self.con = duckdb.connect(str(self.path))
         self._limited = False
+        existed = self.path.exists()
+        if existed:
+            _check_file(self.path)
+        try:
+            # no extension is fetched or loaded for a file DuckDB does not recognise (a SQLite file
+            # would make it download sqlite_scanner)
+            self.con = duckdb.connect(str(self.path), config={"autoinstall_known_extensions": False,
+                                                               "autoload_known_extensions": False})
+        except duckdb.Error as e:
+            raise _store_error(self.path, e) from e
+        try:
+            if existed:
+                self._check_schema()
+            self._create()
+        except (duckdb.Error, InputError) as e:
+            self.con.close()
+            raise e if isinstance(e, InputError) else _store_error(self.path, e) from e
+
+    def _check_schema(self) -> None:
+        """An existing store holds only squealkit's tables and view, with their columns; all of it readable."""
+        objects = dict(self.con.execute(
+            "SELECT table_name, table_type FROM information_schema.tables WHERE table_schema = 'main'").fetchall())
+        ours = {"applications": "BASE TABLE", "events": "BASE TABLE", "squeal": "VIEW"}
+        other = sorted(set(objects) - set(ours))
+        if other:
+            raise InputError(f"{self.path}: not a squealkit campaign store: it holds other tables or views "
+                             f"({', '.join(other)}); give another --out.")
+        for name, kind in objects.items():
+            if kind != ours[name]:
+                raise InputError(f"{self.path}: not a squealkit campaign store: {name!r} is a "
+                                 f"{kind.lower()}, not a {ours[name].lower()}.")
+        for table, spec in (("applications", APPLICATION_COLUMNS), ("events", EVENT_COLUMNS)):
+            if table not in objects:
+                continue
+            cols = dict(self.con.execute("SELECT column_name, data_type FROM information_schema.columns "
+                                         "WHERE table_schema = 'main' AND table_name = ?", [table]).fetchall())
+            want = {k: v.split()[0] for k, v in spec.items()}
+            optional = {"status"} if table == "applications" else set()  # a store written before status
+            wrong = sorted(k for k in set(cols) | set(want)
+                           if cols.get(k) != want.get(k) and not (k in optional and k not in cols))
+            if wrong:
+                raise InputError(f"{self.path}: not a squealkit campaign store: table {table!r} has other "
+                                 f"columns ({', '.join(wrong[:5])}{', ...' if len(wrong) > 5 else ''}).")
+            self.con.execute(f"SELECT * FROM {table}").fetchall()  # every block read: a damaged file says so now
+
+    def _create(self) -> None:
         cols = ", ".join(f"{k} {v}" for k, v in APPLICATION_COLUMNS.items())
         self.con.execute(f"CREATE TABLE IF NOT EXISTS applications ({cols})")
         # a store written before the status column: add it, derived from error

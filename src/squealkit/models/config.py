@@ -24,6 +24,8 @@ A model file (all sections optional; SI units, angles in rad or as ``*_deg`` in 
     # files = {M = "M.mtx", K1 = "K1.mtx", KR = "KR.mtx"}     # one file per matrix
     names = {M = "MAA"}        # the names in the file where they differ (optional)
     omega_ref = 1.0            # rad/s; mu_ref, f_ref likewise (defaults 1)
+    mesh = "mesh.vtu"          # optional: the mesh of the DOFs (meshio), for modes --vtk
+    dof_names = "dof_names.txt"  # optional: one DOF name per line (node12.x: mesh point 12, x)
 
 File paths are relative to the model file. An ``[uncertain]`` table belongs to
 ``montecarlo`` and is ignored here; any other table or key is an error (a typo such as
@@ -72,7 +74,57 @@ _TOP_KEYS = {"model", "preset", "parameters", "rig", "matrices", "fe", "descript
 _OTHER_TABLES = {"uncertain"}
 #: A model file is text of a few kB (large matrices go in the files an [fe] table names).
 _MAX_FILE_BYTES = 16 * 2**20
-_FE_KEYS = ("file", "files", "names", "omega_ref", "mu_ref", "f_ref")
+
+#: The type of each key a model file may hold, table by table (a mapping's values: ``"files.*"``).
+#: One check (:func:`_check_types`) says which key has which type and what is expected.
+_NUMBER = (int, float)
+_SCHEMA: dict[str, dict[str, type | tuple[type, ...]]] = {
+    "": {"model": str, "preset": str, "description": str, "parameters": Mapping, "rig": Mapping,
+         "matrices": Mapping, "fe": Mapping, "uncertain": Mapping},
+    "fe": {"file": str, "files": Mapping, "files.*": str, "names": Mapping, "names.*": str,
+           "omega_ref": _NUMBER, "mu_ref": _NUMBER, "f_ref": _NUMBER, "mesh": str, "dof_names": str},
+    "rig": {"*": (*_NUMBER, str)},
+    "parameters": {"*": (*_NUMBER, str)},
+}
+_FE_KEYS = tuple(k for k in _SCHEMA["fe"] if "." not in k)
+_TOML_TYPE = [(bool, "a boolean"), (int, "an integer"), (float, "a float"), (str, "a string"),
+              (Mapping, "a table"), (list, "an array")]
+
+
+def _toml_type(value: Any) -> str:
+    """The TOML name of a parsed value's type ("an integer", "an array", ...)."""
+    for t, name in _TOML_TYPE:
+        if isinstance(value, t):
+            return name
+    return f"a {type(value).__name__}"
+
+
+def _expected(t: type | tuple[type, ...]) -> str:
+    names = {int: "number", float: "number", str: "string", Mapping: "table", list: "array", bool: "boolean"}
+    ts = t if isinstance(t, tuple) else (t,)
+    return " or ".join(dict.fromkeys(f"a {names[x]}" for x in ts))
+
+
+def _check_types(table: Mapping[str, Any], name: str = "") -> None:
+    """Each key of ``table`` (and of its sub-tables) of the type the schema gives, else one line naming it."""
+    schema = _SCHEMA.get(name, {})
+    for key, value in table.items():
+        want = schema.get(key, schema.get("*"))
+        if want is None:
+            continue  # unknown keys are the caller's (with "did you mean")
+        where = f"[{name}] {key}" if name else key
+        ok = isinstance(value, want) and not (isinstance(value, bool) and bool not in (want if isinstance(
+            want, tuple) else (want,)))
+        if not ok:
+            raise InputError(f"{where} = {value!r} is {_toml_type(value)}; expected {_expected(want)}.")
+        if isinstance(value, Mapping):
+            if name == "":
+                _check_types(value, key)
+            elif f"{key}.*" in schema:
+                sub = schema[f"{key}.*"]
+                for k, v in value.items():
+                    if not isinstance(v, sub) or isinstance(v, bool):
+                        raise InputError(f"[{name}] {key}.{k} = {v!r} is {_toml_type(v)}; expected {_expected(sub)}.")
 
 
 def get_preset(name: str) -> FrictionModel:
@@ -122,12 +174,9 @@ def _fe_from_table(table: Any, base_dir: Path | None) -> FEModel:
     for key in table:
         if key not in _FE_KEYS:
             raise InputError(f"Unknown [fe] key {key!r}; known: {', '.join(_FE_KEYS)}.")
-    for key in ("files", "names"):
-        if key in table and not isinstance(table[key], Mapping):
-            raise InputError(f"[fe] {key} must be a table, e.g. {key} = {{M = ...}}.")
     refs = {k: validate_finite(k, table[k]) for k in ("omega_ref", "mu_ref", "f_ref") if k in table}
     return load_fe_model(table.get("file"), files=table.get("files"), names=table.get("names"),
-                         base_dir=base_dir, **refs)
+                         base_dir=base_dir, mesh=table.get("mesh"), dof_names=table.get("dof_names"), **refs)
 
 
 def model_from_dict(doc: Mapping[str, Any], base_dir: str | Path | None = None) -> FrictionModel | FEModel:
@@ -151,9 +200,12 @@ def model_from_dict(doc: Mapping[str, Any], base_dir: str | Path | None = None) 
     Raises
     ------
     InputError
-        On an unknown table or key (with "did you mean"), a preset of another model kind, or
-        any invalid value.
+        On an unknown table or key (with "did you mean"), a key of the wrong type (the key,
+        its type and the expected one), a preset of another model kind, or any invalid value.
     """
+    if not isinstance(doc, Mapping):
+        raise InputError(f"doc must be a mapping (a parsed model file), not {type(doc).__name__}.")
+    _check_types(doc)
     unknown = sorted(set(doc) - _TOP_KEYS - _OTHER_TABLES)
     if unknown:
         # a typo ([paramters]) must not silently give the default model
@@ -290,15 +342,19 @@ def parse_assignments(items: Iterable[str]) -> dict[str, float | str]:
     Raises
     ------
     InputError
-        If an item is not ``NAME=VALUE`` or a number is not finite.
+        If an item is not a ``NAME=VALUE`` string or a number is not finite.
 
     Examples
     --------
     >>> parse_assignments(["m1=0.05", "kinematics=consistent"])
     {'m1': 0.05, 'kinematics': 'consistent'}
     """
+    if isinstance(items, str | bytes):
+        raise InputError(f"items must be a list of NAME=VALUE strings, not one str ({items!r}).")
     out: dict[str, float | str] = {}
     for item in items:
+        if not isinstance(item, str):
+            raise InputError(f"--set {item!r} is not NAME=VALUE (a string), it is {type(item).__name__}.")
         name, sep, value = item.partition("=")
         name = name.strip()
         if not sep or not name:

@@ -40,20 +40,83 @@ _STIFFNESS = ("K1", "KR", "KGeo")
 _DENSE_CHECK_MAX = 3000
 
 
-def _as_csr(name: str, value: Any) -> sp.csr_matrix:
-    """One matrix as a float64 CSR matrix: square and finite, else a one-line error naming it."""
-    try:
-        mat = sp.csr_matrix(value, dtype=np.float64) if sp.issparse(value) else sp.csr_matrix(
-            np.asarray(value, dtype=np.float64))
-    except (TypeError, ValueError) as e:
-        raise InputError(f"Matrix {name} must be a numeric matrix: {e}") from e
+#: Smallest largest mass entry accepted (the small models refuse masses below 1e-30 kg).
+_MIN_MASS = 1e-30
+#: Largest frequency scale sqrt(max|K1| / max|M|) / (2 pi) [Hz] accepted: far above any structural
+#: vibration (an element of 0.1 mm of steel is near 1e7 Hz); beyond it M or K1 is in the wrong units.
+_MAX_FREQ_SCALE = 1e9
+
+
+def _real_matrix(name: str, value: Any) -> Any:
+    """One matrix, sparse (as given) or a dense 2-D float array: real, square and finite, else one line naming it.
+
+    Nothing of size n is allocated for a sparse matrix here: the declared size is checked
+    against its entries (:func:`_check_dofs`) before the CSR form (n + 1 row pointers) is built.
+    """
+    if sp.issparse(value):
+        mat = value
+        dtype = mat.dtype
+    else:
+        try:
+            mat = np.asarray(value)
+        except (TypeError, ValueError) as e:
+            raise InputError(f"Matrix {name} must be a numeric matrix: {e}") from e
+        dtype = mat.dtype
+    if dtype.kind == "c":
+        raise InputError(f"Matrix {name} is complex ({dtype}); FE matrices must be real "
+                         "(a complex part would be dropped).")
+    if dtype.kind not in "biuf":
+        raise InputError(f"Matrix {name} must be a real numeric matrix, got dtype {dtype}.")
     if mat.ndim != 2 or mat.shape[0] != mat.shape[1]:
         raise InputError(f"Matrix {name} must be square, got shape {mat.shape}.")
-    if not np.all(np.isfinite(mat.data)):
+    values = mat.data if sp.issparse(mat) else mat
+    if not np.all(np.isfinite(values)):
         raise InputError(f"Matrix {name} contains a non-finite value.")
-    mat.sum_duplicates()
-    mat.eliminate_zeros()
-    return mat
+    return mat if sp.issparse(mat) else mat.astype(np.float64)
+
+
+def _check_dofs(mats: dict[str, Any]) -> None:
+    """Every DOF has an entry in some matrix, checked in O(entries) before anything of size n is built.
+
+    A DOF whose row is empty in M, every C and every K makes ``det(lambda^2 M + lambda C + K)``
+    zero for every lambda (a singular pencil): no eigenvalue means anything. This also refuses
+    a declared size far beyond the entries given (1e8 x 1e8 with one entry) before allocating.
+    """
+    n = next(iter(mats.values())).shape[0]
+    if sum((m.nnz if sp.issparse(m) else n * n) for m in mats.values()) < n:
+        entries = sum(m.nnz for m in mats.values() if sp.issparse(m))
+        raise InputError(f"The matrices declare {n} DOFs but hold only {entries} entries: a DOF with no entry in "
+                         "any matrix (no mass, damping or stiffness) makes the problem singular.")
+    rows = [sp.coo_matrix(m).row for m in mats.values() if sp.issparse(m)]
+    dense = [np.flatnonzero(np.any(m != 0, axis=1)) for m in mats.values() if not sp.issparse(m)]
+    covered = np.zeros(n, dtype=bool)
+    for r in (*rows, *dense):
+        covered[r] = True
+    if not covered.all():
+        first = int(np.flatnonzero(~covered)[0])
+        raise InputError(f"DOF {first} (of {n}) has no entry in any matrix (no mass, damping or stiffness): "
+                         f"the problem is singular; {int((~covered).sum())} DOFs are like it.")
+
+
+def _as_csr(mat: Any) -> sp.csr_matrix:
+    out = sp.csr_matrix(mat, dtype=np.float64)
+    out.sum_duplicates()
+    out.eliminate_zeros()
+    return out
+
+
+def _check_scale(M: sp.csr_matrix, K1: sp.csr_matrix) -> None:
+    """M and K1 of plausible scale: M not vanishing, the frequency scale sqrt(|K1|/|M|) not absurd."""
+    m = abs(M).max() if M.nnz else 0.0
+    if 0.0 < m < _MIN_MASS:
+        raise InputError(f"Matrix M is implausibly small: its largest entry is {m:.3g} (below {_MIN_MASS:g} kg); "
+                         "check the units of the matrices.")
+    k = abs(K1).max() if K1.nnz else 0.0
+    if m > 0.0 and k > 0.0:
+        f = math.sqrt(k / m) / (2.0 * math.pi)
+        if not f <= _MAX_FREQ_SCALE:
+            raise InputError(f"Matrices M and K1 are of implausible relative scale: sqrt(max|K1| / max|M|) / 2 pi = "
+                             f"{f:.3g} Hz (above {_MAX_FREQ_SCALE:g} Hz); check the units of M and K1.")
 
 
 def _check_mass(M: sp.csr_matrix) -> None:
@@ -124,18 +187,22 @@ class FEModel:
         for name in ("M", "K1"):
             if getattr(self, name) is None:
                 raise InputError(f"An FE model needs matrix {name}.")
-        n = None
+        mats: dict[str, Any] = {}
         for name in FE_MATRICES:
             value = getattr(self, name)
             if value is None:
                 continue
-            mat = _as_csr(name, value)
-            if n is None:
-                n = mat.shape[0]
-            elif mat.shape[0] != n:
+            mat = _real_matrix(name, value)
+            n = mats["M"].shape[0] if mats else mat.shape[0]
+            if mat.shape[0] != n:
                 raise InputError(f"Matrix {name} must be {n}x{n} like M, got shape {mat.shape}.")
-            set_(self, name, mat)
+            mats[name] = mat
+        _check_dofs(mats)
+        for name, mat in mats.items():
+            set_(self, name, _as_csr(mat))
+        n = self.M.shape[0]
         _check_mass(self.M)
+        _check_scale(self.M, self.K1)
         for name in ("omega_ref", "mu_ref", "f_ref"):
             set_(self, name, validate_positive(name, getattr(self, name)))
         names = tuple(f"q{i}" for i in range(n)) if self.dof_names is None else tuple(map(str, self.dof_names))
@@ -168,8 +235,10 @@ class FEModel:
         Raises
         ------
         InputError
-            For an unknown matrix name, a matrix that is not square, of another size than ``M``
-            or not finite, or ``M`` not symmetric positive semidefinite; the message names it.
+            For an unknown matrix name, a matrix that is complex, not square, of another size than
+            ``M`` or not finite, a DOF with no entry in any matrix, ``M`` not symmetric positive
+            semidefinite, or ``M`` of implausible scale (largest entry below 1e-30, or
+            ``sqrt(max|K1|/max|M|)/2 pi`` above 1e9 Hz); the message names it.
         """
         for name in mats:
             if name not in FE_MATRICES:

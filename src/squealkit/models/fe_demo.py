@@ -483,8 +483,8 @@ def write_fe_demo(model: Mapping[str, Any], out_dir: str | Path) -> Path:
 
     The folder is staged and moved into place only when complete (:func:`squealkit.io.atomic_path`).
     The TOML reads ``model = "fe"`` with ``[fe] files = {M = "M.mtx", ...}``, ``omega_ref``,
-    ``mu_ref`` and ``f_ref``; ``mesh.vtu`` (when meshio is installed) holds the element
-    vertices for viewing mode shapes.
+    ``mu_ref``, ``f_ref``, ``dof_names = "dof_names.txt"`` and (when meshio is installed)
+    ``mesh = "mesh.vtu"``, the element vertices for viewing mode shapes (``modes --vtk``).
 
     Returns
     -------
@@ -516,7 +516,7 @@ def write_fe_demo(model: Mapping[str, Any], out_dir: str | Path) -> Path:
             f"mu_ref = {model['mu_ref']!r}  # friction coefficient of KR\n"
             f"f_ref = {model.get('f_ref', 1.0)!r}  # Hz: reference of D4\n"
         )
-        (stage / "brake.toml").write_text(toml)
+        toml += 'dof_names = "dof_names.txt"  # node{k}.x/y/z: mesh point k\n'
         mesh = model.get("mesh")
         if mesh is not None:
             try:
@@ -529,4 +529,6 @@ def write_fe_demo(model: Mapping[str, Any], out_dir: str | Path) -> Path:
                     meshio.Mesh(mesh["points"], [("hexahedron", mesh["cells"]["hexahedron"])],
                                 cell_data={"disc": [mesh["disc"].astype(np.int8)]}),
                 )
+                toml += 'mesh = "mesh.vtu"  # element vertices, for modes --vtk\n'
+        (stage / "brake.toml").write_text(toml)
     return out / "brake.toml"

@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
 from .. import __version__
-from .._validation import InputError, validate_finite, validate_positive
+from .._validation import InputError, validate_dataset, validate_finite, validate_int, validate_model, validate_positive
 from .harmonic_balance import HBProblem, LimitCycle, SecondOrderSystem, _newton, contact_system, solve_fixed_p
 from .hopf import HopfPoint, hopf_point
 
@@ -418,6 +418,8 @@ def limit_cycle_branch(
         ``hysteresis_mu`` (the range of mu where a quiet and a squealing state coexist,
         NaN if none), ``harmonics``, ``harmonics_change``, ``stop_reason``, units.
     """
+    validate_model(model, kind="friction")
+    harmonics = validate_int("harmonics", harmonics, 1)
     from ..stability import critical_friction
     from ..transient.contact import Contact, as_contact
 
@@ -523,6 +525,8 @@ def limit_cycle_branch_slope(
     -------
     xarray.Dataset
     """
+    validate_model(model, kind="friction")
+    harmonics = validate_int("harmonics", harmonics, 1)
     from ..transient.contact import Contact, as_contact
     from .hopf import _growth
 
@@ -657,6 +661,7 @@ def limit_cycle_summary(ds: xr.Dataset) -> dict[str, object]:
         ``harmonics_tol``: ``harmonics_tol`` and ``harmonics_converged``; with a
         level: ``level_db`` (list, dB SPL re 20 uPa), ``level_dof``, ``level_from``.
     """
+    validate_dataset(ds, what="limit_cycle_branch")
     a = ds.attrs
     over_theta = a.get("param") == "tan_theta"
 

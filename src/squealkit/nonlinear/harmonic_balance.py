@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validation import InputError, validate_finite, validate_positive
+from .._validation import InputError, validate_finite, validate_model, validate_positive
 
 __all__ = [
     "LimitCycle",
@@ -195,6 +195,7 @@ def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float
     >>> sys.dof_names, sys.param
     (('x1', 'y1', 'y2'), 'mu')
     """
+    validate_model(model, kind="friction")
     from ..transient.contact import Contact, as_contact, contact_geometry
 
     contact = Contact.nonlinear() if contact is None else as_contact(contact)

@@ -22,7 +22,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
-from .._validation import InputError, validate_positive
+from .._validation import InputError, validate_dataset, validate_positive
 
 __all__ = ["P_REF", "read_transfer_csv", "sound_level"]
 
@@ -112,6 +112,7 @@ def sound_level(ds: xr.Dataset, *, radiation_factor: float | None = None,
     >>> bool(out.level_db[-1] > out.level_db[1])
     True
     """
+    validate_dataset(ds, what="limit_cycle_branch")
     if (radiation_factor is None) == (transfer is None):
         raise InputError("Give exactly one of radiation_factor [Pa/(m/s)] and transfer (frequency [Hz], |p/v|).")
     dofs = [str(d) for d in ds["dof"].values]

@@ -21,7 +21,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
-from .._validation import InputError, validate_array_finite, validate_finite, validate_positive
+from .._validation import InputError, validate_array_finite, validate_finite, validate_model, validate_positive
 from ..models import FrictionModel
 from ..models.friction import Stribeck, validate_friction
 from ._solve import IndeterminateWarning
@@ -181,6 +181,7 @@ def critical_friction_curve(
         When every onset found needs ``mu > REALISTIC_MU_MAX`` (1): squeal by mode coupling
         would need friction no brake material has.
     """
+    validate_model(model)
     friction, speed = validate_friction(model, friction, speed)
     fr = {} if friction is None else {"friction": friction, "speed": speed}
     th = np.atleast_1d(validate_array_finite("theta", theta)).astype(float)
@@ -309,6 +310,7 @@ def critical_friction(
     >>> abs(c.mu_critical - m.mu_critical_closed_form()) < 1e-9, len(c.unstable_intervals)
     (True, 1)
     """
+    validate_model(model)
     theta = validate_finite("theta", theta)
     ds = critical_friction_curve(model, [theta], damped=damped, mu_max=mu_max, friction=friction, speed=speed)
     r = ds.isel(theta=0)
@@ -409,6 +411,7 @@ def runout_tolerance(
     >>> tol.limiting_side, tol.q0_max > 0
     ('rising', True)
     """
+    validate_model(model)
     mu = validate_finite("mu", mu)
     slope_max = validate_positive("slope_max", slope_max)
     if wavelength is not None:

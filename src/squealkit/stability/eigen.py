@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
 from .._threads import limit_threads, threads_for
-from .._validation import InputError, check_memory, validate_array_finite
+from .._validation import InputError, check_memory, validate_array_finite, validate_dataset, validate_model
 from ..models import FEModel, FrictionModel
 from ..models.friction import Stribeck, validate_friction
 from ._kernels import (
@@ -341,6 +341,7 @@ def eigenvalues(
     >>> bool(lam.real.max() > 0)
     True
     """
+    validate_model(model)
     friction, speed = validate_friction(model, friction, speed)
     return _solve_grid(model, mu, tan_theta, damped, progress, friction, speed)[0]
 
@@ -393,6 +394,7 @@ def stability_verdict(
     >>> stability_verdict(get_preset("lv2013"), [0.0, 0.6]).tolist()
     ['stable', 'flutter']
     """
+    validate_model(model)
     friction, speed = validate_friction(model, friction, speed)
     return np.asarray(VERDICTS)[_solve_grid(model, mu, tan_theta, damped, None, friction, speed)[2]]
 
@@ -482,6 +484,7 @@ def stability_map(
     >>> sorted(ds.sizes.items())
     [('mode', 3), ('mu', 9), ('theta', 5)]
     """
+    validate_model(model)
     if isinstance(model, FEModel):
         from .fe_sweep import fe_stability_map
 
@@ -659,6 +662,7 @@ def stability_summary(ds: xr.Dataset) -> dict[str, object]:
         ([min, max] over unstable points of the frequency of the most unstable mode, or
         None), ``lock_in_fraction``, and the grid extent.
     """
+    validate_dataset(ds, what="stability_map")
     # reductions only, computed in one pass: a streamed (dask-backed) map is never loaded whole
     any_u = ds["any_unstable"]
     w_top = ds["omega"].where(ds["growth_rate"] == ds["max_growth_rate"]).max("mode")

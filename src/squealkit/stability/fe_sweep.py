@@ -25,7 +25,7 @@ from threadpoolctl import threadpool_limits
 
 from .. import __version__
 from .._threads import thread_limit
-from .._validation import InputError, validate_angle, validate_array_finite, validate_positive
+from .._validation import InputError, validate_angle, validate_array_finite, validate_model, validate_positive
 from ..models.fe import FEModel, rpm_to_omega
 from . import reduction
 from ._kernels import derived_quantities
@@ -217,6 +217,7 @@ def fe_stability_map(
     >>> sorted(ds.sizes.items())
     [('mode', 100), ('mu', 2), ('rpm', 2)]
     """
+    validate_model(model, kind="fe")
     rpm_a = _validate_grid("rpm", rpm)
     mu_a = _validate_grid("mu", model.mu_ref if mu is None else mu)
     t = _tan_theta(theta)
@@ -503,6 +504,7 @@ def fe_critical_friction(
     >>> float(fe_critical_friction(m, [60.0], mu_max=1.0).mu_critical[0].round(4))  # 2 |KR12| mu = 1.2 - 1
     0.1
     """
+    validate_model(model, kind="fe")
     rpm_a = _validate_grid("rpm", rpm)
     mu_max = validate_positive("mu_max", 2.0 * model.mu_ref if mu_max is None else mu_max)
     t = _tan_theta(theta)
@@ -576,6 +578,7 @@ def fe_modes(
         ``(dof, mode)``: ``shape_real``, ``shape_imag`` (largest amplitude 1, real there).
         Attributes ``verdict``, ``rpm``, ``mu``, ``theta``.
     """
+    validate_model(model, kind="fe")
     rpm = float(_validate_grid("rpm", rpm)[0])
     mu = float(model.mu_ref if mu is None else mu)
     t = _tan_theta(theta)
@@ -611,11 +614,26 @@ def fe_modes(
     )
 
 
+def _dofs_on_points(names: Any, n_pts: int) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """(DOF index, point, component) of DOFs named ``node{k}.x/y/z`` with k a mesh point; None if none are."""
+    import re
+
+    pattern = re.compile(r"^node(\d+)\.([xyz])$")
+    hits = [(i, int(m.group(1)), "xyz".index(m.group(2))) for i, name in enumerate(names or ())
+            if (m := pattern.match(str(name))) and int(m.group(1)) < n_pts]
+    if not hits:
+        return None
+    dof, point, comp = (np.array(x, dtype=np.int64) for x in zip(*hits, strict=True))
+    return dof, point, comp
+
+
 def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any) -> None:
     """Write mode shapes with the model's mesh (a ``meshio.Mesh``) to a VTK file (needs meshio).
 
-    The model's DOFs must be the mesh points' displacement components in order
-    (``n_dof = 3 x points`` or ``= points``); each mode becomes point data ``mode{k}_re``/``_im``.
+    The model's DOFs are the mesh points' displacement components in order (``n_dof = 3 x
+    points`` or ``= points``), or are named ``node{k}.x``/``.y``/``.z`` (as the FE demo names
+    them): such a DOF goes to point k, DOFs on other nodes (mid-side nodes) are left out and
+    points without DOFs (clamped) are at rest. Each mode becomes point data ``mode{k}_re``/``_im``.
     """
     from ..io import atomic_path
 
@@ -623,15 +641,23 @@ def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any) -> None:
         raise InputError("The model has no mesh: mode shapes can be exported only with one.")
     mesh = model.mesh
     n_pts = len(mesh.points)
+    place = _dofs_on_points(model.dof_names, n_pts)
     comp = model.n_dof // n_pts if n_pts and model.n_dof % n_pts == 0 else 0
-    if comp not in (1, 2, 3):
-        raise InputError(f"The model's {model.n_dof} DOFs do not map onto the mesh's {n_pts} points.")
+    if place is None and comp not in (1, 2, 3):
+        raise InputError(f"The model's {model.n_dof} DOFs do not map onto the mesh's {n_pts} points "
+                         "(nor are they named node{k}.x/y/z).")
     import meshio
 
     data = {}
     for k in range(ds.sizes["mode"]):
         for part in ("real", "imag"):
-            v = ds[f"shape_{part}"].values[:, k].reshape(n_pts, comp)
+            shape = ds[f"shape_{part}"].values[:, k]
+            if place is None:
+                v = shape.reshape(n_pts, comp)
+            else:
+                dof, point, c = place
+                v = np.zeros((n_pts, 3))
+                v[point, c] = shape[dof]
             data[f"mode{k}_{part[:2]}"] = v
     out = meshio.Mesh(mesh.points, mesh.cells, point_data=data)
     with atomic_path(path) as tmp:

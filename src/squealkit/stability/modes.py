@@ -37,7 +37,7 @@ import xarray as xr
 from numpy.typing import NDArray
 
 from .. import __version__
-from .._validation import InputError, validate_finite
+from .._validation import InputError, validate_dataset, validate_finite, validate_model
 from ..models import FrictionModel
 
 __all__ = ["eigenvalue_sensitivity", "mode_shapes", "modes", "modes_summary", "onset_modes"]
@@ -228,6 +228,7 @@ def modes(model: FrictionModel, mu: float, theta: float = 0.0, *, damped: bool =
     >>> bool(ds.unstable[k]), bool(ds.friction_work[k] > 0)
     (True, True)
     """
+    validate_model(model)
     mu, theta = _validate_point(mu, theta)
     t = math.tan(theta)
     verdict, thr = _point_verdict(model, mu, t, damped)  # validates the model's magnitudes first
@@ -308,6 +309,7 @@ def mode_shapes(ds: xr.Dataset, *, left: bool = False) -> NDArray[np.complex128]
         ``*_real + 1j * *_imag``: row k is the shape of mode k, its largest-amplitude entry
         1 + 0j.
     """
+    validate_dataset(ds, what="modes")
     pre = "left_shape" if left else "shape"
     return ds[f"{pre}_real"].values + 1j * ds[f"{pre}_imag"].values
 
@@ -354,6 +356,7 @@ def onset_modes(
     >>> round(float(ds.frequency_hz.where(ds.loses_stability, drop=True)[0]), 1)
     2436.2
     """
+    validate_model(model)
     from .critical import critical_friction
 
     crit = critical_friction(model, theta, damped=damped, mu_max=mu_max)
@@ -397,6 +400,7 @@ def modes_summary(ds: xr.Dataset) -> dict[str, object]:
         real root]; ``loses_stability`` for a result of :func:`onset_modes`, which also
         adds ``mu_critical`` at the top level.
     """
+    validate_dataset(ds, what="modes")
     import json
 
     names = [str(d) for d in ds.dof.values]
@@ -552,6 +556,7 @@ def eigenvalue_sensitivity(
     >>> bool(s.dgrowth_rate_dp[int(s.growth_rate.argmax("mode"))] > 0)   # more friction, faster growth
     True
     """
+    validate_model(model)
     mu, theta = _validate_point(mu, theta)
     if not isinstance(parameter, str):
         raise InputError(f"Parameter parameter={parameter!r} must be a parameter name.")

@@ -33,7 +33,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validation import InputError, validate_positive
+from .._validation import InputError, validate_model, validate_positive
 from ..models import FrictionModel
 from ..models.friction import Stribeck
 from .critical import CriticalFriction, critical_friction
@@ -111,6 +111,7 @@ def critical_friction_sensitivity(
     >>> round(rows["k3"]["elasticity"], 9), abs(rows["m"]["elasticity"]) < 1e-12
     (-1.0, True)
     """
+    validate_model(model)
     if method not in _METHODS:
         raise InputError(f"Parameter method={method!r} must be one of {', '.join(map(repr, _METHODS))}.")
     fr = {} if friction is None else {"friction": friction, "speed": speed}

@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
 from .._threads import thread_limit
-from .._validation import InputError, validate_finite, validate_positive
+from .._validation import InputError, validate_finite, validate_int, validate_model, validate_positive
 from ..models.fe import FEModel
 
 __all__ = [
@@ -113,6 +113,7 @@ def _backward(M, C, K, lam: NDArray, X: NDArray) -> NDArray[np.float64]:
 def backward_errors(model: FEModel, omega: float, mu: float, lam: NDArray, X: NDArray,
                     tan_theta: float = 0.0) -> NDArray[np.float64]:
     """Backward error ``eta`` of each eigenpair ``(lam[k], X[:, k])`` (module docstring)."""
+    validate_model(model, kind="fe")
     return _backward(model.mass_matrix(), model.damping_matrix(omega, mu, tan_theta),
                      model.stiffness_matrix(omega, mu, tan_theta), lam, X)
 
@@ -148,6 +149,7 @@ class DenseParts:
 
 def dense_parts(model: FEModel) -> DenseParts:
     """The model's matrices prepared for repeated dense solves (:class:`DenseParts`)."""
+    validate_model(model, kind="fe")
     parts = {name: getattr(model, name).toarray() for name in model.present}
     try:
         L = np.linalg.cholesky(parts["M"])
@@ -202,6 +204,7 @@ def dense_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, 
     >>> dense_eigs(m, 1.0, 0.0).eigenvalues     # x'' + 4 x = 0: lambda = 2j
     array([0.+2.j])
     """
+    validate_model(model, kind="fe")
     parts = dense_parts(model) if parts is None else parts
     f = model.factors(omega, mu, tan_theta)
     n = model.n_dof
@@ -519,12 +522,15 @@ def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *
         The eigenvalues in the band (omega_d >= 0), lowest frequency first, with right
         eigenvectors and backward errors.
     """
+    validate_model(model, kind="fe")
     lo, hi = validate_band(band)
     omega = validate_finite("omega", omega)
     if not (0 < tol < 1):
         raise InputError(f"Parameter tol={tol!r} must be in (0, 1).")
     workers = thread_limit() if workers is None else max(1, int(workers))
     n = model.n_dof
+    if k is not None:
+        k = validate_int("k", k, 1)
     if k is None:
         k = max(1, min(24 if workers == 1 else 32, 2 * n - 4))
     if 2 * n <= k + 3:

@@ -39,7 +39,15 @@ from numpy.typing import ArrayLike
 
 from .._deprecation import renamed_kwargs
 from .._threads import limit_threads, threads_for
-from .._validation import InputError, check_memory, validate_finite, validate_fs, validate_positive
+from .._validation import (
+    InputError,
+    check_memory,
+    validate_dataset,
+    validate_finite,
+    validate_fs,
+    validate_model,
+    validate_positive,
+)
 from ..models import FrictionModel
 from ..stability.eigen import eigenvalues
 from . import _kernels
@@ -209,6 +217,7 @@ def step_bound(model: FrictionModel, *, mu: float, contact: Contact | str = "lin
     >>> b["friction_bound"] < b["mode_bound"]     # the friction law is the stiffer part
     True
     """
+    validate_model(model)
     run = _Run(_validate_model(model), validate_finite("mu", mu), Smooth(), validate_positive("speed", speed,
                                                                                               allow_zero=True))
     return _bounds([run], as_contact(contact), _validate_method(method))
@@ -723,6 +732,7 @@ def simulate(
     >>> ds.attrs["status"], ds.sizes["time"]
     ('completed', 401)
     """
+    validate_model(model)
     runs = _as_runs([model], [mu], [profile], [speed])
     raw = _integrate(
         runs, duration=duration, fs=fs, contact=as_contact(contact), x0=x0, v0=v0, perturbation=perturbation,
@@ -796,6 +806,7 @@ def simulate_blocks(
     >>> [b.sizes["time"] for b in blocks]
     [100, 100, 100, 100, 1]
     """
+    validate_model(model)
     if isinstance(block_samples, bool) or not isinstance(block_samples, int | np.integer) or block_samples < 1:
         raise InputError(f"Parameter block_samples={block_samples!r} must be an integer >= 1.")
     runs = _as_runs([model], [mu], [profile], [speed])
@@ -1082,6 +1093,7 @@ def response_envelope(ds: xr.Dataset, var: str, *, highpass_freq: float = 1000.0
     xarray.DataArray
         The envelope, the shape, coordinates and units of ``ds[var]``, named ``{var}_envelope``.
     """
+    validate_dataset(ds, variables=("time",), attrs=("fs",), what="simulate")
     from scipy.signal import butter, hilbert, sosfiltfilt
 
     if var not in ds:
@@ -1149,6 +1161,7 @@ def transient_summary(ds: xr.Dataset, *, max_stages: int = 50, highpass_freq: fl
         ``stages`` (``stage``, ``t_start``, ``t_end``, ``rate_per_s``, ``sigma_mean_per_s``,
         ``partial``) and ``stages_truncated``.
     """
+    validate_dataset(ds, variables=("time",), attrs=("fs",), what="simulate")
     model_dofs = [v[: -len("_ddot")] for v in ds.data_vars if str(v).endswith("_ddot")]
     fs = float(ds.attrs["fs"])
     n_time = ds.sizes["time"]
