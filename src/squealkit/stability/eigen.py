@@ -590,7 +590,8 @@ def _eigen_variables(dims, sigma, omega, zeta, err, unstable, verdict, smax, any
         "max_growth_rate": (point, smax, {"units": "1/s", "long_name": "largest growth rate"}),
         "any_unstable": (point, any_u, {"long_name": "unstable: flutter or divergence"}),
         "lock_in": (point, locked,
-                    {"long_name": "two modes coalesced in frequency, one unstable", "rtol": lock_in_rtol}),
+                    {"long_name": "lock-in: an unstable oscillating mode nearer another in frequency than in growth",
+                     "rtol": lock_in_rtol}),
     }
 
 
