@@ -52,3 +52,64 @@ def test_lock_in_function_ignores_real_roots_and_lone_negative_damping():
     assert lock_in(np.array([100.0, 97.0]), np.array([2.0, -8.0]))
     # one mode with negative damping, far in frequency from every other: not a lock-in
     assert not lock_in(np.array([100.0, 300.0]), np.array([1.0, -2.0]))
+
+
+# -- 6. the 50-digit stage of the verdict pipeline (stability._solve.mp_roots) ----------------------
+
+
+def test_mp_roots_decides_a_growth_rate_that_double_precision_cannot():
+    # M = I, C = diag(-4e-9, 0), K = [[1, 1], [0, 1]]: K is triangular, so the characteristic
+    # polynomial is (s^2 - 4e-9 s + 1)(s^2 + 1), roots 2e-9 +- j sqrt(1 - 4e-18) and +-j
+    # (closed form, evaluated here in 60-digit mpmath from the same doubles). The cluster at
+    # +-j is nearly defective: LAPACK's error radius (~1e-5) covers the growth rate 2e-9 and
+    # the verdict threshold (1e-9 |lambda|_max); the 50-digit stage's discs must not.
+    import mpmath
+
+    from squealkit.stability._solve import lapack_roots, mp_roots
+
+    M, C, K = np.eye(2), np.diag([-4e-9, 0.0]), np.array([[1.0, 1.0], [0.0, 1.0]])
+    _, lapack_radius = lapack_roots(M[None], C[None], K[None])
+    assert lapack_radius.min() > 1e-6  # double precision cannot tell 2e-9 from 0
+    z, radius = mp_roots(M, C, K, scale=1.5)
+    with mpmath.workdps(60):
+        c = mpmath.mpf(-4e-9)
+        w = mpmath.sqrt(1 - c * c / 4)
+        want = [-c / 2 + 1j * w, -c / 2 - 1j * w, mpmath.mpc(0, 1), mpmath.mpc(0, -1)]
+        for ref in want:
+            d = [float(abs(mpmath.mpc(zk) - ref)) for zk in z]
+            j = int(np.argmin(d))
+            assert d[j] <= radius[j] < 1e-15  # the root lies in its disc (with the rounding to double)
+    thr = 1e-9 * np.abs(z).max()  # the verdict's threshold, _kernels.UNSTABLE_RTOL
+    growing = z.real - radius > thr
+    assert growing.sum() == 2  # the 2e-9 pair, decided beyond the threshold
+    np.testing.assert_allclose(z.real[growing], 2e-9, rtol=1e-12)
+    assert np.all(np.abs(z.real[~growing]) <= radius[~growing])  # the +-j pair, on the axis
+
+
+def test_public_verdict_reaches_the_50_digit_stage(monkeypatch):
+    # The exact stage (Routh/Sturm in integers) hands a point on to mpmath only at a zero Routh
+    # pivot, a root exactly on the threshold, which a model in doubles meets only by rounding
+    # coincidence; here it is made to decline every point, so stability_verdict's undecided
+    # points (a doublet split by 1e-10, issue 10's models) go through mp_roots. References: the
+    # closed forms of those models (stable one-way coupling; skew coupling unstable exactly on
+    # [(K3 - K_D)/(D + 2c), (K3 - K_D)/(D - 2c)] = [0.1735, 0.289167]).
+    from squealkit.models import MatrixModel
+    from squealkit.stability import _solve, stability_verdict
+
+    calls = []
+    real_mp_roots = _solve.mp_roots
+
+    def spy(*args, **kwargs):
+        calls.append(args)
+        return real_mp_roots(*args, **kwargs)
+
+    monkeypatch.setattr(_solve, "exact_verdict", lambda *a: None)
+    monkeypatch.setattr(_solve, "mp_roots", spy)
+    k_d, d, c, k3 = 1e6, 0.8e6, 0.1e6, 1.1735e6
+    k0 = np.diag([k_d, k_d * (1 + 1e-10), k3])
+    one_way = MatrixModel(M=np.eye(3), K0=k0, Kf=[[d, 0.3 * d, 0], [0, d, 0], [0, 0, 0]])
+    skew = MatrixModel(M=np.eye(3), K0=k0, Kf=[[d, 0, 0], [0, d, c], [0, -c, 0]])
+    assert stability_verdict(one_way, [0.5, 1.0]).tolist() == ["stable", "stable"]
+    assert calls, "no point reached the 50-digit stage"
+    calls.clear()
+    assert stability_verdict(skew, [0.1, 0.2, 0.25, 0.4]).tolist() == ["stable", "flutter", "flutter", "stable"]
