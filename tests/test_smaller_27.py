@@ -113,3 +113,73 @@ def test_public_verdict_reaches_the_50_digit_stage(monkeypatch):
     assert calls, "no point reached the 50-digit stage"
     calls.clear()
     assert stability_verdict(skew, [0.1, 0.2, 0.25, 0.4]).tolist() == ["stable", "flutter", "flutter", "stable"]
+
+
+# -- 5. SQUEALKIT_THREADS bounds BLAS threads in every public compute entry point ----------------
+
+
+@pytest.fixture()
+def blas_threads_seen(monkeypatch):
+    """The BLAS thread count (threadpoolctl's report) at each LAPACK call the FE engines make."""
+    import scipy.linalg as sla
+    from threadpoolctl import threadpool_info
+
+    seen = []
+
+    def spying(fn):
+        def wrapper(*args, **kwargs):
+            seen.append(max(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"))
+            return fn(*args, **kwargs)
+        return wrapper
+
+    for name in ("eig", "eigh", "eigvals", "qr"):
+        monkeypatch.setattr(sla, name, spying(getattr(sla, name)))
+    return seen
+
+
+def test_squealkit_threads_bounds_blas_in_reduction_called_directly(monkeypatch, blas_threads_seen, nlevp):
+    from threadpoolctl import threadpool_limits
+
+    from squealkit.stability.reduction import modal_basis, reduce, reduced_eigs
+    from squealkit.stability.sparse import dense_eigs
+
+    monkeypatch.setenv("SQUEALKIT_THREADS", "1")
+    with threadpool_limits(2, user_api="blas"):  # BLAS's own default on this 2-core machine
+        V = modal_basis(nlevp, n_modes=30)
+        seen_modal = len(blas_threads_seen)
+        red = reduce(nlevp, V)
+        seen_reduce = len(blas_threads_seen)
+        reduced_eigs(red, 2 * np.pi, 1.0, band=(1e-4, 1.0))
+        dense_eigs(nlevp, 2 * np.pi, 1.0)
+    assert 0 < seen_modal < seen_reduce < len(blas_threads_seen)  # each entry point made LAPACK calls
+    assert set(blas_threads_seen) == {1}
+
+
+def test_thread_bound_never_raises_an_enclosing_blas_limit(monkeypatch, blas_threads_seen, nlevp):
+    from threadpoolctl import threadpool_limits
+
+    from squealkit.stability.reduction import modal_basis
+
+    monkeypatch.setenv("SQUEALKIT_THREADS", "2")
+    with threadpool_limits(1, user_api="blas"):
+        modal_basis(nlevp, n_modes=30)
+    assert set(blas_threads_seen) == {1}
+
+
+def test_every_public_stability_computation_honours_the_thread_limit():
+    # one decorator (squealkit._threads.honour_thread_limit) on every public entry point that
+    # calls LAPACK; the ones below only relabel or summarise arrays already computed
+    import inspect
+
+    import squealkit.stability as stability
+    from squealkit._threads import honour_thread_limit
+    from squealkit.stability import reduction, sparse
+
+    no_lapack = {"lock_in", "modes_summary", "stability_summary", "track_modes", "unstable_threshold",
+                 "fill_reducing_order", "validate_band"}
+    names = [(m, n) for m in (stability, reduction, sparse) for n in m.__all__
+             if inspect.isfunction(getattr(m, n)) and n not in no_lapack]
+    assert len(names) > 20
+    wrapper_code = honour_thread_limit(lambda: None).__code__
+    undecorated = [n for m, n in names if getattr(m, n).__code__ is not wrapper_code]
+    assert not undecorated

@@ -18,7 +18,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
-from .._threads import limit_threads, threads_for
+from .._threads import honour_thread_limit, limit_threads, threads_for
 from .._validation import InputError, check_memory, validate_array_finite
 from ..models import FEModel, FrictionModel
 from ..models.friction import Stribeck, validate_friction
@@ -286,6 +286,7 @@ def _solve_grid(model, mu, tan_theta, damped, progress=None, friction=None, spee
     return (lam.reshape((*shape, n)), err.reshape((*shape, n)), verdict.reshape(shape), thr.reshape(shape))
 
 
+@honour_thread_limit
 def eigenvalues(
     model: FrictionModel,
     mu: ArrayLike,
@@ -345,6 +346,7 @@ def eigenvalues(
     return _solve_grid(model, mu, tan_theta, damped, progress, friction, speed)[0]
 
 
+@honour_thread_limit
 def stability_verdict(
     model: FrictionModel,
     mu: ArrayLike,
@@ -397,6 +399,7 @@ def stability_verdict(
     return np.asarray(VERDICTS)[_solve_grid(model, mu, tan_theta, damped, None, friction, speed)[2]]
 
 
+@honour_thread_limit
 def stability_map(
     model: FrictionModel,
     mu: ArrayLike,
