@@ -183,3 +183,40 @@ def test_every_public_stability_computation_honours_the_thread_limit():
     wrapper_code = honour_thread_limit(lambda: None).__code__
     undecorated = [n for m, n in names if getattr(m, n).__code__ is not wrapper_code]
     assert not undecorated
+
+
+# -- 4. opening a UFF 58 file reads its headers, not its samples ----------------------------------
+
+
+def test_opening_uff_reads_headers_only(tmp_path, monkeypatch):
+    import tracemalloc
+
+    pyuff = pytest.importorskip("pyuff")
+    from squealkit.measurement import open_recording, synthetic_recording
+    from squealkit.measurement.writers import write_recording
+
+    rec = synthetic_recording(duration=4.0, seed=1)  # 3 channels x 160000 samples: 3.8 MB of float64
+    path = write_recording(rec, tmp_path / "rec.uff")  # ASCII, about 10 MB
+    # reference for the header fields: pyuff's own reading of the same file (before the mock)
+    uff = pyuff.UFF(str(path))
+    ref = [uff.read_sets(i, header_only=True) for i in range(len(uff.get_set_types()))]
+
+    def reads_data(*args, **kwargs):
+        raise AssertionError("opening a UFF file went through pyuff, which reads the whole file")
+
+    monkeypatch.setattr(pyuff.UFF, "__init__", reads_data)
+    tracemalloc.start()
+    try:
+        src = open_recording(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    data_bytes = sum(rec[n].nbytes for n in rec.data_vars)
+    assert peak < data_bytes / 2, (peak, data_bytes)  # measured: 22.7 MB through pyuff, ~2 MB by headers
+    assert list(src.channels) == [d["id1"] for d in ref]
+    assert src.n_samples == ref[0]["num_pts"] == rec.sizes["time"]
+    assert src.fs == pytest.approx(1.0 / ref[0]["abscissa_inc"], rel=1e-5)
+    assert [src.units[n] for n in src.channels] == [d["ordinate_axis_units_lab"] for d in ref]
+    # and the samples, read later block by block, are the recording's
+    got = np.concatenate([blk["mic"] for _, blk in src.iter_blocks(["mic"], block=50_000)])
+    np.testing.assert_allclose(got, rec["mic"].values, rtol=1e-10)
