@@ -220,3 +220,100 @@ def test_opening_uff_reads_headers_only(tmp_path, monkeypatch):
     # and the samples, read later block by block, are the recording's
     got = np.concatenate([blk["mic"] for _, blk in src.iter_blocks(["mic"], block=50_000)])
     np.testing.assert_allclose(got, rec["mic"].values, rtol=1e-10)
+
+
+# -- 3. a campaign does not need what J2521 occurrence does not: rpm, tacho -----------------------
+
+
+@pytest.fixture(scope="module")
+def small_campaign(tmp_path_factory):
+    """Three synthetic applications (0.5 s each) and a fourth, a slow drag whose once-per-rev tacho
+    has only 2 marks (240 rpm for 0.5 s), squealing at 2388 Hz (the generator's default line)."""
+    from squealkit.campaign import synthetic_campaign
+    from squealkit.measurement import synthetic_recording
+    from squealkit.measurement.writers import write_recording
+
+    d = tmp_path_factory.mktemp("camp27")
+    truth = synthetic_campaign(d, n_applications=3, duration=0.5, seed=5, stop_share=0.0)
+    slow = synthetic_recording(duration=0.5, rpm=240, seed=11)
+    write_recording(slow, d / "recordings" / "slow.nc")
+    with open(d / "matrix.csv", "a") as fh:
+        fh.write("A0004,recordings/slow.nc,S4,drag,10.0,100.0,10.0\n")
+    return d, truth, slow
+
+
+def _campaign(d, out, *extra):
+    import json
+
+    from click.testing import CliRunner
+
+    from squealkit.cli.main import cli
+
+    res = CliRunner().invoke(cli, ["campaign", str(d / "matrix.csv"), "--out", str(d / out), "--mic", "mic",
+                                   "--displacement", "displacement", "--radius", "0.05", "--no-report", "--json",
+                                   *extra])
+    return res, json.loads(res.stdout) if res.stdout.strip() else None
+
+
+def _applications(d, out):
+    import duckdb
+
+    con = duckdb.connect(str(d / out / "campaign.duckdb"), read_only=True)
+    try:
+        cols = ["application", "status", "squeal", "squeal_frequency_hz", "runout_phase_deg", "runout_unavailable"]
+        rows = con.execute(f"SELECT {', '.join(cols)} FROM applications ORDER BY application").fetchall()
+    finally:
+        con.close()
+    return {r[0]: dict(zip(cols, r, strict=True)) for r in rows}
+
+
+def test_campaign_without_rpm_or_tacho_analyses_the_squeal(small_campaign):
+    # reference: the generator's truth (which applications squeal) and J2521 occurrence, which
+    # needs the microphone alone
+    d, truth, _ = small_campaign
+    res, summary = _campaign(d, "out_nospeed")
+    assert res.exit_code == 0, res.output
+    assert summary["failed"] == [] and summary["applications"] == 4
+    squealing = sum(bool(a["lines_hz"]) for a in truth["by_application"].values()) + 1  # + the slow drag
+    assert summary["applications_with_squeal"] == squealing
+    assert {r["application"] for r in summary["runout_unavailable"]} == {"A0001", "A0002", "A0003", "A0004"}
+    assert all("no disc speed" in r["reason"] for r in summary["runout_unavailable"])
+    apps = _applications(d, "out_nospeed")
+    assert all(a["status"] == "ok" and "no disc speed" in a["runout_unavailable"] for a in apps.values())
+    assert apps["A0004"]["squeal_frequency_hz"] == pytest.approx(2388.0, abs=5.0)
+    assert all(a["runout_phase_deg"] is None for a in apps.values())
+
+
+def test_campaign_tacho_with_two_marks_keeps_the_application(small_campaign):
+    d, truth, _ = small_campaign
+    res, summary = _campaign(d, "out_tacho", "--tacho", "tacho")
+    assert res.exit_code == 0, res.output  # before: A0004 failed whole ("at least 3 marks")
+    apps = _applications(d, "out_tacho")
+    assert apps["A0004"]["status"] == "ok" and apps["A0004"]["squeal"]
+    assert "tacho" in apps["A0004"]["runout_unavailable"] and "3 marks" in apps["A0004"]["runout_unavailable"]
+    assert [r["application"] for r in summary["runout_unavailable"]] == ["A0004"]
+    for app, t in truth["by_application"].items():  # the others keep their run-out link
+        assert apps[app]["runout_unavailable"] is None
+        if t["lines_hz"]:
+            err = (apps[app]["runout_phase_deg"] - t["runout_phase_deg"] + 180) % 360 - 180
+            assert abs(err) < 15.0
+
+
+def test_analysis_without_speed_finds_the_same_squeal():
+    # the squeal alone (require_runout=False) against the full analysis at the known speed
+    from squealkit import InputError
+    from squealkit.measurement import analyze_recording, synthetic_recording
+
+    rec = synthetic_recording(duration=0.5, rpm=900, seed=4)
+    kw = dict(mic="mic", displacement="displacement", radius=0.05)
+    with pytest.raises(InputError, match="rpm"):
+        analyze_recording(rec, **kw)  # required by default, as before
+    full = analyze_recording(rec, rpm=900, **kw)
+    alone = analyze_recording(rec, require_runout=False, **kw)
+    assert alone.runout_unavailable and full.runout_unavailable is None
+    assert alone.peak_dba == full.peak_dba
+    assert alone.squeal_frequency_hz == full.squeal_frequency_hz
+    assert [(e.start_s, e.end_s, e.frequency_hz) for e in alone.events] == \
+        [(e.start_s, e.end_s, e.frequency_hz) for e in full.events]
+    assert alone.rising_fraction is None and alone.runout_phase_deg is None
+    assert alone.to_dict()["runout_unavailable"] == alone.runout_unavailable
