@@ -228,14 +228,14 @@ def test_opening_uff_reads_headers_only(tmp_path, monkeypatch):
 @pytest.fixture(scope="module")
 def small_campaign(tmp_path_factory):
     """Three synthetic applications (0.5 s each) and a fourth, a slow drag whose once-per-rev tacho
-    has only 2 marks (240 rpm for 0.5 s), squealing at 2388 Hz (the generator's default line)."""
+    has only 2 marks (300 rpm for 0.5 s), squealing at 2388 Hz (the generator's default line)."""
     from squealkit.campaign import synthetic_campaign
     from squealkit.measurement import synthetic_recording
     from squealkit.measurement.writers import write_recording
 
     d = tmp_path_factory.mktemp("camp27")
     truth = synthetic_campaign(d, n_applications=3, duration=0.5, seed=5, stop_share=0.0)
-    slow = synthetic_recording(duration=0.5, rpm=240, seed=11)
+    slow = synthetic_recording(duration=0.5, rpm=300, seed=11)
     write_recording(slow, d / "recordings" / "slow.nc")
     with open(d / "matrix.csv", "a") as fh:
         fh.write("A0004,recordings/slow.nc,S4,drag,10.0,100.0,10.0\n")
@@ -291,6 +291,7 @@ def test_campaign_tacho_with_two_marks_keeps_the_application(small_campaign):
     apps = _applications(d, "out_tacho")
     assert apps["A0004"]["status"] == "ok" and apps["A0004"]["squeal"]
     assert "tacho" in apps["A0004"]["runout_unavailable"] and "3 marks" in apps["A0004"]["runout_unavailable"]
+    assert "got 2" in apps["A0004"]["runout_unavailable"]
     assert [r["application"] for r in summary["runout_unavailable"]] == ["A0004"]
     for app, t in truth["by_application"].items():  # the others keep their run-out link
         assert apps[app]["runout_unavailable"] is None
