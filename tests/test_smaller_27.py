@@ -318,3 +318,73 @@ def test_analysis_without_speed_finds_the_same_squeal():
         [(e.start_s, e.end_s, e.frequency_hz) for e in full.events]
     assert alone.rising_fraction is None and alone.runout_phase_deg is None
     assert alone.to_dict()["runout_unavailable"] == alone.runout_unavailable
+
+
+# -- 2. NLEVP disk_brake100: both assemblies against an independent dense solve -------------------
+
+
+def _mfile_assembly(omega):
+    """M, D, K exactly as NLEVP's disk_brake100.m writes them: its ``D = ...;`` and ``K = ...;``
+    lines evaluated over the raw arrays of disk_brake100.mat (the MATLAB expressions are valid
+    NumPy here: sums, products and quotients of matrices and the scalar omega); and the D formula."""
+    import re
+
+    import scipy.io
+
+    text = nlevp_path("disk_brake100.m").read_text()
+    raw = {k: v for k, v in scipy.io.loadmat(nlevp_path()).items() if not k.startswith("__")}
+    formula = {name: re.search(rf"^{name} = (.+);$", text, re.M).group(1) for name in ("D", "K")}
+    D, K = (eval(formula[name], {"__builtins__": {}}, {**raw, "omega": omega}) for name in ("D", "K"))
+    return raw, D, K, formula["D"]
+
+
+def _companion_eigs(M, D, K):
+    """All 2n eigenvalues of lambda^2 M + lambda D + K from LAPACK's QZ on the companion pencil."""
+    import scipy.linalg as sla
+
+    n = M.shape[0]
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-K, -D]])
+    B = sla.block_diag(np.eye(n), M)
+    return sla.eig(A, B, right=False)
+
+
+def _match(got, ref):
+    """Largest distance from each computed eigenvalue to the nearest reference one, over |lambda|_max."""
+    return float(np.max(np.min(np.abs(got[:, None] - ref[None, :]), axis=1)) / np.max(np.abs(ref)))
+
+
+@pytest.mark.parametrize("omega", [2 * np.pi, 8 * np.pi])
+def test_nlevp_assemblies_against_an_independent_dense_solve(omega):
+    from squealkit.stability.sparse import dense_eigs
+
+    raw, D_mfile, K, formula = _mfile_assembly(omega)
+    assert formula == "D1 + DR/omega + omega*DG"  # what the shipped .m file writes
+    ref_with_dg = _companion_eigs(raw["M"], D_mfile, K)
+    ref_without_dg = _companion_eigs(raw["M"], raw["D1"] + raw["DR"] / omega, K)
+    assert _match(ref_with_dg, ref_without_dg) > 1e-6  # the two assemblies are told apart (4e-5 at 2 pi)
+
+    default = load_fe_model(nlevp_path())  # squealkit's default keeps DG: the .m file's assembly
+    no_gyro = load_fe_model(nlevp_path(), omit=["DG"])
+    assert "DG" in default.present and "DG" not in no_gyro.present
+    for model, ref in ((default, ref_with_dg), (no_gyro, ref_without_dg)):
+        lam = dense_eigs(model, omega, 1.0, vectors=False).eigenvalues  # one per mode (omega > 0)
+        assert lam.size == 100
+        assert _match(lam, ref) < 1e-9
+        upper = ref[ref.imag > 1e-12 * np.abs(ref)]
+        assert np.sum(lam.imag > 1e-12 * np.abs(lam)) == upper.size  # every oscillating mode, once
+
+
+def test_omit_is_checked_and_reaches_the_toml(tmp_path):
+    import shutil
+
+    from squealkit import InputError
+    from squealkit.models import load_model
+
+    with pytest.raises(InputError, match="M and K1 are required"):
+        load_fe_model(nlevp_path(), omit=["K1"])
+    with pytest.raises(InputError, match="omit='DX'"):
+        load_fe_model(nlevp_path(), omit=["DX"])
+    shutil.copy(nlevp_path(), tmp_path / "disk_brake100.mat")
+    p = tmp_path / "brake.toml"
+    p.write_text('model = "fe"\n[fe]\nfile = "disk_brake100.mat"\nomit = ["DG"]\n')
+    assert "DG" not in load_model(p).present

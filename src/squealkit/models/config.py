@@ -24,6 +24,7 @@ A model file (all sections optional; SI units, angles in rad or as ``*_deg`` in 
     # files = {M = "M.mtx", K1 = "K1.mtx", KR = "KR.mtx"}     # one file per matrix
     names = {M = "MAA"}        # the names in the file where they differ (optional)
     omega_ref = 1.0            # rad/s; mu_ref, f_ref likewise (defaults 1)
+    omit = ["DG"]              # matrices read but left out of the assembly (optional)
 
 File paths are relative to the model file. An ``[uncertain]`` table belongs to
 ``montecarlo`` and is ignored here; any other table or key is an error (a typo such as
@@ -72,7 +73,7 @@ _TOP_KEYS = {"model", "preset", "parameters", "rig", "matrices", "fe", "descript
 _OTHER_TABLES = {"uncertain"}
 #: A model file is text of a few kB (large matrices go in the files an [fe] table names).
 _MAX_FILE_BYTES = 16 * 2**20
-_FE_KEYS = ("file", "files", "names", "omega_ref", "mu_ref", "f_ref")
+_FE_KEYS = ("file", "files", "names", "omega_ref", "mu_ref", "f_ref", "omit")
 
 
 def get_preset(name: str) -> FrictionModel:
@@ -126,8 +127,13 @@ def _fe_from_table(table: Any, base_dir: Path | None) -> FEModel:
         if key in table and not isinstance(table[key], Mapping):
             raise InputError(f"[fe] {key} must be a table, e.g. {key} = {{M = ...}}.")
     refs = {k: validate_finite(k, table[k]) for k in ("omega_ref", "mu_ref", "f_ref") if k in table}
+    omit = table.get("omit", [])
+    if isinstance(omit, str):
+        omit = [omit]
+    if not (isinstance(omit, list) and all(isinstance(k, str) for k in omit)):
+        raise InputError(f'[fe] omit={omit!r} must be a list of matrix names, e.g. omit = ["DG"].')
     return load_fe_model(table.get("file"), files=table.get("files"), names=table.get("names"),
-                         base_dir=base_dir, **refs)
+                         base_dir=base_dir, omit=omit, **refs)
 
 
 def model_from_dict(doc: Mapping[str, Any], base_dir: str | Path | None = None) -> FrictionModel | FEModel:

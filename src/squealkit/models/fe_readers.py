@@ -8,7 +8,7 @@ matrix, with the names they have in the files if those differ, and builds the
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -151,6 +151,7 @@ def load_fe_model(
     mu_ref: float = 1.0,
     f_ref: float = 1.0,
     base_dir: str | Path | None = None,
+    omit: Sequence[str] = (),
 ) -> FEModel:
     """An FE model read from exported matrices.
 
@@ -167,6 +168,9 @@ def load_fe_model(
         Reference values (see :class:`~squealkit.models.fe.FEModel`).
     base_dir : path, optional
         Folder relative paths start from (the model file's folder).
+    omit : sequence of str, optional
+        Matrices read but left out of the assembly, e.g. ``("DG",)`` for no gyroscopic term
+        (NLEVP's disk_brake100 with ``D = D1 + DR/omega``); ``M`` and ``K1`` cannot be omitted.
 
     Returns
     -------
@@ -177,7 +181,7 @@ def load_fe_model(
     ------
     InputError
         If neither or both of ``file`` and ``files`` are given, a name is not an FE matrix,
-        or a file cannot be read.
+        ``omit`` names ``M``, ``K1`` or no FE matrix, or a file cannot be read.
 
     Examples
     --------
@@ -188,6 +192,11 @@ def load_fe_model(
     if (file is None) == (files is None):
         raise InputError("An FE model needs either file (all matrices in one file) or files (one per matrix).")
     names = dict(names or {})
+    omit = (omit,) if isinstance(omit, str) else tuple(omit)
+    for key in omit:
+        if key not in FE_MATRICES or key in ("M", "K1"):
+            raise InputError(f"omit={key!r}: only {', '.join(k for k in FE_MATRICES if k not in ('M', 'K1'))} "
+                             "can be left out of an FE model (M and K1 are required).")
     for key in names:
         if key not in FE_MATRICES:
             raise InputError(f"Unknown FE matrix {key!r} in names; known: {', '.join(FE_MATRICES)}.")
@@ -222,6 +231,10 @@ def load_fe_model(
                 m = next(iter(found.values()))
             mats[key] = m
         source = ", ".join(str(v) for v in dict(files).values())
+    for key in omit:
+        mats.pop(key, None)
+    if omit:
+        source += f" (without {', '.join(omit)})"
     try:
         return FEModel.from_matrices(**mats, omega_ref=omega_ref, mu_ref=mu_ref, f_ref=f_ref, source=source)
     except InputError as e:
