@@ -195,8 +195,8 @@ def test_opening_uff_reads_headers_only(tmp_path, monkeypatch):
     from squealkit.measurement import open_recording, synthetic_recording
     from squealkit.measurement.writers import write_recording
 
-    rec = synthetic_recording(duration=4.0, seed=1)  # 3 channels x 160000 samples: 3.8 MB of float64
-    path = write_recording(rec, tmp_path / "rec.uff")  # ASCII, about 10 MB
+    rec = synthetic_recording(duration=2.0, seed=1)  # 3 channels x 80000 samples: 1.9 MB of float64
+    path = write_recording(rec, tmp_path / "rec.uff")  # ASCII, about 5 MB
     # reference for the header fields: pyuff's own reading of the same file (before the mock)
     uff = pyuff.UFF(str(path))
     ref = [uff.read_sets(i, header_only=True) for i in range(len(uff.get_set_types()))]
@@ -212,7 +212,7 @@ def test_opening_uff_reads_headers_only(tmp_path, monkeypatch):
     finally:
         tracemalloc.stop()
     data_bytes = sum(rec[n].nbytes for n in rec.data_vars)
-    assert peak < data_bytes / 2, (peak, data_bytes)  # measured: 22.7 MB through pyuff, ~2 MB by headers
+    assert peak < data_bytes / 2, (peak, data_bytes)  # measured: 11.4 MB through pyuff, 0.53 MB by headers
     assert list(src.channels) == [d["id1"] for d in ref]
     assert src.n_samples == ref[0]["num_pts"] == rec.sizes["time"]
     assert src.fs == pytest.approx(1.0 / ref[0]["abscissa_inc"], rel=1e-5)
