@@ -17,11 +17,14 @@ gets a core. So:
   (``numba.set_num_threads``, which makes ``prange`` loops serial at 1).
 
 numba's thread count is per calling thread, so a limit set in one thread (or one Dask
-task) never changes another's. BLAS threads are left alone: the stability engine calls
-LAPACK one small matrix at a time (companion matrices of degree <= 8, 2n x 2n state
-matrices of the small models), sizes at which OpenBLAS does not start threads; capping
-BLAS too (threadpoolctl) would matter only for large FE models, which squealkit does not
-solve yet.
+task) never changes another's.
+
+BLAS threads (OpenBLAS, MKL: the FE engines' dense LAPACK calls) are bounded by the same
+limit in every public compute entry point that calls them, through one decorator,
+:func:`honour_thread_limit` (the context :func:`bounded_blas`): at most
+:func:`thread_limit` threads, never more than an enclosing block (or the caller's own
+``threadpoolctl`` limit) already allows. BLAS's thread count is process-wide, unlike
+numba's.
 
 Examples
 --------
@@ -37,16 +40,20 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import functools
 import numbers
 import os
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from typing import Any, TypeVar
 
 from ._validation import InputError
 
 __all__ = [
     "ENV_VAR",
     "SERIAL_BELOW",
+    "bounded_blas",
     "env_threads",
+    "honour_thread_limit",
     "limit_threads",
     "thread_limit",
     "threads_for",
@@ -145,3 +152,53 @@ def limit_threads(n: int) -> Iterator[int]:
     finally:
         _LIMIT.reset(token)
         numba.set_num_threads(before)
+
+
+#: threadpoolctl's controller of the BLAS libraries loaded (made at first use: by then numpy's
+#: and scipy's are loaded; reused, as a new one costs ~3 ms of library scanning per call).
+_BLAS_CONTROLLER: Any = None
+
+
+def _blas_controller() -> Any:
+    global _BLAS_CONTROLLER
+    if _BLAS_CONTROLLER is None:
+        from threadpoolctl import ThreadpoolController
+
+        _BLAS_CONTROLLER = ThreadpoolController().select(user_api="blas")
+    return _BLAS_CONTROLLER
+
+
+@contextlib.contextmanager
+def bounded_blas() -> Iterator[int]:
+    """Run a block with BLAS on at most :func:`thread_limit` threads; yields that limit.
+
+    A BLAS library already at or below the limit (an enclosing block, or the caller's own
+    ``threadpoolctl`` limit) is left alone: this only ever lowers the count, and restores
+    it on exit.
+
+    Raises
+    ------
+    InputError
+        If ``SQUEALKIT_THREADS`` is set to anything but an integer >= 1.
+    """
+    n = thread_limit()
+    blas = _blas_controller()
+    if all(lib.num_threads <= n for lib in blas.lib_controllers):
+        yield n
+        return
+    with blas.limit(limits=n):
+        yield n
+
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def honour_thread_limit(fn: _F) -> _F:
+    """Decorate a public compute entry point: its BLAS calls run under :func:`bounded_blas`."""
+
+    @functools.wraps(fn)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        with bounded_blas():
+            return fn(*args, **kwargs)
+
+    return wrapper  # type: ignore[return-value]

@@ -52,6 +52,12 @@ def write_campaign_report(store, summary: dict[str, Any], out: Path, *, threshol
         paragraphs.append(f"{len(failed)} of {n_all} applications could not be analysed and are left out of every "
                           "figure and table above the last one; the table 'Failed applications' gives the reason "
                           "of each (a re-run retries them).")
+    no_link = summary.get("runout_unavailable", [])
+    if no_link:
+        reasons = sorted({r["reason"] for r in no_link})
+        paragraphs.append(f"The run-out link (median correlation and rising fraction) is unavailable for "
+                          f"{len(no_link)} of {summary['applications']} applications, whose squeal was analysed "
+                          f"all the same: {'; '.join(reasons)}.")
     link = summary["runout_link"]
     table = Table("Campaign", ("quantity", "value"), (
         ("applications", summary["applications"]),
@@ -60,6 +66,7 @@ def write_campaign_report(store, summary: dict[str, Any], out: Path, *, threshol
         ("highest peak [dB(A)]", summary["max_peak_dba"]),
         ("median growth/slope correlation (squealing applications)", link["median_growth_slope_correlation"]),
         ("median rising_fraction (squealing applications)", link["median_rising_fraction"]),
+        ("applications without run-out link", len(no_link)),
         ("failed applications", len(summary["failed"])),
     ))
     bands = Table("Occurrence by 1/3-octave band", ("band [Hz]", "applications with squeal", "occurrence [%]"),

@@ -55,7 +55,7 @@ def _analyze_application(item: dict[str, Any]) -> tuple[dict[str, Any], list[dic
                squeal_frequency_hz=res.squeal_frequency_hz, n_events=len(res.events),
                growth_slope_correlation=res.growth_slope_correlation, rising_fraction=res.rising_fraction,
                runout_phase_deg=res.runout_phase_deg, mean_rpm=res.settings.rpm,
-               criteria=res.settings.criteria.describe())
+               runout_unavailable=res.runout_unavailable, criteria=res.settings.criteria.describe())
     events = []
     for i, e in enumerate(res.events):
         b = band_of(e.frequency_hz, bands)
@@ -112,6 +112,11 @@ def run_campaign(
     (``application``, ``file``, ``error``) and in the report. Failed applications are
     retried on every re-run (the file may have been fixed); the ones analysed are not.
 
+    Squeal occurrence needs no disc speed: an application without one (no ``rpm``, ``tacho``
+    nor matrix ``rpm``, or a tacho that cannot give one, such as 2 marks in a short low-speed
+    drag) is analysed for squeal, and its run-out link is stored as unavailable with the
+    reason (column ``runout_unavailable``; the summary's ``runout_unavailable`` lists them).
+
     Parameters
     ----------
     matrix : path
@@ -120,7 +125,8 @@ def run_campaign(
         Output folder (created).
     mic, displacement, radius, tacho, rpm
         As for :func:`squealkit.measurement.analyze_recording`; a matrix column ``rpm``
-        gives each application's speed where there is no tacho.
+        gives each application's speed where there is no tacho. Optional: without a speed the
+        run-out link is left out (see above).
     setup, band, threshold_dba, time_weighting, min_duration
         The squeal criteria (:func:`squealkit.measurement.squeal_criteria`; ``band`` in [Hz]).
     client : distributed.Client, optional
@@ -149,9 +155,11 @@ def run_campaign(
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     bands = third_octave_bands(crit.band)
+    # J2521 occurrence needs no disc speed: without one (no rpm, or a tacho that gives none) an
+    # application is analysed for squeal and its run-out link stored as unavailable, with the reason
     kw_base = dict(mic=mic, displacement=displacement, radius=radius, setup=crit.setup if crit.setup != "user"
                    else None, band=crit.band, threshold_dba=crit.threshold_dba, time_weighting=crit.time_weighting,
-                   min_duration=crit.min_duration, **options)
+                   min_duration=crit.min_duration, require_runout=False, **options)
     with CampaignStore(out / "campaign.duckdb") as store:
         done = store.done(crit.describe())
         items = []

@@ -11,7 +11,8 @@ driver), and ``COPY applications TO 'apps.parquet'`` exports it when Parquet is 
 
 Tables: ``applications`` (one row per brake application: its conditions and results; ``status``
 is ``'ok'`` or ``'failed'``, and ``error`` the one-line reason of a failed application, whose
-results are empty),
+results are empty; ``runout_unavailable`` says why an analysed application has no run-out link,
+e.g. no disc speed),
 ``events`` (one row per squeal event, VDA 303 tonal component), and the view ``squeal``
 (events with their application's conditions), e.g.::
 
@@ -34,7 +35,7 @@ APPLICATION_COLUMNS = {
     "synthetic": "BOOLEAN", "squeal": "BOOLEAN", "peak_dba": "DOUBLE", "squeal_frequency_hz": "DOUBLE",
     "n_events": "INTEGER", "growth_slope_correlation": "DOUBLE", "rising_fraction": "DOUBLE",
     "runout_phase_deg": "DOUBLE", "mean_rpm": "DOUBLE", "criteria": "VARCHAR", "file_size": "BIGINT",
-    "file_mtime_ns": "BIGINT", "error": "VARCHAR", "status": "VARCHAR",
+    "file_mtime_ns": "BIGINT", "error": "VARCHAR", "status": "VARCHAR", "runout_unavailable": "VARCHAR",
 }
 EVENT_COLUMNS = {
     "application": "VARCHAR", "event": "INTEGER", "start_s": "DOUBLE", "end_s": "DOUBLE", "duration_s": "DOUBLE",
@@ -157,6 +158,8 @@ class CampaignStore:
         self.con.execute("ALTER TABLE applications ADD COLUMN IF NOT EXISTS status VARCHAR")
         self.con.execute("UPDATE applications SET status = CASE WHEN error IS NULL THEN 'ok' ELSE 'failed' END "
                          "WHERE status IS NULL")
+        # and before the run-out link could be unavailable (then it never was)
+        self.con.execute("ALTER TABLE applications ADD COLUMN IF NOT EXISTS runout_unavailable VARCHAR")
         cols = ", ".join(f"{k} {v}" for k, v in EVENT_COLUMNS.items())
         self.con.execute(f"CREATE TABLE IF NOT EXISTS events ({cols})")
         self.con.execute(

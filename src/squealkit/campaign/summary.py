@@ -65,7 +65,9 @@ def campaign_summary(store, band: tuple[float, float], criteria: str) -> dict[st
     dict
         JSON-ready: ``criteria``, ``applications``, ``applications_with_squeal``,
         ``occurrence_percent``, ``by_band``, ``by_temperature_c``, ``by_pressure_bar``,
-        ``max_peak_dba``, ``runout_link`` and ``failed`` (applications that could not be read).
+        ``max_peak_dba``, ``runout_link``, ``runout_unavailable`` (analysed applications without a
+        run-out link: ``application``, ``file``, ``reason``) and ``failed`` (applications that could
+        not be read).
     """
     apps = store.query("SELECT * FROM applications WHERE error IS NULL AND {in_matrix} ORDER BY application")
     ev = store.query("SELECT application, band_center_hz FROM events WHERE {in_matrix}")
@@ -102,6 +104,8 @@ def campaign_summary(store, band: tuple[float, float], criteria: str) -> dict[st
             "median_growth_slope_correlation": float(sq["growth_slope_correlation"].median()) if len(sq) else None,
             "median_rising_fraction": float(sq["rising_fraction"].median()) if len(sq) else None,
         },
+        "runout_unavailable": [{"application": r.application, "file": r.file, "reason": r.runout_unavailable}
+                               for r in apps.itertuples() if isinstance(r.runout_unavailable, str)],
         "failed": [{"application": a, "file": f, "error": e}
                    for a, f, e in zip(failed["application"], failed["file"], failed["error"], strict=True)],
     }

@@ -85,6 +85,9 @@ def campaign(matrix: Path, out_dir: Path, mic: str, displacement: str, radius: f
                    f"with squeal: occurrence {summary['occurrence_percent']:.1f} %")
     else:
         click.echo(f"no application could be analysed ({n_failed} failed)")
+    if summary["runout_unavailable"]:
+        click.echo(f"run-out link unavailable for {len(summary['runout_unavailable'])} applications "
+                   "(summary.json 'runout_unavailable' says why; give --rpm or --tacho for it)")
     for b in summary["by_band"]:
         if b["occurrence_percent"]:
             click.echo(f"  {b['band_hz'][0]:7.0f}-{b['band_hz'][1]:7.0f} Hz: {b['occurrence_percent']:5.1f} %")

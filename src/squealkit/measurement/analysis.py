@@ -139,7 +139,8 @@ class AnalysisSettings:
         InputError
             If a setting is out of range.
         """
-        validate_positive("rpm", self.rpm)
+        if not math.isnan(self.rpm):  # NaN: no disc speed, the run-out link left out (require_runout=False)
+            validate_positive("rpm", self.rpm)
         validate_positive("radius", self.radius)
         validate_positive("chunk_s", self.chunk_s)
         validate_positive("acoustic_delay", self.acoustic_delay, allow_zero=True)
@@ -201,6 +202,10 @@ class MeasurementResult:
     attrs : dict
         ``source`` (the file), ``synthetic``, ``max_tan_theta`` (largest run-out slope [1]) and
         ``surface_speed`` [m/s].
+    runout_unavailable : str or None
+        Why the run-out link could not be computed (no disc speed, a tacho that gives none),
+        when the analysis was asked for the squeal alone in that case (``require_runout=False``);
+        then the run-out results are None or NaN. None when it was computed.
     """
 
     squeal_frequency_hz: float | None
@@ -218,6 +223,7 @@ class MeasurementResult:
     polar: xr.Dataset = field(repr=False)
     spectrum: xr.Dataset = field(repr=False)
     attrs: dict[str, Any] = field(default_factory=dict, repr=False)
+    runout_unavailable: str | None = None
 
     @property
     def squeal(self) -> bool:
@@ -266,6 +272,7 @@ class MeasurementResult:
             "growth_slope_correlation": self.growth_slope_correlation,
             "rising_fraction": self.rising_fraction,
             "runout_phase_deg": self.runout_phase_deg,
+            "runout_unavailable": self.runout_unavailable,
             "runout": {
                 "n_revolutions": int(rev.sizes["revolution"]),
                 "sro_p2p_m": float(rev["sro_p2p"].median()) if rev.sizes["revolution"] else None,
@@ -522,7 +529,8 @@ def _open_source(recording: Any, fs: float | None) -> tuple[Any, dict[str, Any]]
     return src, {"source": str(src.path), "synthetic": src.synthetic}
 
 
-def _disc_rotation(src: Any, tacho: str | int | None, rpm: float | None, options: dict[str, Any]) -> tuple[Any, float]:
+def _disc_rotation(src: Any, tacho: str | int | None, rpm: float | None, options: dict[str, Any], *,
+                   required: bool = True) -> tuple[Any, float, str | None]:
     """The disc's position against time, from the tacho channel or the constant speed.
 
     Parameters
@@ -536,25 +544,37 @@ def _disc_rotation(src: Any, tacho: str | int | None, rpm: float | None, options
     options : dict
         The analysis options; ``tacho_kind``, ``pulses_per_rev``, ``tacho_level`` and
         ``angle_unit`` apply to the tacho.
+    required : bool
+        Raise where the rotation cannot be had (no speed given, a tacho that cannot give one);
+        otherwise return None and the reason.
 
     Returns
     -------
-    rotation : DiscAngle or ConstantSpeed
+    rotation : DiscAngle, ConstantSpeed or None
         Has ``turns(t)``, ``rev_per_s(t)`` and ``time_at(turns)``.
     rpm : float
-        The speed [rpm] (with a tacho: the mean speed over the recording).
+        The speed [rpm] (with a tacho: the mean speed over the recording); NaN without rotation.
+    unavailable : str or None
+        Why there is no rotation (then the run-out link cannot be computed).
     """
     fs = float(src.fs)
     if tacho is not None:
         tk = {k: options[k] for k in ("tacho_kind", "pulses_per_rev", "tacho_level", "angle_unit") if k in options}
-        rotation = read_tacho(src, tacho, kind=tk.get("tacho_kind", "pulses"),
-                              pulses_per_rev=tk.get("pulses_per_rev", 1), level=tk.get("tacho_level"),
-                              angle_unit=tk.get("angle_unit", "deg"))
+        try:
+            rotation = read_tacho(src, tacho, kind=tk.get("tacho_kind", "pulses"),
+                                  pulses_per_rev=tk.get("pulses_per_rev", 1), level=tk.get("tacho_level"),
+                                  angle_unit=tk.get("angle_unit", "deg"))
+        except InputError as e:
+            if required:
+                raise
+            return None, math.nan, f"no disc speed from the tacho channel {tacho!r}: {e}"
         span = src.n_samples / fs
-        return rotation, 60.0 * float(rotation.turns(span) - rotation.turns(0.0)) / span  # mean speed
+        return rotation, 60.0 * float(rotation.turns(span) - rotation.turns(0.0)) / span, None  # mean speed
     if rpm is None:
-        raise InputError("Give the disc speed rpm, or a tacho channel.")
-    return ConstantSpeed(validate_positive("rpm", rpm)), rpm
+        if required:
+            raise InputError("Give the disc speed rpm, or a tacho channel.")
+        return None, math.nan, "no disc speed: neither an rpm nor a tacho channel was given"
+    return ConstantSpeed(validate_positive("rpm", rpm)), rpm, None
 
 
 @dataclass(frozen=True)
@@ -607,8 +627,9 @@ def _plan(s: AnalysisSettings, fs: float, total: int, rotation: Any) -> _Plan:
         Sample rate [Hz].
     total : int
         Samples in the recording.
-    rotation : DiscAngle or ConstantSpeed
-        The disc's rotation (its slowest speed sets how far back the margins reach).
+    rotation : DiscAngle, ConstantSpeed or None
+        The disc's rotation (its slowest speed sets how far back the margins reach); None:
+        the squeal alone, no run-out.
 
     Returns
     -------
@@ -616,7 +637,7 @@ def _plan(s: AnalysisSettings, fs: float, total: int, rotation: Any) -> _Plan:
     """
     if total < s.nperseg:
         raise InputError(f"Recording has {total} samples, fewer than one analysis frame ({s.nperseg}).")
-    f_rev = revolution_frequency(s.rpm)
+    f_rev = math.nan if rotation is None else revolution_frequency(s.rpm)
     n, hop = s.nperseg, s.hop
     freq = np.fft.rfftfreq(n, 1 / fs)
     lo, hi = int(np.searchsorted(freq, s.band[0])), int(np.searchsorted(freq, s.band[1], side="right"))
@@ -624,17 +645,22 @@ def _plan(s: AnalysisSettings, fs: float, total: int, rotation: Any) -> _Plan:
         raise InputError(f"Band {s.band} Hz holds fewer than 5 bins of {fs / n:g} Hz; widen it or raise nperseg.")
     w_a = 10 ** (a_weighting_db(freq[lo:hi]) / 10)
     win = signal.windows.hann(n, sym=False)
-    # the slowest speed decides how far the probe's view of the pin's surface lies back in time
-    t_span = np.linspace(0.0, total / fs, 257)
-    f_min = max(float(np.min(rotation.rev_per_s(t_span))), 1e-3 * f_rev)
-    lag = s.acoustic_delay + abs(s.probe_offset_deg) / 360.0 / f_min
     # run-out is analysed at fs / dec, dec a divisor of hop with fs / dec >= 4 lowpass_freq
     dec = max(d for d in range(1, hop + 1) if hop % d == 0 and fs / d >= 4 * s.lowpass_freq)
-    f_macro = (s.macro_orders + 0.5) * f_rev
-    if f_macro >= s.lowpass_freq:
-        raise InputError(f"macro_orders={s.macro_orders} at {s.rpm:g} rpm puts the macro corner ({f_macro:g} Hz) "
-                         f"above lowpass_freq={s.lowpass_freq:g} Hz.")
-    rev0 = math.floor(float(rotation.turns(0.0)))  # revolutions count from the first mark (or t = 0)
+    if rotation is None:  # the squeal alone: no revolutions, margins for the frames only
+        lag, f_macro, rev0, n_rev, macro_margin = s.acoustic_delay, math.nan, 0, 0, 0
+    else:
+        # the slowest speed decides how far the probe's view of the pin's surface lies back in time
+        t_span = np.linspace(0.0, total / fs, 257)
+        f_min = max(float(np.min(rotation.rev_per_s(t_span))), 1e-3 * f_rev)
+        lag = s.acoustic_delay + abs(s.probe_offset_deg) / 360.0 / f_min
+        f_macro = (s.macro_orders + 0.5) * f_rev
+        if f_macro >= s.lowpass_freq:
+            raise InputError(f"macro_orders={s.macro_orders} at {s.rpm:g} rpm puts the macro corner "
+                             f"({f_macro:g} Hz) above lowpass_freq={s.lowpass_freq:g} Hz.")
+        rev0 = math.floor(float(rotation.turns(0.0)))  # revolutions count from the first mark (or t = 0)
+        n_rev = math.floor(float(rotation.turns((total - 1) / fs))) - rev0 + 1
+        macro_margin = int(4 * fs / ((s.macro_orders + 0.5) * f_rev))
     return _Plan(
         fs=fs, total=total, n=n, hop=hop, n_frames=(total - n) // hop + 1, half=(n - hop) // 2, freq=freq,
         lo=lo, hi=hi, w_a=w_a, w_a32=w_a.astype(np.float32), win32=win.astype(np.float32),
@@ -642,10 +668,9 @@ def _plan(s: AnalysisSettings, fs: float, total: int, rotation: Any) -> _Plan:
         half_width=max(2, int(0.5 * s.freq_tol * n / fs)),  # bins of a tonal component either side
         n_threads=thread_limit(),  # FFT threads: this process's share (one on a one-thread Dask worker)
         core=max(hop, round(s.chunk_s * fs / hop) * hop),
-        margin=max(n, int(0.25 * fs), int(4 * fs / ((s.macro_orders + 0.5) * f_rev)), int(lag * fs) + n),
+        margin=max(n, int(0.25 * fs), macro_margin, int(lag * fs) + n),
         dec=dec, fs_d=fs / dec, f_rev=f_rev, f_macro=f_macro, off_turns=s.probe_offset_deg / 360.0,
-        a_frames=math.exp(-hop / fs / s.criteria.time_constant_s), rev0=rev0,
-        n_rev=math.floor(float(rotation.turns((total - 1) / fs))) - rev0 + 1, nb=s.n_angle_bins,
+        a_frames=math.exp(-hop / fs / s.criteria.time_constant_s), rev0=rev0, n_rev=n_rev, nb=s.n_angle_bins,
     )
 
 
@@ -686,7 +711,7 @@ class _Accumulators:
         nf, nb = plan.n_frames, plan.nb
         return cls(
             level=np.full(nf, -np.inf), leq=np.empty(nf), ridge_f=np.empty(nf), e_tot=np.empty(nf),
-            e_rise=np.empty(nf), slope_f=np.empty(nf), frame_turns=np.zeros(nf),
+            e_rise=np.full(nf, np.nan), slope_f=np.full(nf, np.nan), frame_turns=np.zeros(nf),
             spec_state=np.zeros(plan.hi - plan.lo), mic_spec_sum=np.zeros(plan.freq.size),
             mic_cross_sum=np.zeros(plan.freq.size, np.complex128),
             rev_max=np.full((3, plan.n_rev), -np.inf), rev_min=np.full((3, plan.n_rev), np.inf),
@@ -1162,7 +1187,7 @@ def _runout_link(
 def _assemble(
     plan: _Plan, s: AnalysisSettings, acc: _Accumulators, rotation: Any, src: Any, attrs: dict[str, Any], *,
     events: list[SquealEvent], squeal_f: float | None, harmonics: list[dict[str, float]],
-    rising: float | None, corr: float | None, phase: float | None,
+    rising: float | None, corr: float | None, phase: float | None, unavailable: str | None = None,
 ) -> MeasurementResult:
     """Result step: label the accumulated features (frames, revolutions, angles, spectrum).
 
@@ -1170,14 +1195,16 @@ def _assemble(
     ----------
     plan, s, acc
         The analysis after its last window.
-    rotation : DiscAngle or ConstantSpeed
-        For the frames' disc speed.
+    rotation : DiscAngle, ConstantSpeed or None
+        For the frames' disc speed (None: unknown).
     src : RecordingSource-like
         For the source's name.
     attrs : dict
         The recording's attributes.
     events, squeal_f, harmonics, rising, corr, phase
         From the events and run-out link steps.
+    unavailable : str, optional
+        Why the run-out link could not be computed.
 
     Returns
     -------
@@ -1198,7 +1225,8 @@ def _assemble(
             "rising_power": ("time", acc.e_rise, {"units": "Pa^2",
                                                   "long_name": "band_power x share on rising run-out"}),
             "tan_theta": ("time", acc.slope_f, {"units": "1", "long_name": "mean SRO slope tan(theta)"}),
-            "rpm": ("time", 60.0 * rotation.rev_per_s(t_frames), {"units": "rpm", "long_name": "disc speed"}),
+            "rpm": ("time", np.full(t_frames.size, np.nan) if rotation is None else 60.0 * rotation.rev_per_s(t_frames),
+                    {"units": "rpm", "long_name": "disc speed"}),
         },
         coords={"time": ("time", t_frames, {"units": "s", "long_name": "frame centre"})},
     )
@@ -1226,12 +1254,14 @@ def _assemble(
         coords={"freq": ("freq", plan.freq, {"units": "Hz"})},
     )
     out_attrs = {"source": str(attrs.get("source", src.path)), "synthetic": bool(attrs.get("synthetic", False)),
-                 "max_tan_theta": acc.max_tan, "surface_speed": surface_speed(s.rpm, s.radius),
+                 "max_tan_theta": acc.max_tan if rotation is not None else math.nan,
+                 "surface_speed": surface_speed(s.rpm, s.radius) if rotation is not None else math.nan,
                  "min_tnr_db": s.min_tnr_db}
     return MeasurementResult(
         squeal_frequency_hz=squeal_f, harmonics=tuple(harmonics), events=tuple(events), rising_fraction=rising,
         growth_slope_correlation=corr, peak_dba=peak, runout_phase_deg=phase, duration_s=plan.total / fs, fs=fs,
         settings=s, frames=frames, revolutions=revolutions, polar=polar, spectrum=spectrum, attrs=out_attrs,
+        runout_unavailable=unavailable,
     )
 
 
@@ -1260,6 +1290,7 @@ def analyze_recording(
     time_weighting: str = "fast",
     fs: float | None = None,
     progress: Callable[[int, int], None] | None = None,
+    require_runout: bool = True,
     **options: Any,
 ) -> MeasurementResult:
     """Analyse a microphone + displacement recording for squeal and its tie to run-out.
@@ -1295,6 +1326,11 @@ def analyze_recording(
         Sample rate [Hz] where the recording does not carry one.
     progress : callable, optional
         Called as ``progress(samples_done, samples_total)``.
+    require_runout : bool, default True
+        Without a disc speed (no ``rpm`` nor ``tacho``, or a tacho that cannot give one, e.g.
+        fewer than 3 marks in a short low-speed drag) raise; with False analyse the squeal alone
+        (SAE J2521 occurrence needs no speed) and say why in the result's
+        ``runout_unavailable`` (the run-out results are then None or NaN).
     **options
         Further :class:`AnalysisSettings` fields (``lowpass_freq``, ``macro_orders``,
         ``nperseg``, ``hop``, ``freq_tol``, ``n_angle_bins``, ``chunk_s``), and the rig's
@@ -1320,7 +1356,7 @@ def analyze_recording(
     crit = squeal_criteria(setup, band=band, threshold_dba=threshold_dba, time_weighting=time_weighting,
                            min_duration=min_duration)
     fs_ = float(src.fs)
-    rotation, rpm = _disc_rotation(src, tacho, rpm, options)
+    rotation, rpm, unavailable = _disc_rotation(src, tacho, rpm, options, required=require_runout)
     try:
         s = AnalysisSettings(rpm=rpm, radius=radius, criteria=crit, **options)
     except TypeError as e:
@@ -1332,13 +1368,16 @@ def analyze_recording(
     plan = _plan(s, fs_, src.n_samples, rotation)
     acc = _Accumulators.empty(plan)
     block = _read_block(src, plan)
-    for c0, c1, w0, data in _windows(src, [mic_n, disp_n], plan.core, plan.margin, block):
+    wanted = [mic_n] if rotation is None else [mic_n, disp_n]  # no speed: the probe is not read
+    for c0, c1, w0, data in _windows(src, wanted, plan.core, plan.margin, block):
         win = _Window.at(plan, c0, c1, w0)
-        p, q = data[mic_n].astype(np.float32), data[disp_n]  # the band level and the frames: single precision
+        p = data[mic_n].astype(np.float32)  # the band level and the frames: single precision
         ms = _band_level(plan, s, win, p, acc)
         if win.f1 > win.f0:
             _frame_components(plan, s, win, _frame_spectra(plan, win, p, acc), acc)
-        _accumulate_runout(plan, s, win, _runout_signals(plan, s, win, q, rotation), ms, rotation, acc)
+        if rotation is not None:
+            _accumulate_runout(plan, s, win, _runout_signals(plan, s, win, data[disp_n], rotation), ms, rotation,
+                               acc)
         if progress is not None:
             progress(c1, plan.total)
 
@@ -1350,7 +1389,8 @@ def analyze_recording(
     if events:
         in_ev = _in_events(plan.n_frames, ev_frames)
         squeal_f, harmonics = _squeal_lines(plan, acc, in_ev)
-        rising, corr = _runout_statistics(plan, s, acc, in_ev)
+        if rotation is not None:
+            rising, corr = _runout_statistics(plan, s, acc, in_ev)
     phase, events = _runout_link(plan, acc, events, ev_frames, ev_weights)
     return _assemble(plan, s, acc, rotation, src, attrs, events=events, squeal_f=squeal_f, harmonics=harmonics,
-                     rising=rising, corr=corr, phase=phase)
+                     rising=rising, corr=corr, phase=phase, unavailable=unavailable)

@@ -26,6 +26,7 @@ A model file (all sections optional; SI units, angles in rad or as ``*_deg`` in 
     omega_ref = 1.0            # rad/s; mu_ref, f_ref likewise (defaults 1)
     mesh = "mesh.vtu"          # optional: the mesh of the DOFs (meshio), for modes --vtk
     dof_names = "dof_names.txt"  # optional: one DOF name per line (node12.x: mesh point 12, x)
+    omit = ["DG"]              # matrices read but left out of the assembly (optional)
 
 File paths are relative to the model file. An ``[uncertain]`` table belongs to
 ``montecarlo`` and is ignored here; any other table or key is an error (a typo such as
@@ -82,7 +83,8 @@ _SCHEMA: dict[str, dict[str, type | tuple[type, ...]]] = {
     "": {"model": str, "preset": str, "description": str, "parameters": Mapping, "rig": Mapping,
          "matrices": Mapping, "fe": Mapping, "uncertain": Mapping},
     "fe": {"file": str, "files": Mapping, "files.*": str, "names": Mapping, "names.*": str,
-           "omega_ref": _NUMBER, "mu_ref": _NUMBER, "f_ref": _NUMBER, "mesh": str, "dof_names": str},
+           "omega_ref": _NUMBER, "mu_ref": _NUMBER, "f_ref": _NUMBER, "mesh": str, "dof_names": str,
+           "omit": (list, str)},
     "rig": {"*": (*_NUMBER, str)},
     "parameters": {"*": (*_NUMBER, str)},
 }
@@ -175,8 +177,14 @@ def _fe_from_table(table: Any, base_dir: Path | None) -> FEModel:
         if key not in _FE_KEYS:
             raise InputError(f"Unknown [fe] key {key!r}; known: {', '.join(_FE_KEYS)}.")
     refs = {k: validate_finite(k, table[k]) for k in ("omega_ref", "mu_ref", "f_ref") if k in table}
+    omit = table.get("omit", [])
+    if isinstance(omit, str):
+        omit = [omit]
+    if not (isinstance(omit, list) and all(isinstance(k, str) for k in omit)):
+        raise InputError(f'[fe] omit={omit!r} must be a list of matrix names, e.g. omit = ["DG"].')
     return load_fe_model(table.get("file"), files=table.get("files"), names=table.get("names"),
-                         base_dir=base_dir, mesh=table.get("mesh"), dof_names=table.get("dof_names"), **refs)
+                         base_dir=base_dir, omit=omit, mesh=table.get("mesh"), dof_names=table.get("dof_names"),
+                         **refs)
 
 
 def model_from_dict(doc: Mapping[str, Any], base_dir: str | Path | None = None) -> FrictionModel | FEModel:

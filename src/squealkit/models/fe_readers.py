@@ -9,7 +9,7 @@ matrix, with the names they have in the files if those differ, and builds the
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -221,6 +221,7 @@ def load_fe_model(
     base_dir: str | Path | None = None,
     mesh: str | Path | None = None,
     dof_names: str | Path | None = None,
+    omit: Sequence[str] = (),
 ) -> FEModel:
     """An FE model read from exported matrices.
 
@@ -242,6 +243,9 @@ def load_fe_model(
         export (:func:`~squealkit.stability.fe_sweep.modes_to_vtk`); needs meshio.
     dof_names : path, optional
         A text file with one DOF name per line (``node12.x`` puts that DOF on mesh point 12).
+    omit : sequence of str, optional
+        Matrices read but left out of the assembly, e.g. ``("DG",)`` for no gyroscopic term
+        (NLEVP's disk_brake100 with ``D = D1 + DR/omega``); ``M`` and ``K1`` cannot be omitted.
 
     Returns
     -------
@@ -252,7 +256,7 @@ def load_fe_model(
     ------
     InputError
         If neither or both of ``file`` and ``files`` are given, a name is not an FE matrix,
-        or a file cannot be read.
+        ``omit`` names ``M``, ``K1`` or no FE matrix, or a file cannot be read.
 
     Examples
     --------
@@ -263,6 +267,11 @@ def load_fe_model(
     if (file is None) == (files is None):
         raise InputError("An FE model needs either file (all matrices in one file) or files (one per matrix).")
     names = dict(names or {})
+    omit = (omit,) if isinstance(omit, str) else tuple(omit)
+    for key in omit:
+        if key not in FE_MATRICES or key in ("M", "K1"):
+            raise InputError(f"omit={key!r}: only {', '.join(k for k in FE_MATRICES if k not in ('M', 'K1'))} "
+                             "can be left out of an FE model (M and K1 are required).")
     for key in names:
         if key not in FE_MATRICES:
             raise InputError(f"Unknown FE matrix {key!r} in names; known: {', '.join(FE_MATRICES)}.")
@@ -297,6 +306,10 @@ def load_fe_model(
                 m = next(iter(found.values()))
             mats[key] = m
         source = ", ".join(str(v) for v in dict(files).values())
+    for key in omit:
+        mats.pop(key, None)
+    if omit:
+        source += f" (without {', '.join(omit)})"
     extra = {"mesh": _read_mesh(resolve(mesh)) if mesh is not None else None,
              "dof_names": _read_dof_names(resolve(dof_names)) if dof_names is not None else None}
     try:

@@ -23,6 +23,7 @@ the data themselves, and no answer is given silently.
 
 from __future__ import annotations
 
+import inspect
 import itertools
 import math
 import warnings
@@ -109,7 +110,8 @@ def mp_roots(M: NDArray, C: NDArray, K: NDArray, scale: float, dps: int = _MP_DP
     The coefficients come from the determinant at 2n+1 points on the circle of radius
     ``scale`` (an inverse discrete Fourier transform, exact to the working precision); each
     coefficient's error is bounded by ``tol max|p| / scale^d``, and :func:`inclusion_radii`
-    turns that into a radius per root. The matrices are taken exactly as given (doubles).
+    turns that into a radius per root, to which the rounding of each root to a double is
+    added. The matrices are taken exactly as given (doubles).
     """
     import mpmath
 
@@ -137,14 +139,21 @@ def mp_roots(M: NDArray, C: NDArray, K: NDArray, scale: float, dps: int = _MP_DP
         if lead == 0:
             return np.full(deg, np.nan + 0j), np.full(deg, np.inf)
         try:
-            z = mpmath.polyroots(coef[::-1], maxsteps=400, extraprec=4 * dps)
+            # mpmath >= 1.4 takes ascending coefficients (asc=True), older ones descending only
+            asc = "asc" in inspect.signature(mpmath.polyroots).parameters
+            z = mpmath.polyroots(coef if asc else coef[::-1], maxsteps=400, extraprec=4 * dps,
+                                 **({"asc": True} if asc else {}))
         except mpmath.libmp.NoConvergence:
             return np.full(deg, np.nan + 0j), np.full(deg, np.inf)
         tol = mpmath.mpf(10) ** (-dps + 4) * N * pmax
         err_at = np.array([float(sum(tol * (abs(zk) / R) ** d for d in range(N))) for zk in z])
         roots = np.array([complex(zk) for zk in z])
+        # the roots are returned in doubles: their discs must also cover that rounding
+        # (about eps |z|), else a disc of 1e-40 around a rounded centre misses its root
+        rounding = np.array([float(abs(zk - mpmath.mpc(r))) for zk, r in zip(z, roots, strict=True)])
     radius = np.empty(deg)
     inclusion_radii(roots, float(lead), err_at, radius, np.empty(deg, dtype=np.bool_))
+    radius += np.nextafter(rounding, np.inf)
     return roots, radius
 
 

@@ -21,6 +21,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
+from .._threads import honour_thread_limit
 from .._validation import InputError, validate_array_finite, validate_finite, validate_model, validate_positive
 from ..models import FrictionModel
 from ..models.friction import Stribeck, validate_friction
@@ -129,6 +130,7 @@ class CriticalFriction:
         return d
 
 
+@honour_thread_limit
 def critical_friction_curve(
     model: FrictionModel,
     theta: ArrayLike,
@@ -264,6 +266,7 @@ def _pairs(a: NDArray) -> tuple[tuple[float, float], ...]:
     return tuple((float(lo), float(hi)) for lo, hi in a if np.isfinite(lo))
 
 
+@honour_thread_limit
 def critical_friction(
     model: FrictionModel,
     theta: float = 0.0,
@@ -370,6 +373,7 @@ class RunoutTolerance:
         return dataclasses.asdict(self)
 
 
+@honour_thread_limit
 def runout_tolerance(
     model: FrictionModel,
     mu: float,

@@ -18,7 +18,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
-from .._threads import limit_threads, threads_for
+from .._threads import honour_thread_limit, limit_threads, threads_for
 from .._validation import InputError, check_memory, validate_array_finite, validate_dataset, validate_model
 from ..models import FEModel, FrictionModel
 from ..models.friction import Stribeck, validate_friction
@@ -286,6 +286,7 @@ def _solve_grid(model, mu, tan_theta, damped, progress=None, friction=None, spee
     return (lam.reshape((*shape, n)), err.reshape((*shape, n)), verdict.reshape(shape), thr.reshape(shape))
 
 
+@honour_thread_limit
 def eigenvalues(
     model: FrictionModel,
     mu: ArrayLike,
@@ -346,6 +347,7 @@ def eigenvalues(
     return _solve_grid(model, mu, tan_theta, damped, progress, friction, speed)[0]
 
 
+@honour_thread_limit
 def stability_verdict(
     model: FrictionModel,
     mu: ArrayLike,
@@ -399,6 +401,7 @@ def stability_verdict(
     return np.asarray(VERDICTS)[_solve_grid(model, mu, tan_theta, damped, None, friction, speed)[2]]
 
 
+@honour_thread_limit
 def stability_map(
     model: FrictionModel,
     mu: ArrayLike,
@@ -593,7 +596,8 @@ def _eigen_variables(dims, sigma, omega, zeta, err, unstable, verdict, smax, any
         "max_growth_rate": (point, smax, {"units": "1/s", "long_name": "largest growth rate"}),
         "any_unstable": (point, any_u, {"long_name": "unstable: flutter or divergence"}),
         "lock_in": (point, locked,
-                    {"long_name": "two modes coalesced in frequency, one unstable", "rtol": lock_in_rtol}),
+                    {"long_name": "lock-in: an unstable oscillating mode nearer another in frequency than in growth",
+                     "rtol": lock_in_rtol}),
     }
 
 

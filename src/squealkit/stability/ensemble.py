@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._threads import limit_threads, threads_for
+from .._threads import honour_thread_limit, limit_threads, threads_for
 from .._validation import InputError, validate_array_finite, validate_finite
 from ..models import FrictionModel
 from ._kernels import DIVERGENCE, FLUTTER, INDETERMINATE
@@ -176,6 +176,7 @@ def _slope(tan_theta: float) -> float:
     return validate_finite("tan_theta", tan_theta)
 
 
+@honour_thread_limit
 def ensemble_unstable(ens: ModelEnsemble, mu: ArrayLike, tan_theta: float = 0.0) -> NDArray[np.bool_]:
     """Which models are unstable at each friction coefficient (paper eqs. 7-8).
 
@@ -208,6 +209,7 @@ def ensemble_unstable(ens: ModelEnsemble, mu: ArrayLike, tan_theta: float = 0.0)
     return _unstable_rows(ens, np.broadcast_to(mu_a, (len(ens), mu_a.size)), t)
 
 
+@honour_thread_limit
 def ensemble_onset(
     ens: ModelEnsemble,
     mu: ArrayLike,

@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike, NDArray
 from threadpoolctl import threadpool_limits
 
 from .. import __version__
-from .._threads import thread_limit
+from .._threads import honour_thread_limit, thread_limit
 from .._validation import InputError, validate_angle, validate_array_finite, validate_model, validate_positive
 from ..models.fe import FEModel, rpm_to_omega
 from . import reduction
@@ -149,6 +149,7 @@ def _tan_theta(theta: float) -> float:
     return math.tan(validate_angle("theta", theta))
 
 
+@honour_thread_limit
 def fe_stability_map(
     model: FEModel,
     rpm: ArrayLike,
@@ -445,6 +446,7 @@ def _onsets(solver: FESolver, omegas: NDArray, grid: NDArray, t: float, xtol: fl
     return mu_c, freq, status
 
 
+@honour_thread_limit
 def fe_critical_friction(
     model: FEModel,
     rpm: ArrayLike,
@@ -538,6 +540,7 @@ def fe_critical_friction(
     return ds
 
 
+@honour_thread_limit
 def fe_modes(
     model: FEModel,
     rpm: float,

@@ -37,6 +37,7 @@ import xarray as xr
 from numpy.typing import NDArray
 
 from .. import __version__
+from .._threads import honour_thread_limit
 from .._validation import InputError, validate_dataset, validate_finite, validate_model
 from ..models import FrictionModel
 
@@ -176,6 +177,7 @@ def _point_verdict(model: FrictionModel, mu: float, t: float, damped: bool) -> t
     return VERDICTS[int(verdict[0])], float(thr[0])
 
 
+@honour_thread_limit
 def modes(model: FrictionModel, mu: float, theta: float = 0.0, *, damped: bool = False) -> xr.Dataset:
     """Complex modes of the model at friction ``mu`` and run-out incline ``theta``.
 
@@ -290,6 +292,7 @@ def _dof_descriptions(model: FrictionModel, names: tuple[str, ...]) -> tuple[str
     return desc if len(desc) == len(names) else names
 
 
+@honour_thread_limit
 def mode_shapes(ds: xr.Dataset, *, left: bool = False) -> NDArray[np.complex128]:
     """The complex mode shapes of a :func:`modes` result, shape (mode, dof).
 
@@ -314,6 +317,7 @@ def mode_shapes(ds: xr.Dataset, *, left: bool = False) -> NDArray[np.complex128]
     return ds[f"{pre}_real"].values + 1j * ds[f"{pre}_imag"].values
 
 
+@honour_thread_limit
 def onset_modes(
     model: FrictionModel, theta: float = 0.0, *, damped: bool = False, mu_max: float = 2.0
 ) -> xr.Dataset:
@@ -513,6 +517,7 @@ def _dlambda(
     return -num / den
 
 
+@honour_thread_limit
 def eigenvalue_sensitivity(
     model: FrictionModel, mu: float, theta: float, parameter: str, *, damped: bool = False
 ) -> xr.Dataset:

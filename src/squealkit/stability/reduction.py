@@ -45,7 +45,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .._threads import thread_limit
+from .._threads import honour_thread_limit, thread_limit
 from .._validation import InputError
 from ..models.fe import FEModel
 from .sparse import (
@@ -119,6 +119,7 @@ def _one_blas_thread():
 # ----------------------------------------------------------------------------- modal basis
 
 
+@honour_thread_limit
 def modal_basis(
     matrices: Any,
     *,
@@ -230,6 +231,7 @@ def _snapshot(fe, omega: float, mu: float, band: tuple[float, float], parts: Den
     return sol.vectors[:, (f >= band[0]) & (f <= band[1])]
 
 
+@honour_thread_limit
 def pod_basis(
     matrices: Any,
     omegas: Sequence[float],
@@ -394,6 +396,7 @@ class ReducedModel:
         return self.V.shape[1]
 
 
+@honour_thread_limit
 def reduce(matrices: Any, V: np.ndarray) -> ReducedModel:
     """Project every matrix on the basis ``V`` (orthonormalised first) and keep residual data.
 
@@ -432,6 +435,7 @@ def _gram(model: FEModel, order: Sequence[str]) -> np.ndarray:
     return G
 
 
+@honour_thread_limit
 def reduced_eigs(
     reduced: ReducedModel,
     omega: float,
@@ -522,6 +526,7 @@ def _reduced_backward_error(reduced: ReducedModel, coef, lam: np.ndarray, Y: np.
     return res / ((np.abs(lam) ** 2 * nM + np.abs(lam) * nC + nK) * np.linalg.norm(Y, axis=0))
 
 
+@honour_thread_limit
 def reduced_sweep(
     reduced: ReducedModel,
     omegas: Sequence[float],

@@ -33,6 +33,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from .._threads import honour_thread_limit
 from .._validation import InputError, validate_model, validate_positive
 from ..models import FrictionModel
 from ..models.friction import Stribeck
@@ -59,6 +60,7 @@ def _parameter_names(model: FrictionModel, parameters: Sequence[str] | None, dam
     return names
 
 
+@honour_thread_limit
 def critical_friction_sensitivity(
     model: FrictionModel,
     theta: float = 0.0,

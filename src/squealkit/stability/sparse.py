@@ -32,7 +32,7 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
-from .._threads import thread_limit
+from .._threads import honour_thread_limit, thread_limit
 from .._validation import InputError, validate_finite, validate_int, validate_model, validate_positive
 from ..models.fe import FEModel
 
@@ -110,6 +110,7 @@ def _backward(M, C, K, lam: NDArray, X: NDArray) -> NDArray[np.float64]:
         return np.where(den > 0, np.linalg.norm(R, axis=0) / den, np.inf)
 
 
+@honour_thread_limit
 def backward_errors(model: FEModel, omega: float, mu: float, lam: NDArray, X: NDArray,
                     tan_theta: float = 0.0) -> NDArray[np.float64]:
     """Backward error ``eta`` of each eigenpair ``(lam[k], X[:, k])`` (module docstring)."""
@@ -147,6 +148,7 @@ class DenseParts:
     congruent: dict[str, NDArray]
 
 
+@honour_thread_limit
 def dense_parts(model: FEModel) -> DenseParts:
     """The model's matrices prepared for repeated dense solves (:class:`DenseParts`)."""
     validate_model(model, kind="fe")
@@ -174,6 +176,7 @@ _C_NAMES = ("D1", "DR", "DG", "D4")
 _K_NAMES = ("K1", "KR", "KGeo")
 
 
+@honour_thread_limit
 def dense_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *, vectors: bool = True,
                parts: DenseParts | None = None) -> EigenSolution:
     """All eigenvalues of the model at ``(omega, mu)`` by LAPACK on the 2n state matrix.
@@ -467,6 +470,7 @@ def _real_times(A, X: NDArray) -> NDArray[np.complex128]:
     return np.ascontiguousarray(Y).view(np.complex128).reshape((A.shape[0], *shape[1:]))
 
 
+@honour_thread_limit
 def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *,
               band: tuple[float, float] = BAND_HZ, k: int | None = None, sigma_reach: float = 0.0,
               max_shifts: int = 400, workers: int | None = None, tol: float = 1e-12) -> EigenSolution:

@@ -20,6 +20,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
+from ._kernels import _REAL_RTOL, _locked_in
+
 __all__ = ["lock_in", "track_modes"]
 
 _MAX_BRUTE_FORCE = 5
@@ -200,31 +202,48 @@ def lock_in(
     rtol: float = 1e-3,
     unstable_threshold: float = 0.0,
 ) -> NDArray[np.bool_]:
-    """Where two modes have locked in: equal frequency (within ``rtol``) and one unstable.
+    """Where two modes have locked in (mode coupling): frequencies merged, growth rates split, one growing.
+
+    A point is locked in when an unstable oscillating mode ``k`` has another mode ``m`` nearer
+    to it in frequency than in growth rate, ``|omega_k - omega_m| <= max(rtol * max(omega_k,
+    omega_m), |sigma_k - sigma_m|)``: the undamped pair ``+-sigma`` at one frequency, or its
+    damped counterpart whose frequencies only approach. A growing real root (divergence) and a
+    lone mode destabilised by negative damping are not lock-in. The flag of
+    :func:`~squealkit.stability.stability_map`, which also uses each root's error radius.
 
     Parameters
     ----------
     omega, growth_rate : ndarray, shape (..., n_mode)
         Imaginary and real parts of the eigenvalues [rad/s, 1/s].
     rtol : float
-        Relative frequency tolerance for coalescence.
+        Relative frequency tolerance for coalescence, the least the criterion accepts.
     unstable_threshold : float or ndarray
         Growth rate above which a mode counts as unstable [1/s].
 
     Returns
     -------
     ndarray of bool, shape (...)
+
+    Examples
+    --------
+    >>> bool(lock_in(np.array([100.0, 100.0]), np.array([5.0, -5.0])))
+    True
+    >>> bool(lock_in(np.array([0.0, 0.0]), np.array([5.0, -3.0])))  # divergence
+    False
     """
-    w = np.asarray(omega)
-    s = np.asarray(growth_rate)
-    dw = np.abs(w[..., :, None] - w[..., None, :])
-    scale = np.maximum(np.abs(w[..., :, None]), np.abs(w[..., None, :]))
-    close = dw <= rtol * scale
-    n = w.shape[-1]
-    close &= ~np.eye(n, dtype=bool)
-    thr = np.asarray(unstable_threshold)[..., None, None] if np.ndim(unstable_threshold) else unstable_threshold
-    unstable_pair = (s[..., :, None] > thr) | (s[..., None, :] > thr)
-    return np.any(close & unstable_pair, axis=(-2, -1))
+    w = np.asarray(omega, dtype=float)
+    s = np.asarray(growth_rate, dtype=float)
+    w, s = np.broadcast_arrays(w, s)
+    lead = w.shape[:-1]
+    thr = np.broadcast_to(np.asarray(unstable_threshold, dtype=float), lead)[..., None]
+    unstable = s > thr
+    oscillating = np.abs(w) > _REAL_RTOL * np.hypot(w, s)
+    flat = (-1, w.shape[-1])
+    out = [_locked_in(*rows, float(rtol)) for rows in zip(
+        np.ascontiguousarray(s.reshape(flat)), np.ascontiguousarray(w.reshape(flat)),
+        np.ascontiguousarray(unstable.reshape(flat)), np.ascontiguousarray(oscillating.reshape(flat)),
+        strict=True)]
+    return np.array(out, dtype=bool).reshape(lead)
 
 
 def _mac(A: NDArray, B: NDArray) -> NDArray:
