@@ -52,7 +52,8 @@ def _plain_help(app, ctx, lines) -> None:
             block.append(line[2:])
             continue
         flush()
-        out.append(line.replace("*", r"\*"))
+        # plain text: a literal *, but sphinx-click's own "**Required**" marker stays bold
+        out.append(line.replace("*", r"\*").replace(r"\*\*Required\*\*", "**Required**"))
     flush()
     lines[:] = out
 
@@ -61,3 +62,7 @@ def setup(app) -> None:
     app.connect("sphinx-click-process-description", _plain_help)
     app.connect("sphinx-click-process-options", _plain_help)
     app.connect("sphinx-click-process-epilog", _plain_help)
+
+# long code lines wrap instead of being cut at the edge of the page
+html_static_path = ["_static"]
+html_css_files = ["wrap.css"]

@@ -21,6 +21,12 @@ def test_docs_build_without_warnings(tmp_path):
         assert (tmp_path / "html" / f"{page}.html").stat().st_size > 2000
     cli = (tmp_path / "html" / "cli.html").read_text(encoding="utf-8")
     assert "squealkit stability" in cli and "--mu" in cli  # generated from the commands
+    # required options are marked in bold, not with literal asterisks
+    assert "**Required**" not in cli and "<strong>Required</strong>" in cli
+    # long code lines wrap (docs/_static/wrap.css) instead of being cut at the page's edge
+    assert "wrap.css" in cli and "pre-wrap" in (tmp_path / "html" / "_static" / "wrap.css").read_text()
+    for page in ("models", "stability", "fe-models", "transient", "measurement", "command-line", "speed"):
+        assert (tmp_path / "html" / "guide" / f"{page}.html").stat().st_size > 5000  # the guide
     api = (tmp_path / "html" / "api.html").read_text(encoding="utf-8")
     assert "critical_friction" in api and "stability_map" in api
     # the equations render offline: MathJax is bundled with the pages
