@@ -98,6 +98,16 @@ class ReportSettings:
         it (1.5 mu_c), the limit cycle quoted at 1.3 mu_c, and a 1 mm run-out whose steepest slope
         is 0.3 mu_c, so that Fig. 4's mu + tan(theta) swings through the onset as in the paper.
         A model without a damped onset up to mu = 2 gets the paper's values, and says so.
+
+        Parameters
+        ----------
+        model : FrictionModel
+            The report's model.
+
+        Returns
+        -------
+        ReportSettings
+            With ``source`` saying where the values come from.
         """
         from ..stability import critical_friction
 
@@ -115,7 +125,21 @@ class ReportSettings:
 
     @classmethod
     def from_table(cls, table: Mapping[str, Any], base: ReportSettings, name: str = "[report]") -> ReportSettings:
-        """``base`` with the values of a ``[report]`` table; an unknown key is an error."""
+        """``base`` with the values of a ``[report]`` table; an unknown key is an error.
+
+        Parameters
+        ----------
+        table : mapping
+            ``NAME = VALUE`` pairs, names of this class's fields (SI units: m, m/s).
+        base : ReportSettings
+            The values the table does not set.
+        name : str
+            The table's name in error messages.
+
+        Returns
+        -------
+        ReportSettings
+        """
         known = [f.name for f in fields(cls) if f.name != "source"]
         values = {}
         for key, value in table.items():
