@@ -32,7 +32,7 @@ STABLE = PIN + "disc_freq = 5200.0\n\n[parameters]\nalpha_deg = 2.0\nc1 = 0.0\nc
 # critical_friction); its own operating point in a [report] table
 DAMPED = (PIN + "disc_freq = 2650.0\n\n[parameters]\nalpha_deg = 2.0\nc1 = 30.0\nc2 = 30.0\nc3 = 30.0\n\n"
           "[report]\nmu_design = 0.04\nmu_transient = 0.045\nmu_unstable = 0.08\nmu_cycle = 0.07\n"
-          "sro_amplitude = 6e-6\nsro_wavelength = 2e-3\n")
+          "sro_amplitude = 6e-6\nsro_wavelength = 2e-3\nspeed = 0.04\n")
 
 
 def _text(html: str) -> str:
@@ -117,7 +117,9 @@ def test_own_operating_point_from_the_report_table(damped):
     assert n["transient"]["mu_transient"] == 0.045 and n["critical"]["mu_design"] == 0.04
     assert "Run-out tolerance at mu = 0.04" in text
     assert "Fig. 4 (sine SRO, q0 = 0.006 mm, lambda = 2 mm" in text
-    assert "mu = 0.08, where it grows" in text
+    assert "mu = 0.08, where it grows" in text and "v = 0.04 m/s" in text
+    # the Fig. 4 run lasts long enough for whole run-out stages of the rig's own wavelength and speed
+    assert n["transient"]["rising_stages"] >= 1 and n["transient"]["falling_stages"] >= 1
     assert "at mu = 0.07 (" in text  # the limit cycle quoted at mu_cycle
     # nothing from the paper's operating point (mu 0.3, 0.4, 0.6, q0 = 80 um, lambda = 1 mm)
     for paper in (r"mu = 0\.4\b", r"mu = 0\.6\b", r"mu = 0\.3\b", r"(?<![\d.])80 um", r"0\.08 mm", r"lambda = 1 mm",
@@ -128,11 +130,12 @@ def test_own_operating_point_from_the_report_table(damped):
 def test_own_rig_gets_no_published_comparisons(damped):
     # only the paper's model is compared with the paper's numbers: every comparison row of another rig has an
     # empty published cell, and no paper number appears
-    tables = re.findall(r"<caption>Published beside computed</caption>(.*?)</table>", damped.html, flags=re.S)
+    assert "Published beside computed" not in damped.html  # its tables of checks are called so
+    tables = re.findall(r"<caption>Checks</caption>(.*?)</table>", damped.html, flags=re.S)
     rows = [c for t in tables for c in re.findall(r"<tr><td>[^<]*</td><td>([^<]*)</td>", t)]
     assert rows and set(rows) == {"&mdash;"}
     text = damped.text
-    for paper in ("14997", "15317", "2387", "m1 from the rig", "paper: 2388", "for reference"):
+    for paper in ("14997", "15317", "2387", "m1 from the rig", "paper: 2388", "for reference", "as the paper finds"):
         assert paper not in text, paper
 
 

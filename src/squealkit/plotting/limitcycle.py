@@ -205,7 +205,7 @@ def how_loud_plot(branch: xr.Dataset, slope_branch: xr.Dataset | None, envelope:
     ax_b.plot([branch.attrs["hopf_mu"]], [0], "k*", ms=11, label="onset (Hopf point)")
     ax_b.set_xlabel("effective friction mu_e = mu + tan(theta)")
     ax_b.set_ylabel(f"{dof} amplitude [um]")
-    ax_b.legend(fontsize=8, loc="upper left")
+    ax_b.legend(fontsize=8, loc="lower right")  # the branches rise from the onset at the left
     t_ms = envelope["time"].values * 1e3
     ax_t.plot(t_ms, envelope.values * 1e6, color="tab:gray", lw=1.0, label=f"transient: {dof} envelope (> 1 kHz)")
     ax_t.plot(cycle["time"].values * 1e3, cycle.values * 1e6, "--", color="tab:red", lw=1.6,

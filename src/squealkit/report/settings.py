@@ -120,8 +120,7 @@ class ReportSettings:
         return cls(mu_design=_round(0.75 * c), mu_transient=_round(0.9 * c), mu_unstable=_round(1.5 * c),
                    mu_cycle=_round(1.3 * c), sro_amplitude=float(f"{0.3 * c * wavelength / (2 * math.pi):.2g}"),
                    sro_wavelength=wavelength, speed=0.02,
-                   source=f"placed from this model's damped onset on a flat disc, mu_crit = {c:.4g}; a [report] "
-                          "table in the model file sets them")
+                   source=f"placed from this model's damped onset on a flat disc, mu_crit = {c:.4g}")
 
     @classmethod
     def from_table(cls, table: Mapping[str, Any], base: ReportSettings, name: str = "[report]") -> ReportSettings:
@@ -148,8 +147,9 @@ class ReportSettings:
             if isinstance(value, bool) or not isinstance(value, int | float):
                 raise InputError(f"{name} {key} = {value!r} must be a number.")
             values[key] = float(value)
-        return replace(base, **values, source=f"{name}: " + ", ".join(f"{k} = {v:g}" for k, v in values.items())
-                       + ("" if len(values) == len(known) else f"; the rest {base.source}"))
+        rest = [k for k in known if k not in values]
+        return replace(base, **values, source=f"the model file's {name} table"
+                       + (f"; {', '.join(rest)}: {base.source}" if rest else ""))
 
 
 def _round(x: float) -> float:

@@ -170,7 +170,8 @@ def beyond_step(model: FrictionModel, figures: Path, data: Path, *,
            if spread["consistent"] > max(0.05, 3 * spread["paper"]) else
            f"; there mu_crit + tan(theta) varies by {100 * spread['consistent']:.2f} %."),
         f"Run-out tolerance at mu = {mu_design:g} (undamped, wavelength {wavelength * 1e3:g} mm): the paper's "
-        f"model allows {_tolerance_words(tol['paper'])}; the consistent one {_tolerance_words(tol['consistent'])}"
+        f"model allows {_tolerance_words(tol['paper'])}; the consistent one allows "
+        f"{_tolerance_words(tol['consistent'])}"
         + ("." if min(tol["paper"].tan_theta_max, tol["consistent"].tan_theta_max) <= 0
            or math.isinf(max(tol["paper"].tan_theta_max, tol["consistent"].tan_theta_max)) else
            ": " + _ratio_text(tol["paper"].q0_max, tol["consistent"].q0_max)),
@@ -184,7 +185,8 @@ def beyond_step(model: FrictionModel, figures: Path, data: Path, *,
                "consistent mu_crit + tan(theta)"), rows),
         Table(f"Run-out tolerance at mu = {mu_design:g}, wavelength {wavelength * 1e3:g} mm",
               ("kinematics", "largest stable slope", "theta [deg]", "q0 max [um]", "limited by"),
-              tuple((k, t.tan_theta_max, t.theta_max_deg, _um(t.q0_max), t.limiting_side) for k, t in tol.items())),
+              tuple((k, t.tan_theta_max, t.theta_max_deg, _um(t.q0_max), t.limiting_side) if math.isfinite(
+                  t.tan_theta_max) else (k, "every slope searched", None, None, "nothing") for k, t in tol.items())),
     )
     numbers = {
         "mu_crit_flat": float(pc[i0]),
@@ -223,7 +225,7 @@ def _beyond_stable(ds: xr.Dataset, tol: dict, frictionless: dict, mu_design: flo
         + (f"; an onset appears only at {', '.join(fin)}." if fin else
            f" at any incline of {THETA_DEG[0]:g}..{THETA_DEG[-1]:g} deg either."),
         f"Run-out tolerance at mu = {mu_design:g} (undamped, wavelength {wavelength * 1e3:g} mm): the paper's model "
-        f"allows {_tolerance_words(tol['paper'])}; the consistent one {_tolerance_words(tol['consistent'])}.",
+        f"allows {_tolerance_words(tol['paper'])}; the consistent one allows {_tolerance_words(tol['consistent'])}.",
     )
     rows = tuple((float(t), float(a), float(b)) for t, a, b in zip(THETA_DEG, pc, cc, strict=True))
     table = Table("Critical friction over the run-out incline (undamped; a dash: stable up to mu = 2)",

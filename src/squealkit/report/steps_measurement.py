@@ -99,7 +99,7 @@ def recording_step(recording: Path, figures: Path, data: Path, *, mic: str, disp
         Comparison("growth/slope correlation", None, res.growth_slope_correlation, "1", None,
                    "the squeal's growth rate against the run-out slope; positive: squeal grows on rising run-out"),
         Comparison("share of squeal energy on rising run-out", None, rf, "1", None,
-                   "above 0.5: squeal favours rising run-out, as the paper finds"),
+                   "above 0.5: squeal favours rising run-out"),
     )
     tacho = (options or {}).get("tacho")
     speed = f"disc speed from tacho channel {tacho!r}" if tacho is not None else f"{rpm:g} rpm"
@@ -122,7 +122,7 @@ def recording_step(recording: Path, figures: Path, data: Path, *, mic: str, disp
         numbers.update(model_frequency_hz=f_model if f_model is not None else math.nan,
                        model_difference_percent=diff if diff is not None else math.nan)
         if diff is not None:
-            paragraphs.append(f"The model puts squeal at {f_model:.0f} Hz ({source}); the recording squeals at "
+            paragraphs.append(f"The model puts squeal at {f_model:.0f} Hz, {source}; the recording squeals at "
                               f"{f_sq:.0f} Hz, {abs(diff):.1f} % {'above' if diff > 0 else 'below'} it.")
     tables.append(Table(
         "Detected squeal events (first 12)", ("start [s]", "end [s]", "frequency [Hz]", "peak [dB(A)]"),

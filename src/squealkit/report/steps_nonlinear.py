@@ -134,7 +134,7 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", TensileContactWarning)
         run = simulate(model, mu=mu4, profile=SineRunOut(q0, wavelength), speed=speed,
-                       duration=0.05 if quick else 0.15, contact=Contact.nonlinear())
+                       duration=(1.0 if quick else 3.0) * wavelength / speed, contact=Contact.nonlinear())
     env = response_envelope(run, DOF, highpass_freq=1000.0)
     # the limit-cycle amplitude at each instant's slope (0 where the quiet state is stable)
     inst = run["tan_theta"].values

@@ -55,7 +55,10 @@ def operating_point_text(settings: ReportSettings) -> str:
     return (f"Operating point of this report ({s.source}): run-out tolerance at mu = {s.mu_design:g}; transients at "
             f"mu = {s.mu_transient:g} and {s.mu_unstable:g}, v = {s.speed:g} m/s; the Fig. 4 sine run-out has "
             f"q0 = {s.sro_amplitude * 1e6:.3g} um and lambda = {s.sro_wavelength * 1e3:.3g} mm (steepest slope "
-            f"tan(theta) = {s.sro_slope:.3g}).")
+            f"tan(theta) = {s.sro_slope:.3g})."
+            + ("" if s.is_paper or "[report]" in s.source else
+               " A [report] table in the model file sets them (mu_design, mu_transient, mu_unstable, mu_cycle, "
+               "sro_amplitude, sro_wavelength, speed)."))
 
 
 def parameters_step(model: FrictionModel, rig: PinOnDiscRig | None, figures: Path, data: Path, *,

@@ -105,7 +105,8 @@ def transient_step(model: FrictionModel, figures: Path, data: Path, *, quick: bo
 
     st = settings or ReportSettings.paper()
     rng = np.random.default_rng(2013)
-    dur4 = 0.075 if quick else 0.15
+    period = st.sro_wavelength / st.speed  # one run-out period [s] (paper: 50 ms)
+    dur4 = (1.5 if quick else 3.0) * period  # whole rising and falling stages for any run-out (paper: 75/150 ms)
     dur3 = 0.2 if quick else 0.5
     mu_first, mu_clear, speed = st.mu_transient, st.mu_unstable, st.speed
     with warnings.catch_warnings():  # a tensile normal force is reported in the text below instead
