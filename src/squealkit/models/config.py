@@ -26,8 +26,9 @@ A model file (all sections optional; SI units, angles in rad or as ``*_deg`` in 
     omega_ref = 1.0            # rad/s; mu_ref, f_ref likewise (defaults 1)
 
 File paths are relative to the model file. An ``[uncertain]`` table belongs to
-``montecarlo`` and a ``[report]`` table to ``report``; both are ignored here; any other table or key is an error (a typo such as
-``[paramters]`` must not silently give the default model).
+``montecarlo`` and a ``[report]`` table to ``report``; both are ignored here; any other
+table or key is an error (a typo such as ``[paramters]`` must not silently give the
+default model).
 """
 
 from __future__ import annotations
