@@ -316,3 +316,85 @@ def fe_kwargs_from_options(model: Any, rpm_spec: str | None, band_spec: str | No
     if n_modes is not None and n_modes < 1:
         raise InputError(f"--modes {n_modes} must be >= 1.")
     return out
+
+
+def recording_options(*, required: bool = True) -> Callable[[F], F]:
+    """How to read and analyse a rig recording: channels, disc speed or tacho, probe, criteria, scaling.
+
+    One definition for every command that analyses a recording (``analyze``, ``report --recording``).
+    With ``required`` (``analyze``) --mic, --displacement and --radius must be given; otherwise the
+    channels default to ``mic`` and ``displacement`` and the command checks --radius when it needs it.
+    Turn the values into arguments with :func:`recording_kwargs_from_options`.
+    """
+    mic = {"required": True} if required else {"default": "mic", "show_default": True}
+    disp = {"required": True} if required else {"default": "displacement", "show_default": True}
+    radius = {"required": True} if required else {"default": None}
+    options = [
+        click.option("--mic", help="Microphone channel [Pa]: name or 0-based index.", **mic),
+        click.option("--displacement", help="Eddy-current probe channel [m]: name or index.", **disp),
+        click.option("--rpm", type=float, default=None, help="Disc speed [rpm] (constant; or give --tacho)."),
+        click.option("--radius", type=float, help="Probe radius on the disc [m].", **radius),
+        click.option("--tacho", default=None, help="Tacho channel (name or index): disc angle and speed from it."),
+        click.option("--tacho-kind", type=click.Choice(["pulses", "angle"]), default="pulses", show_default=True,
+                     help="Tacho channel: a pulse train or an angle (degrees)."),
+        click.option("--pulses-per-rev", type=int, default=1, show_default=True, help="Tacho pulses per revolution."),
+        click.option("--probe-offset-deg", type=float, default=0.0, show_default=True,
+                     help="The probe sits this far upstream of the pin [deg] (sees the surface earlier)."),
+        click.option("--acoustic-delay", type=float, default=0.0, show_default=True,
+                     help="Delay of the sound from the pin to the microphone [s]."),
+        click.option("--polarity", type=click.Choice(["1", "-1"]), default="1", show_default=True,
+                     help="-1 when the probe reads the run-out reversed."),
+        criteria_options,
+        click.option("--min-tnr-db", type=float, default=8.0, show_default=True,
+                     help="Tonality a squeal component needs: its tone-to-noise ratio [dB] over the noise in its "
+                     "critical band (ECMA-418-1 prominent tone: 8). Broadband noise stays below 0."),
+        click.option("--fs", type=float, default=None, help="Sample rate [Hz] for a CSV without time column."),
+        click.option("--scale", "scales", multiple=True, metavar="CHANNEL=FACTOR",
+                     help="File value -> physical unit factor per channel (e.g. WAV full scale in Pa). Repeatable."),
+        click.option("--unit", "units", multiple=True, metavar="CHANNEL=UNIT", help="Unit of a channel. Repeatable."),
+    ]
+
+    def deco(f: F) -> F:
+        for option in reversed(options):  # click lists options in the order they are written here
+            f = option(f)
+        return f
+
+    return deco
+
+
+def channel_pairs(option: str, items: tuple[str, ...]) -> dict[str, str]:
+    """``CHANNEL=VALUE`` items of a repeatable option (--scale, --unit) as a dict."""
+    out = {}
+    for it in items:
+        name, sep, value = it.partition("=")
+        if not sep or not name.strip() or not value.strip():
+            raise InputError(f"{option} {it!r} must look like CHANNEL=VALUE.")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def recording_kwargs_from_options(*, rpm: float | None, tacho: str | None, tacho_kind: str, pulses_per_rev: int,
+                                  probe_offset_deg: float, acoustic_delay: float, polarity: str, setup: str | None,
+                                  band: str | None, threshold_dba: float, time_weighting: str, min_duration: float,
+                                  min_tnr_db: float, scales: tuple[str, ...], units: tuple[str, ...],
+                                  ) -> tuple[dict[str, Any], dict[str, float], dict[str, str]]:
+    """The values of :func:`recording_options` as (analysis options, scale map, unit map).
+
+    The analysis options are keyword arguments of :func:`squealkit.measurement.analyze_recording`
+    besides the channels, ``rpm`` and ``radius``; the maps go to
+    :func:`squealkit.measurement.open_recording`. Without --tacho, --rpm is required.
+    """
+    from .._validation import validate_finite
+
+    crit = criteria_from_options(setup, band, threshold_dba, time_weighting, min_duration)
+    kw: dict[str, Any] = dict(setup=crit.setup if crit.setup != "user" else None, band=crit.band,
+                              threshold_dba=crit.threshold_dba, time_weighting=crit.time_weighting,
+                              min_duration=crit.min_duration, probe_offset_deg=probe_offset_deg,
+                              acoustic_delay=acoustic_delay, polarity=int(polarity), min_tnr_db=min_tnr_db)
+    if tacho is not None:
+        kw.update(tacho=int(tacho) if tacho.isdigit() else tacho, tacho_kind=tacho_kind,
+                  pulses_per_rev=pulses_per_rev)
+    elif rpm is None:
+        raise InputError("Give the disc speed --rpm, or a --tacho channel.")
+    scale_map = {k: validate_finite(f"--scale {k}", v) for k, v in channel_pairs("--scale", scales).items()}
+    return kw, scale_map, channel_pairs("--unit", units)

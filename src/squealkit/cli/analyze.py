@@ -6,13 +6,13 @@ from pathlib import Path
 
 import click
 
-from .._validation import InputError, validate_finite
+from .._validation import InputError
 from ._options import (
     check_output_suffix,
-    criteria_from_options,
-    criteria_options,
     emit_json,
     progress_callback,
+    recording_kwargs_from_options,
+    recording_options,
     scheduler_option,
     writable,
     writable_folder,
@@ -20,16 +20,6 @@ from ._options import (
 
 #: Show a progress bar for recordings longer than this [s].
 _PROGRESS_ABOVE_S = 60.0
-
-
-def _pairs(option: str, items: tuple[str, ...]) -> dict[str, str]:
-    out = {}
-    for it in items:
-        name, sep, value = it.partition("=")
-        if not sep or not name.strip() or not value.strip():
-            raise InputError(f"{option} {it!r} must look like CHANNEL=VALUE.")
-        out[name.strip()] = value.strip()
-    return out
 
 
 #: The figure formats --plot takes.
@@ -55,28 +45,7 @@ def _figure_stem(ctx: click.Context, param: click.Parameter, value: Path | None)
 
 @click.command()
 @click.argument("files", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option("--mic", required=True, help="Microphone channel [Pa]: name or 0-based index.")
-@click.option("--displacement", required=True, help="Eddy-current probe channel [m]: name or index.")
-@click.option("--rpm", type=float, default=None, help="Disc speed [rpm] (constant; or give --tacho).")
-@click.option("--radius", type=float, required=True, help="Probe radius on the disc [m].")
-@click.option("--tacho", default=None, help="Tacho channel (name or index): disc angle and speed from it.")
-@click.option("--tacho-kind", type=click.Choice(["pulses", "angle"]), default="pulses", show_default=True,
-              help="Tacho channel: a pulse train or an angle (degrees).")
-@click.option("--pulses-per-rev", type=int, default=1, show_default=True, help="Tacho pulses per revolution.")
-@click.option("--probe-offset-deg", type=float, default=0.0, show_default=True,
-              help="The probe sits this far upstream of the pin [deg] (sees the surface earlier).")
-@click.option("--acoustic-delay", type=float, default=0.0, show_default=True,
-              help="Delay of the sound from the pin to the microphone [s].")
-@click.option("--polarity", type=click.Choice(["1", "-1"]), default="1", show_default=True,
-              help="-1 when the probe reads the run-out reversed.")
-@criteria_options
-@click.option("--min-tnr-db", type=float, default=8.0, show_default=True,
-              help="Tonality a squeal component needs: its tone-to-noise ratio [dB] over the noise in its "
-              "critical band (ECMA-418-1 prominent tone: 8). Broadband noise stays below 0.")
-@click.option("--fs", type=float, default=None, help="Sample rate [Hz] for a CSV without time column.")
-@click.option("--scale", "scales", multiple=True, metavar="CHANNEL=FACTOR",
-              help="File value -> physical unit factor per channel (e.g. WAV full scale in Pa). Repeatable.")
-@click.option("--unit", "units", multiple=True, metavar="CHANNEL=UNIT", help="Unit of a channel. Repeatable.")
+@recording_options(required=True)
 @click.option("--json", "as_json", is_flag=True, help="Print the result (or the campaign) as JSON.")
 @click.option("--plot", "plot_dir", type=click.Path(path_type=Path), default=None, callback=_figure_stem,
               help="Write the figures (paper Figs. 6-13 equivalents, polar plot): --plot figs.png writes "
@@ -129,16 +98,10 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float | N
     from ..measurement import open_recording
     from ..measurement.campaign import summarize_campaign
 
-    crit = criteria_from_options(setup, band, threshold_dba, time_weighting, min_duration)
-    crit_kw = dict(setup=crit.setup if crit.setup != "user" else None, band=crit.band,
-                   threshold_dba=crit.threshold_dba, time_weighting=crit.time_weighting, min_duration=crit.min_duration,
-                   probe_offset_deg=probe_offset_deg, acoustic_delay=acoustic_delay, polarity=int(polarity),
-                   min_tnr_db=min_tnr_db)
-    if tacho is not None:
-        crit_kw.update(tacho=int(tacho) if tacho.isdigit() else tacho, tacho_kind=tacho_kind,
-                       pulses_per_rev=pulses_per_rev)
-    elif rpm is None:
-        raise InputError("Give the disc speed --rpm, or a --tacho channel.")
+    crit_kw, scale_map, unit_map = recording_kwargs_from_options(
+        rpm=rpm, tacho=tacho, tacho_kind=tacho_kind, pulses_per_rev=pulses_per_rev, probe_offset_deg=probe_offset_deg,
+        acoustic_delay=acoustic_delay, polarity=polarity, setup=setup, band=band, threshold_dba=threshold_dba,
+        time_weighting=time_weighting, min_duration=min_duration, min_tnr_db=min_tnr_db, scales=scales, units=units)
     check_output_suffix(out_path, (".nc",), "--out")
     check_output_suffix(summary_path, (".csv",), "--summary")
     if out_path is not None and len(files) > 1:
@@ -146,8 +109,6 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float | N
     folder = plot_dir is not None and plot_dir.suffix.lower() not in _FIGURE_SUFFIXES
     if folder and not plot_dir.is_dir():
         plot_dir.mkdir(parents=True, exist_ok=True)
-    scale_map = {k: validate_finite(f"--scale {k}", v) for k, v in _pairs("--scale", scales).items()}
-    unit_map = _pairs("--unit", units)
     kwargs = dict(mic=mic, displacement=displacement, rpm=rpm, radius=radius, **crit_kw)
     if scheduler is not None:
         sources = [open_recording(f, fs=fs, scale=scale_map or None, units=unit_map or None) for f in files]

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ._options import emit_json, model_options
+from ._options import emit_json, model_options, recording_kwargs_from_options, recording_options
 
 
 def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = False, as_json: bool,
@@ -74,22 +74,23 @@ def reproduce(out_dir: Path, force: bool, quick: bool, as_json: bool) -> None:
 @click.option("--force", is_flag=True, help="Write into a folder that holds other files, leaving them alone.")
 @click.option("--recording", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Your rig recording (CSV, WAV, netCDF, TDMS), analysed for §5 instead of a synthetic one.")
-@click.option("--mic", default="mic", show_default=True, help="Microphone channel (name or index) in --recording.")
-@click.option("--displacement", default="displacement", show_default=True,
-              help="Displacement channel (name or index) in --recording.")
-@click.option("--rpm", type=float, default=None, help="Disc speed [rpm] of --recording.")
-@click.option("--radius", type=float, default=None, help="Probe radius [m] of --recording.")
-@click.option("--fs", type=float, default=None, help="Sample rate [Hz] of a CSV --recording without a time column.")
+@recording_options(required=False)
 @click.option("--quick", is_flag=True, help="Coarser grids and shorter runs: a preview in seconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print the computed numbers as JSON on stdout.")
-def report(preset, config, sets, out_dir: Path, force: bool, recording, mic, displacement, rpm, radius, fs,
-           quick: bool, as_json: bool) -> None:
+@click.pass_context
+def report(ctx: click.Context, preset, config, sets, out_dir: Path, force: bool, recording, quick: bool,
+           as_json: bool, mic: str, displacement: str, rpm: float | None, radius: float | None, fs: float | None,
+           scales: tuple[str, ...], units: tuple[str, ...], **analysis) -> None:
     """The paper's analysis for your own rig or model, as one report.
 
     Takes the model from --config (a TOML model file; with a [rig] table the
-    parameters are derived from your rig's geometry, materials and frequencies
-    and compared with the paper's), --preset and --set. The paper's published
-    numbers stay in the report for reference.
+    parameters are derived from your rig's geometry, materials and frequencies),
+    --preset and --set. Only the paper's model gets the published numbers and
+    verdicts against them. The operating point (frictions of the transients and
+    the run-out tolerance, the Fig. 4 run-out) comes from the file's [report]
+    table, or is placed from your model's own onset. --recording is read and
+    analysed with the options of 'squealkit analyze' (--tacho, --scale,
+    --unit, the squeal criteria...).
 
     \b
     Example:
@@ -97,6 +98,8 @@ def report(preset, config, sets, out_dir: Path, force: bool, recording, mic, dis
       squealkit report --set alpha_deg=3 --set kc=3e7 --out stiffer-pin
       squealkit report --config myrig.toml --recording run1.tdms \
           --mic mic --displacement probe --rpm 900 --radius 0.05
+      squealkit report --config myrig.toml --recording run1.wav --mic 0 \
+          --displacement 1 --scale 0=120 --tacho 2 --radius 0.05
     """
     from .._validation import InputError
     from ..models import load_rig
@@ -106,10 +109,18 @@ def report(preset, config, sets, out_dir: Path, force: bool, recording, mic, dis
     model = build_model_from_options(preset, config, sets)
     rig = load_rig(config) if config is not None else None
     spec = None
-    if recording is not None:
-        if rpm is None or radius is None:
-            raise InputError("--recording needs --rpm and --radius (disc speed and probe radius).")
+    if recording is None:  # a recording option without a recording would be silently ignored
+        given = [p.opts[0] for p in ctx.command.params if p.name not in ("preset", "config", "sets", "out_dir",
+                                                                          "force", "recording", "quick", "as_json")
+                 and ctx.get_parameter_source(p.name) == click.core.ParameterSource.COMMANDLINE]
+        if given:
+            raise InputError(f"{given[0]} applies to --recording; give the recording, or leave {given[0]} out.")
+    else:
+        if (rpm is None and analysis.get("tacho") is None) or radius is None:
+            raise InputError("--recording needs --rpm and --radius (the disc speed, or a --tacho channel, and the "
+                             "probe radius).")
         if not recording.is_file():
             raise InputError(f"Recording {str(recording)!r} does not exist.")
-        spec = RecordingSpec(recording, mic, displacement, rpm, radius, fs)
+        options, scale_map, unit_map = recording_kwargs_from_options(rpm=rpm, scales=scales, units=units, **analysis)
+        spec = RecordingSpec(recording, mic, displacement, rpm, radius, fs, scale_map, unit_map, options)
     _run(out_dir, model=model, rig=rig, recording=spec, quick=quick, as_json=as_json, force=force, config=config)

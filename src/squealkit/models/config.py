@@ -29,8 +29,9 @@ A model file (all sections optional; SI units, angles in rad or as ``*_deg`` in 
     omit = ["DG"]              # matrices read but left out of the assembly (optional)
 
 File paths are relative to the model file. An ``[uncertain]`` table belongs to
-``montecarlo`` and is ignored here; any other table or key is an error (a typo such as
-``[paramters]`` must not silently give the default model).
+``montecarlo`` and a ``[report]`` table to ``report``; both are ignored here; any other
+table or key is an error (a typo such as ``[paramters]`` must not silently give the
+default model).
 """
 
 from __future__ import annotations
@@ -71,8 +72,9 @@ _MODEL_KINDS: dict[str, type[FrictionModel]] = {
 }
 _PRESET_KIND = {"lv2013": "pin_on_disc", "hoffmann2002": "hoffmann"}
 _TOP_KEYS = {"model", "preset", "parameters", "rig", "matrices", "fe", "description"}
-#: Tables a model file may hold for other commands (``montecarlo`` reads ``[uncertain]``).
-_OTHER_TABLES = {"uncertain"}
+#: Tables a model file may hold for other commands (``montecarlo`` reads ``[uncertain]``, ``report``
+#: reads ``[report]``: see :mod:`squealkit.report.settings`).
+_OTHER_TABLES = {"uncertain", "report"}
 #: A model file is text of a few kB (large matrices go in the files an [fe] table names).
 _MAX_FILE_BYTES = 16 * 2**20
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-__all__ = ["how_loud_plot", "limitcycle_plot", "limitcycle_signal_plot"]
+__all__ = ["how_loud_level_plot", "how_loud_plot", "limitcycle_plot", "limitcycle_signal_plot"]
 
 _COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink")
 
@@ -205,7 +205,7 @@ def how_loud_plot(branch: xr.Dataset, slope_branch: xr.Dataset | None, envelope:
     ax_b.plot([branch.attrs["hopf_mu"]], [0], "k*", ms=11, label="onset (Hopf point)")
     ax_b.set_xlabel("effective friction mu_e = mu + tan(theta)")
     ax_b.set_ylabel(f"{dof} amplitude [um]")
-    ax_b.legend(fontsize=8, loc="upper left")
+    ax_b.legend(fontsize=8, loc="lower right")  # the branches rise from the onset at the left
     t_ms = envelope["time"].values * 1e3
     ax_t.plot(t_ms, envelope.values * 1e6, color="tab:gray", lw=1.0, label=f"transient: {dof} envelope (> 1 kHz)")
     ax_t.plot(cycle["time"].values * 1e3, cycle.values * 1e6, "--", color="tab:red", lw=1.6,
@@ -216,4 +216,50 @@ def how_loud_plot(branch: xr.Dataset, slope_branch: xr.Dataset | None, envelope:
     for ax in (ax_b, ax_t):
         ax.grid(color="0.9")
         ax.set_axisbelow(True)
+    return fig
+
+
+def how_loud_level_plot(branch: xr.Dataset, slope_branch: xr.Dataset | None = None, *, dof: str = "x1", fig=None):
+    """The report's dB figure: the limit cycles' vibration velocity level over mu_e = mu + tan(theta).
+
+    Draws the ``velocity_level_db`` each branch holds [dB re 1 nm/s] (the report adds it from the
+    cycles' Fourier coefficients), stable solid and unstable dashed, the flat-disc branch over mu
+    and the run-out branch over its friction plus tan(theta).
+
+    Parameters
+    ----------
+    branch : xarray.Dataset
+        A flat-disc branch with ``velocity_level_db`` over ``point``.
+    slope_branch : xarray.Dataset or None
+        A run-out branch (its ``mu`` attribute is the friction) with ``velocity_level_db``.
+    dof : str
+        The DOF the level belongs to (for the label).
+    fig : matplotlib Figure, optional
+        Figure to draw into (cleared); a new one otherwise.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.figure import Figure
+
+    fig = fig or Figure(figsize=(7.5, 3.6), layout="constrained")
+    fig.clf()
+    ax = fig.subplots()
+    curves = [(branch, branch["mu"].values, "tab:blue", "flat disc, over mu")]
+    if slope_branch is not None:
+        mu_fixed = float(slope_branch.attrs["mu"])
+        curves.append((slope_branch, mu_fixed + slope_branch["tan_theta"].values, "tab:red",
+                       f"run-out at mu = {mu_fixed:g}, over mu + tan(theta)"))
+    for ds, x, color, label in curves:
+        st = ds["stable"].values.astype(bool)
+        level = ds["velocity_level_db"].values
+        for i0, i1 in _runs(st):
+            ax.plot(x[i0:i1 + 1], level[i0:i1 + 1], "-" if st[i0] else "--", color=color, lw=1.8)
+        ax.plot([], [], "-", color=color, label=label)
+    ax.set_xlabel("effective friction mu_e = mu + tan(theta)")
+    ax.set_ylabel(f"{dof} velocity level [dB re 1 nm/s]")
+    ax.legend(fontsize=8, loc="lower right")
+    ax.grid(color="0.9")
+    ax.set_axisbelow(True)
     return fig

@@ -183,10 +183,13 @@ def band_vs_pressure_plot(rec: xr.Dataset, *, mic: str = "mic", displacement: st
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
     ax1.plot(t[sel], rec[mic].values[sel], lw=0.5)
     ax1.set_ylabel("sound pressure [Pa]")
-    ax2.plot(t[sel], qb[sel] * 1e6, lw=0.5, color="C1")
-    ax2.set_ylabel(f"displacement {band[0]:g}-{band[1]:g} Hz [um]")
+    ax2.plot(t[sel], qb[sel] * 1e6, lw=0.5, color="C1", label=f"band-passed {band[0]:.0f}-{band[1]:.0f} Hz")
+    # the band goes in the legend: in the axis label it made a label longer than the panel (issue 27)
+    ax2.set_ylabel("displacement [um]")
+    ax2.legend(loc="upper right", fontsize=8)
     ax2.set_xlabel("time [s]")
     ax1.set_title("Vibration band against sound pressure" + _tag(rec))
+    fig.align_ylabels([ax1, ax2])
     return fig
 
 

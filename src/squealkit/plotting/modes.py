@@ -90,7 +90,10 @@ def modes_plot(ds: xr.Dataset, *, modes: list[int] | None = None, fig=None):
         ax_a.tick_params(labelbottom=False)
         f = float(ds["frequency_hz"].values[k])
         sigma = float(ds["growth_rate"].values[k])
-        ax_a.set_title(f"mode {k}: {f:.1f} Hz\nsigma = {sigma:+.4g} 1/s", fontsize=9, color=color)
+        thr = float(ds.attrs.get("unstable_threshold", 0.0))
+        # a sigma within the stability engine's round-off bound has no sign to show
+        sig = f"|sigma| < {thr:.1g} (round-off)" if abs(sigma) <= thr else f"sigma = {sigma:+.4g} 1/s"
+        ax_a.set_title(f"mode {k}: {f:.1f} Hz\n{sig}", fontsize=9, color=color)
         show = amp > 1e-6
         ax_p.axhline(0.0, color="0.7", lw=0.8)
         ax_p.vlines(x[show], 0.0, phase[show], color=color, lw=2)
@@ -105,8 +108,10 @@ def modes_plot(ds: xr.Dataset, *, modes: list[int] | None = None, fig=None):
         for ax in (ax_a, ax_p):
             ax.grid(axis="y", color="0.9")
             ax.set_axisbelow(True)
+    pair = ds.attrs.get("onset_kind") == "coalescence"
     names = {"stable": "stable mode", "unstable": "unstable mode (sigma > 0)",
-             "onset": "mode that loses stability at mu_crit"}
+             "onset": "coalescing pair that loses stability at mu_crit (one double root)" if pair else
+             "mode that loses stability at mu_crit"}
     handles = [Patch(color=colors[k], label=names[k]) for k in ("unstable", "onset", "stable") if k in roles]
     fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), fontsize=9, frameon=False)
     a = ds.attrs

@@ -41,7 +41,9 @@ def _accel_names(ds: xr.Dataset) -> list[str]:
 
 
 def _title(ds: xr.Dataset) -> str:
-    return f"mu = {ds.attrs.get('mu')}, v = {ds.attrs.get('speed')} m/s, {ds.attrs.get('profile')}"
+    profile = str(ds.attrs.get("profile"))
+    profile = "smooth disc" if profile in ("none", "None") else profile  # a reader does not know "none"
+    return f"mu = {ds.attrs.get('mu')}, v = {ds.attrs.get('speed')} m/s, {profile}"
 
 
 def fig3_plot(ds: xr.Dataset, ax: Any = None):

@@ -2,5 +2,7 @@
 
 from .document import Comparison, FigureRef, Section, Table
 from .reproduce import RecordingSpec, ReproduceResult, reproduce
+from .settings import ReportSettings
 
-__all__ = ["Comparison", "FigureRef", "RecordingSpec", "ReproduceResult", "Section", "Table", "reproduce"]
+__all__ = ["Comparison", "FigureRef", "RecordingSpec", "ReportSettings", "ReproduceResult", "Section", "Table",
+           "reproduce"]

@@ -65,8 +65,10 @@ def _comparisons(items: Sequence[Comparison]) -> str:
             f"<td>{html.escape(c.unit)}</td><td>{c.difference()}</td><td{verdict}>{mark}</td>"
             f"<td>{html.escape(c.note)}</td></tr>"
         )
+    # a table without a published number is a table of checks, not a comparison with the paper
+    caption = "Published beside computed" if any(c.published is not None for c in items) else "Checks"
     return (
-        "<table><caption>Published beside computed</caption><tr><th>quantity</th><th>published</th>"
+        f"<table><caption>{caption}</caption><tr><th>quantity</th><th>published</th>"
         "<th>squealkit</th><th>unit</th><th>difference</th><th>verdict</th><th>note</th></tr>"
         + "".join(rows) + "</table>"
     )

@@ -9,16 +9,18 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from .. import _warmup
 from ..io import check_output, output_folder
 from ..models import FrictionModel, PinOnDiscRig, get_preset
 from .document import Section
 from .html import render_html
+from .settings import ReportSettings, load_report_settings
 
-__all__ = ["RecordingSpec", "ReproduceResult", "reproduce"]
+__all__ = ["RecordingSpec", "ReportSettings", "ReproduceResult", "reproduce"]
 
 Step = Callable[[Path, Path], Section]
 
@@ -74,45 +76,57 @@ class RecordingSpec:
         Probe (and pin) radius [m].
     fs : float or None, default None
         Sample rate [Hz] where the file does not carry one.
+    scale, units : dict of str, optional
+        Per-channel factor from file value to physical unit, and unit names (as ``analyze``'s
+        ``--scale`` and ``--unit``; see :func:`squealkit.measurement.open_recording`).
+    options : dict, optional
+        Further keyword arguments of :func:`squealkit.measurement.analyze_recording` (tacho,
+        criteria, probe offset, polarity...). With a ``tacho``, ``rpm`` may be None.
     """
 
     path: Path
     mic: str
     displacement: str
-    rpm: float
+    rpm: float | None
     radius: float
     fs: float | None = None
+    scale: dict[str, float] = field(default_factory=dict)
+    units: dict[str, str] = field(default_factory=dict)
+    options: dict[str, Any] = field(default_factory=dict)
 
 
 def _paper_steps(
     model: FrictionModel, rig: PinOnDiscRig | None, published: bool, quick: bool,
-    recording: RecordingSpec | None = None,
+    recording: RecordingSpec | None = None, settings: ReportSettings | None = None,
 ) -> list[tuple[str, Step]]:
     from .steps_measurement import measurement_step, recording_step
     from .steps_stability import critical_step, fig2_step, parameters_step
     from .steps_transient import transient_step
 
     n = 41 if quick else 161
+    op = settings or ReportSettings.paper()
     steps: list[tuple[str, Step]] = [
-        ("parameters", lambda fig, dat: parameters_step(model, rig, fig, dat)),
+        ("parameters", lambda fig, dat: parameters_step(model, rig, fig, dat, settings=op)),
         ("Fig. 2 eigenvalues", lambda fig, dat: fig2_step(model, fig, dat, n_mu=n, n_theta=n, published=published)),
-        ("critical friction", lambda fig, dat: critical_step(model, fig, dat)),
-        ("Figs. 3-4 transients", lambda fig, dat: transient_step(model, fig, dat, quick=quick)),
+        ("critical friction", lambda fig, dat: critical_step(model, fig, dat, settings=op)),
+        ("Figs. 3-4 transients", lambda fig, dat: transient_step(model, fig, dat, quick=quick, settings=op,
+                                                                 published=published)),
     ]
     if "kinematics" in model.parameter_info():
         from .steps_beyond import beyond_step
 
-        steps.append(("beyond the paper", lambda fig, dat: beyond_step(model, fig, dat)))
+        steps.append(("beyond the paper", lambda fig, dat: beyond_step(model, fig, dat, settings=op)))
         from .steps_nonlinear import nonlinear_step
 
-        steps.append(("how loud", lambda fig, dat: nonlinear_step(model, fig, dat, quick=quick)))
+        steps.append(("how loud", lambda fig, dat: nonlinear_step(model, fig, dat, quick=quick, settings=op)))
     if recording is None:
-        steps.append(("Figs. 6-13 measurement", lambda fig, dat: measurement_step(model, fig, dat, quick=quick)))
+        steps.append(("Figs. 6-13 measurement", lambda fig, dat: measurement_step(model, fig, dat, quick=quick,
+                                                                                  published=published)))
     else:
         r = recording
         steps.append(("Figs. 6-13 your recording", lambda fig, dat: recording_step(
             r.path, fig, dat, mic=r.mic, displacement=r.displacement, rpm=r.rpm, radius=r.radius, fs=r.fs,
-            model=model)))
+            model=model, scale=r.scale, units=r.units, options=r.options)))
     return steps
 
 
@@ -127,6 +141,7 @@ def reproduce(
     progress: Callable[[int, int, str], None] | None = None,
     force: bool = False,
     config: str | Path | None = None,
+    settings: ReportSettings | None = None,
 ) -> ReproduceResult:
     """Recompute the paper's figures and numbers and write a self-contained report.
 
@@ -139,8 +154,8 @@ def reproduce(
         Write into a folder that holds other files: the report's files are moved in one
         by one, complete, and the other files are left alone.
     model : FrictionModel, optional
-        The model (default: the paper's rig, preset ``lv2013``). With a model of your own
-        the published numbers are still shown for reference.
+        The model (default: the paper's rig, preset ``lv2013``). Only the paper's model gets
+        the published numbers and verdicts against them; a model of your own gets its own.
     rig : PinOnDiscRig, optional
         The rig the parameters are derived from (default: the paper's, when ``model`` is
         the default).
@@ -151,7 +166,12 @@ def reproduce(
     recording : RecordingSpec, optional
         Your rig recording, analysed for §5 instead of the synthetic one.
     config : path-like, optional
-        The model file the model and rig were read from; named in the report's header.
+        The model file the model and rig were read from; named in the report's header. Its
+        ``[report]`` table, if any, sets the operating point (see :class:`ReportSettings`).
+    settings : ReportSettings, optional
+        The operating point (frictions, the Fig. 4 run-out, the sliding speed); overrides the
+        ``[report]`` table. Default: the paper's for the paper's model, otherwise placed from
+        the model's own onset (:meth:`ReportSettings.for_model`).
     progress : callable, optional
         ``progress(done, total, step_name)`` before each step and at the end.
 
@@ -168,7 +188,9 @@ def reproduce(
     paper = get_preset("lv2013")
     # verdicts against the published numbers only for the paper's rig; other models show them for reference
     paper_model = type(model) is type(paper) and model == paper
-    steps = _paper_steps(model, rig, published=paper_model, quick=quick, recording=recording)
+    if settings is None:
+        settings = load_report_settings(config, model, paper=paper_model)
+    steps = _paper_steps(model, rig, published=paper_model, quick=quick, recording=recording, settings=settings)
     start = time.perf_counter()
     # a first run compiles the later steps' kernels on the other core while the first steps run
     _warmup.start(["transient", "nonlinear", "measurement"])
@@ -185,7 +207,7 @@ def reproduce(
             sections.append(step(figures, data))
         from .steps_conclusions import conclusions_step
 
-        sections.append(conclusions_step(sections))
+        sections.append(conclusions_step(sections, settings=settings, published=paper_model))
         if progress is not None:
             progress(len(steps), len(steps), "report")
         title = title or ("Lv, Zhang & Yu (2013), reproduced by squealkit" if default else "squealkit report")

@@ -6,10 +6,23 @@ import math
 from collections.abc import Sequence
 
 from .document import Section, Table
+from .settings import ReportSettings
 
 
-def conclusions_step(sections: Sequence[Section]) -> Section:
-    """Build the conclusions from the numbers of the sections computed before."""
+def _um(x: float) -> str:
+    """A run-out amplitude [m] in um, or in mm from 1 mm up."""
+    if not math.isfinite(x):
+        return "no finite amplitude"
+    return f"{x * 1e6:.1f} um" if x < 1e-3 else f"{x * 1e3:.3g} mm"
+
+
+def conclusions_step(sections: Sequence[Section], *, settings: ReportSettings | None = None,
+                     published: bool = True) -> Section:
+    """Build the conclusions from the numbers of the sections computed before.
+
+    ``settings`` is the report's operating point; ``published`` puts the paper's measured squeal
+    frequency beside the synthetic one (the paper's model only)."""
+    st = settings or ReportSettings.paper()
     n = {s.key: s.numbers for s in sections}
     rows = []
     fig2, crit = n.get("fig2", {}), n.get("critical", {})
@@ -30,15 +43,26 @@ def conclusions_step(sections: Sequence[Section]) -> Section:
             f"({lo / (2 * math.pi):.0f}-{hi / (2 * math.pi):.0f} Hz): a spread of {100 * (hi / lo - 1):.1f} %."
             if math.isfinite(lo) and math.isfinite(hi) else "No unstable mode over mu 0-0.8 and theta -8..8 deg.",
         ))
+        spread = crit["mu_e_spread"]
+        lam = st.sro_wavelength
+        if crit.get("tolerance_flat_unstable"):
+            tol = (f"no run-out is tolerated at mu = {st.mu_design:g}: the model is already unstable on a flat disc "
+                   "there.")
+        elif math.isfinite(crit["q0_max"]):
+            tol = (f"the run-out tolerance is a slope (tan(theta) <= {crit['tan_theta_max']:.4f} at mu = "
+                   f"{st.mu_design:g}), met by q0 = {_um(crit['q0_max'])} at lambda = {lam * 1e3:g} mm or "
+                   f"{_um(crit['q0_max'] * 100)} at lambda = {lam * 1e5:g} mm alike.")
+        else:
+            tol = (f"the run-out tolerance is a slope: tan(theta) <= {crit['tan_theta_max']:.4f} at "
+                   f"mu = {st.mu_design:g}.")
         rows.append((
             "Stability is not related to the SRO amplitude directly; its incline angle acts like friction.",
-            (f"The critical mu + tan(theta) varies by only {100 * crit['mu_e_spread']:.2f} % over theta -8..8 deg; "
-             if crit["mu_e_spread"] < 0.01 else
-             f"The critical mu + tan(theta) varies by {100 * crit['mu_e_spread']:.2f} % over theta -8..8 deg: "
-             "here the incline does not act exactly like friction; ")
-            + f"the run-out tolerance is a slope (tan(theta) <= {crit['tan_theta_max']:.4f} at mu = 0.3), met by "
-            f"q0 = {crit['q0_max'] * 1e6:.1f} um at lambda = 1 mm or {crit['q0_max'] * 1e5:.2f} mm at "
-            "lambda = 100 mm alike.",
+            ("Without an onset at every incline the spread of the critical mu + tan(theta) is not defined; "
+             if not math.isfinite(spread) else
+             f"The critical mu + tan(theta) varies by only {100 * spread:.2f} % over theta -8..8 deg; "
+             if spread < 0.01 else
+             f"The critical mu + tan(theta) varies by {100 * spread:.2f} % over theta -8..8 deg: "
+             "here the incline does not act exactly like friction; ") + tol,
         ))
         md, mu0 = crit.get("mu_crit_damped", math.nan), crit["mu_crit"]
         if math.isfinite(md) and math.isfinite(mu0) and abs(md / mu0 - 1) >= 1e-4:
@@ -50,18 +74,21 @@ def conclusions_step(sections: Sequence[Section]) -> Section:
             ))
     tr = n.get("transient", {})
     if tr:
+        up, nr = int(tr.get("rising_stages_growing", 0)), int(tr.get("rising_stages", 0))
+        down, nf = int(tr.get("falling_stages_decaying", 0)), int(tr.get("falling_stages", 0))
         rows.append((
             "With SRO the response grows while the SRO rises and decays while it falls: squeal is intermittent.",
-            "With the Fig. 4 sine SRO the vibration envelope "
-            + ("grows" if tr["rise_rate"] > 0 else "changes") + f" at {tr['rise_rate']:+.1f} 1/s on rising stages and "
-            + ("decays" if tr["fall_rate"] < 0 else "changes") + f" at {tr['fall_rate']:+.1f} 1/s on falling stages "
-            "(mu = 0.4).",
+            (f"With the Fig. 4 sine SRO (q0 = {st.sro_amplitude * 1e6:.3g} um, lambda = {st.sro_wavelength * 1e3:g} "
+             f"mm, mu = {st.mu_transient:g}) the vibration envelope grows on {up} of {nr} rising stages (the last at "
+             f"{tr['rise_rate']:+.1f} 1/s) and decays on {down} of {nf} falling stages (the last at "
+             f"{tr['fall_rate']:+.1f} 1/s).") if nr and nf else
+            "The Fig. 4 run holds no whole rising and falling stage to measure the envelope on.",
         ))
     ms = n.get("measurement", {})
     if ms:
         claim = ("In the rig, squeal recurs once per disc turn on the rising SRO, and its sound pressure follows "
                  "the disc vibration.")
-        f_txt = (f"squeal at {ms['squeal_frequency_hz']:.1f} Hz (paper: 2388 Hz)"
+        f_txt = (f"squeal at {ms['squeal_frequency_hz']:.1f} Hz" + (" (paper: 2388 Hz)" if published else "")
                  if math.isfinite(ms["squeal_frequency_hz"]) else "no squeal found")
         rf_txt = (f"{ms['rising_fraction']:.1%} of its energy on rising run-out"
                   if math.isfinite(ms["rising_fraction"]) else "no rising-run-out share (no squeal)")

@@ -20,11 +20,16 @@ import xarray as xr
 from ..io import save_dataset
 from ..models import FrictionModel
 from .document import FigureRef, Section, Table
+from .settings import ReportSettings
 
 __all__ = ["nonlinear_step"]
 
-# Paper §4: v = 0.02 m/s; Fig. 4: mu = 0.4, sine SRO q0 = 0.08 mm, lambda = 1 mm (max slope 0.503).
-MU_FIG4, SPEED, Q0, WAVELENGTH = 0.4, 0.02, 0.08e-3, 1e-3
+# The operating point (paper §4: v = 0.02 m/s; Fig. 4: mu = 0.4, sine SRO q0 = 0.08 mm, lambda = 1 mm,
+# max slope 0.503) comes from ReportSettings.
+#: Reference velocity of the vibration velocity level [m/s] (ISO 1683: 1 nm/s).
+V_REF = 1e-9
+#: Contact open over less than this fraction of the period: the cycle is not bounded by loss of contact.
+OPEN_MIN = 0.01
 #: Friction range of the flat-disc branch, and the harmonics of every cycle.
 MU_RANGE, HARMONICS = (0.3, 1.0), 10
 #: The DOF whose amplitude the section reports (the pin's, as the paper's Fig. 3-4 accelerations).
@@ -46,25 +51,66 @@ def _um(x: float) -> str:
     return f"{x * 1e6:.3f} um" if math.isfinite(x) else "no cycle"
 
 
-def nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: bool = False) -> Section:
+def _db(x: float) -> str:
+    return f"{x:.1f} dB" if math.isfinite(x) else "no cycle"
+
+
+def _with_level(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` with ``velocity_level_db``: the vibration velocity level of ``DOF`` [dB re 1 nm/s] (ISO 1683)."""
+    from ..nonlinear import sound_level
+
+    v = sound_level(ds, radiation_factor=1.0, dof=DOF)["velocity_rms"]
+    with np.errstate(divide="ignore"):  # a cycle of zero amplitude (the onset itself) has no level: nan
+        level = np.where(v.values > 0, 20.0 * np.log10(v.values / V_REF), np.nan)
+    return ds.assign(velocity_level_db=(v.dims, level, {
+        "units": "dB", "long_name": f"vibration velocity level of {DOF}, re 1 nm/s (ISO 1683)"}))
+
+
+def _open_text(loss: float) -> str:
+    """What the contact does over a cycle, and whether that is what bounds it."""
+    if not math.isfinite(loss):
+        return "no cycle there"
+    if loss < OPEN_MIN:
+        return (f"the contact open over {100 * loss:.1f} % of the period: loss of contact does not bound this "
+                "cycle")
+    return f"the contact open over {100 * loss:.0f} % of the period: bounded by loss of contact"
+
+
+def _settle_text(low: tuple[float, float, float, float], high: tuple[float, float, float, float],
+                 f_high: float) -> str:
+    """The limit cycles at two frictions, each ``(mu, amplitude [m], contact-open fraction, level [dB])``, in
+    words true to each: loss of contact is named as the bound only where the contact opens."""
+    (mu_1, a_1, open_1, l_1), (mu_2, a_2, open_2, l_2) = low, high
+    return (f"The squeal then settles on a limit cycle: {DOF} swings {_um(a_1)} at mu = {mu_1:g} ({_open_text(open_1)})"
+            f" and {_um(a_2)} at mu = {mu_2:g} ({_open_text(open_2)}), while the frequency moves to {f_high:.1f} Hz. "
+            f"As a vibration velocity level of {DOF} (dB re 1 nm/s, ISO 1683; the model has no acoustics): "
+            f"{_db(l_1)} at mu = {mu_1:g} and {_db(l_2)} at mu = {mu_2:g}.")
+
+
+def nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: bool = False,
+                   settings: ReportSettings | None = None) -> Section:
     """The section "How loud": limit cycles over friction and run-out slope, beside the Fig. 4 transient."""
     from ..stability.critical import UnrealisticFrictionWarning
 
     with warnings.catch_warnings():  # the critical-friction section already says so
         warnings.simplefilter("ignore", UnrealisticFrictionWarning)
-        return _nonlinear_step(model, figures, data, quick=quick)
+        return _nonlinear_step(model, figures, data, quick=quick, settings=settings or ReportSettings.paper())
 
 
-def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: bool) -> Section:
+def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: bool,
+                    settings: ReportSettings) -> Section:
     from .._validation import InputError
     from ..nonlinear import limit_cycle_branch, limit_cycle_branch_slope
-    from ..plotting.limitcycle import how_loud_plot
+    from ..plotting.limitcycle import how_loud_level_plot, how_loud_plot
     from ..stability import critical_friction
     from ..transient import Contact, SineRunOut, TensileContactWarning, simulate
     from ..transient.simulate import response_envelope
     from .steps_stability import _save_fig
 
     title = "How loud: squeal limit cycles"
+    mu4, speed = settings.mu_transient, settings.speed
+    q0, wavelength = settings.sro_amplitude, settings.sro_wavelength
+    fig4 = "the paper's Fig. 4" if settings.is_paper else "the report's Fig. 4"
     if DOF not in model.dof_names:
         return Section("how_loud", title, (f"This model has no DOF {DOF!r} (the pin's); the limit-cycle section is "
                                            "written for the pin-on-disc model.",))
@@ -76,19 +122,19 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
     mu_range = (min(MU_RANGE[0], 0.9 * crit.mu_critical), max(MU_RANGE[1], crit.mu_critical + 0.3))
     n = 11 if quick else 26
     try:
-        branch = limit_cycle_branch(model, mu_range, harmonics=HARMONICS, n_points=n, speed=SPEED)
+        branch = limit_cycle_branch(model, mu_range, harmonics=HARMONICS, n_points=n, speed=speed)
     except InputError as e:
         return Section("how_loud", title, (f"The limit cycles could not be followed for this model: {e}",))
-    t_max = 2 * math.pi * Q0 / WAVELENGTH  # the steepest slope of the Fig. 4 run-out (eq. 11)
+    t_max = 2 * math.pi * q0 / wavelength  # the steepest slope of the Fig. 4 run-out (eq. 11)
     try:
-        slope = limit_cycle_branch_slope(model, (-t_max, t_max), mu=MU_FIG4, harmonics=HARMONICS, n_points=n,
-                                         speed=SPEED)
+        slope = limit_cycle_branch_slope(model, (-t_max, t_max), mu=mu4, harmonics=HARMONICS, n_points=n,
+                                         speed=speed)
     except InputError:  # no onset within the run-out's slopes at this friction
         slope = None
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", TensileContactWarning)
-        run = simulate(model, mu=MU_FIG4, profile=SineRunOut(Q0, WAVELENGTH), speed=SPEED,
-                       duration=0.05 if quick else 0.15, contact=Contact.nonlinear())
+        run = simulate(model, mu=mu4, profile=SineRunOut(q0, wavelength), speed=speed,
+                       duration=(1.0 if quick else 3.0) * wavelength / speed, contact=Contact.nonlinear())
     env = response_envelope(run, DOF, highpass_freq=1000.0)
     # the limit-cycle amplitude at each instant's slope (0 where the quiet state is stable)
     inst = run["tan_theta"].values
@@ -103,18 +149,23 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
         t_c, cyc = math.nan, np.zeros_like(inst)
     cycle = xr.DataArray(cyc, coords={"time": run["time"].values}, dims="time", name=f"{DOF}_limit_cycle",
                          attrs={"units": "m", "long_name": f"limit-cycle amplitude of {DOF} at the instant's slope"})
+    branch = _with_level(branch)
+    if slope is not None:
+        slope = _with_level(slope)
     save_dataset(branch, data / "limit_cycles_mu.nc")
     if slope is not None:
         save_dataset(slope, data / "limit_cycles_runout.nc")
     save_dataset(xr.Dataset({"envelope": env, "limit_cycle": cycle, "tan_theta": run["tan_theta"]}),
                  data / "fig4_nonlinear_envelope.nc")
     _save_fig(how_loud_plot(branch, slope, env, cycle, dof=DOF), figures, "how_loud")
+    _save_fig(how_loud_level_plot(branch, slope, dof=DOF), figures, "how_loud_level")
 
     a = branch.attrs
     mu_c, f_c = float(a["hopf_mu"]), float(a["hopf_frequency_hz"])
     mu_hi = float(branch["mu"].values.max())
-    mu_1 = 0.5 if mu_c < 0.45 else round(mu_c + 0.1, 2)  # the paper's case: mu = 0.5
+    mu_1 = settings.mu_cycle
     a_05, a_hi = _at(branch, "mu", mu_1), _at(branch, "mu", mu_hi)
+    l_05, l_hi = (_at(branch, "mu", m, "velocity_level_db") for m in (mu_1, mu_hi))
     loss_05, loss_hi = (_at(branch, "mu", m, "contact_loss_fraction") for m in (mu_1, mu_hi))
     f_hi = _at(branch, "mu", mu_hi, "frequency_hz")
     kind = str(a["kind"])
@@ -125,34 +176,32 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
              if kind == "supercritical" else
              "a hard (subcritical) onset: cycles exist below it and a quiet and a squealing state coexist"
              if kind == "subcritical" else "an onset whose type the branch does not settle")
-    p1 = (f"On a flat disc (v = {SPEED:g} m/s, the model's own damping) squeal sets in at mu = {mu_c:.4f} "
+    p1 = (f"On a flat disc (v = {speed:g} m/s, the model's own damping) squeal sets in at mu = {mu_c:.4f} "
           f"({f_c:.1f} Hz), {onset}"
           + (" (read from the branch: the contact law is piecewise linear about steady sliding, so the first "
              "Lyapunov coefficient is 0)." if a["kind_from"] == "branch" and kind else
              "." if not kind else f" (first Lyapunov coefficient {float(a['lyapunov_coefficient']):.3g}).")
-          + (f" The squeal then settles on a limit cycle bounded by loss of contact: {DOF} swings {_um(a_05)} at "
-             f"mu = {mu_1:g} with the contact open over {100 * loss_05:.0f} % of the period, and {_um(a_hi)} at "
-             f"mu = {mu_hi:g} ({100 * loss_hi:.0f} %), while the frequency falls to {f_hi:.1f} Hz. "
-             f"(Harmonic balance with H = {HARMONICS}; doubling H changes the amplitudes by "
+          + (" " + _settle_text((mu_1, a_05, loss_05, l_05), (mu_hi, a_hi, loss_hi, l_hi), f_hi)
+             + f" (Harmonic balance with H = {HARMONICS}; doubling H changes the amplitudes by "
              f"{float(a['harmonics_change']):.1e}.)" if followed else
              f" The continuation stopped after {branch.sizes['point']} cycles next to the onset "
              f"({str(a['stop_reason']).replace('_', ' ')}), so this model's squeal amplitude is not followed here."))
     # run-out: onset slope and the cycles against the flat disc at the same mu_e
     a_steep = _at(slope, "tan_theta", t_max) if slope is not None else math.nan
-    a_flat_same = _at(branch, "mu", MU_FIG4 + t_max)
+    a_flat_same = _at(branch, "mu", mu4 + t_max)
     same = abs(a_steep / a_flat_same - 1) if math.isfinite(a_steep) and math.isfinite(a_flat_same) else math.nan
     if math.isfinite(t_c) and -t_max <= t_c <= t_max:
-        p2 = (f"With run-out at the paper's Fig. 4 friction mu = {MU_FIG4:g}, squeal sets in where the slope reaches "
+        p2 = (f"With run-out at {fig4} friction mu = {mu4:g}, squeal sets in where the slope reaches "
               f"tan(theta) = {t_c:.4f} ({math.degrees(math.atan(t_c)):.2f} deg): mu + tan(theta) = "
-              f"{MU_FIG4 + t_c:.4f} against the flat disc's {mu_c:.4f}. At the steepest slope of Fig. 4 "
+              f"{mu4 + t_c:.4f} against the flat disc's {mu_c:.4f}. At the steepest slope of {fig4} "
               f"({t_max:.3f}) the cycle's {DOF} amplitude is {_um(a_steep)}")
-        p2 += (f", and on a flat disc at mu = {MU_FIG4 + t_max:.3f} it is {_um(a_flat_same)}: "
+        p2 += (f", and on a flat disc at mu = {mu4 + t_max:.3f} it is {_um(a_flat_same)}: "
                + (f"the limit cycles too depend on mu + tan(theta) alone (within {100 * same:.1f} %), as eq. (6) "
                   "says of the onset." if same < 0.02 else
                   f"they differ by {100 * same:.1f} %, so the slope is not simply added friction once the "
                   "contact opens.") if math.isfinite(same) else ".")
     else:
-        p2 = (f"With run-out at the paper's Fig. 4 friction mu = {MU_FIG4:g} no slope within +-{t_max:.3f} starts "
+        p2 = (f"With run-out at {fig4} friction mu = {mu4:g} no slope within +-{t_max:.3f} starts "
               f"squeal in this model (its flat-disc threshold is mu = {mu_c:.4f}).")
     # the Fig. 4 transient with the nonlinear contact against the frozen-slope cycles: the envelope's
     # median where the slope makes the quiet state unstable (its short bursts are reported apart)
@@ -161,10 +210,10 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
     emax = float(env.values.max())
     emed = float(np.median(env.values[unstable])) if unstable.any() else math.nan
     grow = float(np.max(run["growth_rate"].values))
-    half = WAVELENGTH / SPEED / 2
+    half = wavelength / speed / 2
     ratio = emed / float(np.median(cyc[unstable])) if unstable.any() else math.nan
-    p3 = (f"The Fig. 4 run with this contact law (sine run-out, q0 = {Q0 * 1e3:g} mm, lambda = {WAVELENGTH * 1e3:g} mm,"
-          f" mu = {MU_FIG4:g}, {float(run['time'].values[-1]):.3g} s): ")
+    p3 = (f"The Fig. 4 run with this contact law (sine run-out, q0 = {q0 * 1e3:g} mm, lambda = {wavelength * 1e3:g} mm,"
+          f" mu = {mu4:g}, {float(run['time'].values[-1]):.3g} s): ")
     if math.isfinite(ratio):
         p3 += (f"while the slope makes the quiet state unstable the vibration envelope of {DOF} above 1 kHz has a "
                f"median of {_um(emed)}, {100 * ratio:.2g} % of the limit cycle of the instant's slope (median "
@@ -177,22 +226,28 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
                "steady state of the instant's slope.")
     else:
         p3 += "no slope of the run reaches a limit cycle."
-    rows = tuple((float(m), float(f), float(x) * 1e6, float(lf), "yes" if s else "no")
-                 for m, f, x, lf, s in list(zip(branch["mu"].values, branch["frequency_hz"].values,
-                                                branch["amplitude"].sel(dof=DOF).values,
-                                                branch["contact_loss_fraction"].values, branch["stable"].values,
-                                                strict=True))[:: max(1, branch.sizes["point"] // 12)])
     every = max(1, branch.sizes["point"] // 12)
+    rows = tuple((float(m), float(f), float(x) * 1e6, float(db), float(lf), "yes" if s else "no")
+                 for m, f, x, db, lf, s in list(zip(branch["mu"].values, branch["frequency_hz"].values,
+                                                    branch["amplitude"].sel(dof=DOF).values,
+                                                    branch["velocity_level_db"].values,
+                                                    branch["contact_loss_fraction"].values, branch["stable"].values,
+                                                    strict=True))[::every])
     table = Table("Limit cycles on a flat disc" + (f" (one point in {every} of the branch)" if every > 1 else ""),
-                  ("mu", "frequency [Hz]", f"{DOF} amplitude [um]", "contact open [fraction]", "stable"), rows)
+                  ("mu", "frequency [Hz]", f"{DOF} amplitude [um]", f"{DOF} velocity level [dB re 1 nm/s]",
+                   "contact open [fraction]", "stable"), rows)
     numbers = {"hopf_mu": mu_c, "hopf_frequency_hz": f_c, "amplitude_mu05": a_05, "amplitude_mu_max": a_hi,
+               "level_db_mu05": l_05, "level_db_mu_max": l_hi, "contact_open_mu05": loss_05,
+               "contact_open_mu_max": loss_hi, "mu_cycle": mu_1,
                "onset_tan_theta": t_c, "amplitude_steepest_slope": a_steep, "amplitude_flat_same_mu_e": a_flat_same,
                "fig4_envelope_max": emax, "fig4_envelope_median_unstable": emed, "fig4_cycle_max": cmax,
                "fig4_envelope_ratio": ratio}
     fig = FigureRef("how_loud", f"Top: limit-cycle amplitude of {DOF} over mu_e = mu + tan(theta), on a flat disc "
-                    f"(over mu) and with run-out at mu = {MU_FIG4:g} (over tan(theta)); stable solid, unstable "
+                    f"(over mu) and with run-out at mu = {mu4:g} (over tan(theta)); stable solid, unstable "
                     "dashed. Bottom: the Fig. 4 run with the nonlinear contact, its vibration envelope beside the "
                     "limit-cycle amplitude of each instant's slope.")
-    return Section("how_loud", "How loud: squeal limit cycles", (p1, p2, p3), (), (table,), (fig,),
+    fig_db = FigureRef("how_loud_level", f"Limit-cycle level: vibration velocity level of {DOF} [dB re 1 nm/s] over "
+                       "mu_e = mu + tan(theta), on a flat disc and with run-out (stable solid, unstable dashed)")
+    return Section("how_loud", "How loud: squeal limit cycles", (p1, p2, p3), (), (table,), (fig, fig_db),
                    ("limit_cycles_mu.nc",) + (("limit_cycles_runout.nc",) if slope is not None else ())
                    + ("fig4_nonlinear_envelope.nc",), numbers=numbers)

@@ -21,6 +21,7 @@ from ..stability import (
     stability_summary,
 )
 from .document import Comparison, FigureRef, Section, Table
+from .settings import ReportSettings
 
 # Published values, with where they stand in the paper.
 PAPER_PARAMETERS = {  # §3
@@ -48,15 +49,28 @@ def _cell(value):
     return ", ".join(map(str, value)) if isinstance(value, list | tuple) else str(value)
 
 
-def parameters_step(model: FrictionModel, rig: PinOnDiscRig | None, figures: Path, data: Path) -> Section:
-    """Table 1 and §3: every parameter derived from the rig beside the paper's value."""
+def operating_point_text(settings: ReportSettings) -> str:
+    """The report's operating point in one sentence, with where it comes from."""
+    s = settings
+    return (f"Operating point of this report ({s.source}): run-out tolerance at mu = {s.mu_design:g}; transients at "
+            f"mu = {s.mu_transient:g} and {s.mu_unstable:g}, v = {s.speed:g} m/s; the Fig. 4 sine run-out has "
+            f"q0 = {s.sro_amplitude * 1e6:.3g} um and lambda = {s.sro_wavelength * 1e3:.3g} mm (steepest slope "
+            f"tan(theta) = {s.sro_slope:.3g})."
+            + ("" if s.is_paper or "[report]" in s.source else
+               " A [report] table in the model file sets them (mu_design, mu_transient, mu_unstable, mu_cycle, "
+               "sro_amplitude, sro_wavelength, speed)."))
+
+
+def parameters_step(model: FrictionModel, rig: PinOnDiscRig | None, figures: Path, data: Path, *,
+                    settings: ReportSettings | None = None) -> Section:
+    """Table 1 and §3: every parameter derived from the rig (beside the paper's value for the paper's rig)."""
     paragraphs = [
         "The paper derives each modal stiffness from a modal frequency, k = m (2 pi f)^2, the contact "
         "stiffness from the pin's axial stiffness E A / L, and weighs the masses (§3, Table 1)."
         + (" squealkit derives them again from the rig's geometry, materials and the FEA frequencies of Table 1."
            if rig is not None and rig == PinOnDiscRig.paper() else
-           " squealkit derives them the same way from your rig's geometry, materials and frequencies; the "
-           "paper's values are shown for reference only." if rig is not None else
+           " squealkit derives them the same way from your rig's geometry, materials and frequencies."
+           if rig is not None else
            f" This report's model ({model.kind}) is not derived from a rig: its parameters are used as given."),
     ]
     comparisons: list[Comparison] = []
@@ -80,14 +94,11 @@ def parameters_step(model: FrictionModel, rig: PinOnDiscRig | None, figures: Pat
                "(preload = \"contact_force\" makes P the contact force).")
         )
         paper_rig = rig == PinOnDiscRig.paper()
-        for name, (value, unit) in PAPER_PARAMETERS.items():
-            got = float(getattr(derived, name))
-            if paper_rig:
+        if paper_rig:  # another rig's parameters are not the paper's: no comparison with them
+            for name, (value, unit) in PAPER_PARAMETERS.items():
+                got = float(getattr(derived, name))
                 comparisons.append(Comparison(f"{name} from the rig", value, got, unit,
                                               abs(got / value - 1) < 5e-3, "within 0.5 %"))
-            else:  # another rig: the paper's value is a reference, not a target
-                comparisons.append(Comparison(f"{name} from the rig", value, got, unit, None,
-                                              "published: the paper's rig, for reference (yours is another rig)"))
         d, L, E, rho, nu = (rig.pin_diameter, rig.pin_length, rig.pin_youngs_modulus, rig.pin_density,
                             rig.pin_poisson)
         eb = cantilever_bending_frequency(d, L, E, rho, theory="euler_bernoulli")
@@ -126,6 +137,7 @@ def parameters_step(model: FrictionModel, rig: PinOnDiscRig | None, figures: Pat
         tuple((k, _cell(v), info.get(k, {}).get("unit", ""), docs.get(k, ""))
               for k, v in model.parameters().items()),
     ))
+    paragraphs.append(operating_point_text(settings or ReportSettings.paper()))
     title = "Table 1 and §3: model parameters from the rig" if rig is not None else "Model parameters (no rig)"
     return Section("parameters", title, tuple(paragraphs),
                    tuple(comparisons), tuple(tables))
@@ -148,14 +160,12 @@ def fig2_step(model: FrictionModel, figures: Path, data: Path, *, n_mu: int = 16
     s = stability_summary(ds)
     band = tuple(s["unstable_omega_rad_s"]) if s["unstable_omega_rad_s"] else None
     comps = []
-    ok = band is not None and abs(band[0] - FIG2_BAND_RAD_S[0]) < 10 and abs(band[1] - FIG2_BAND_RAD_S[1]) < 10
-    # for a model that is not the paper's, the published band is shown for reference, without a verdict
-    note = "over mu 0-0.8, theta -8..8 deg; within 10 rad/s" if published else "the paper's rig, for reference"
-    comps.append(Comparison("coupled (lock-in) frequency band", FIG2_BAND_RAD_S, band, "rad/s",
-                            ok if published else None, note))
-    hz = (band[0] / (2 * math.pi), band[1] / (2 * math.pi)) if band else None
-    comps.append(Comparison("coupled frequency band", (2387.0, 2438.0), hz, "Hz", ok if published else None,
-                            "" if published else "the paper's rig, for reference"))
+    if published:  # another model's band is not the paper's: no comparison with it
+        ok = band is not None and abs(band[0] - FIG2_BAND_RAD_S[0]) < 10 and abs(band[1] - FIG2_BAND_RAD_S[1]) < 10
+        comps.append(Comparison("coupled (lock-in) frequency band", FIG2_BAND_RAD_S, band, "rad/s", ok,
+                                "over mu 0-0.8, theta -8..8 deg; within 10 rad/s"))
+        hz = (band[0] / (2 * math.pi), band[1] / (2 * math.pi)) if band else None
+        comps.append(Comparison("coupled frequency band", (2387.0, 2438.0), hz, "Hz", ok, ""))
     first = "Complex eigenvalues of M x'' + K(mu, tan theta) x = 0 (eq. 7) over the paper's grid."
     if published:
         first += (" As mu and theta grow the pin-bending and disc modes lock in: their frequencies coalesce and the "
@@ -182,44 +192,55 @@ def fig2_step(model: FrictionModel, figures: Path, data: Path, *, n_mu: int = 16
     )
 
 
-def critical_step(model: FrictionModel, figures: Path, data: Path, *, wavelength: float = 1e-3,
-                  mu_design: float = 0.3) -> Section:
-    """Critical friction, mu_e = mu + tan(theta), the run-out tolerance and sensitivities."""
+def critical_step(model: FrictionModel, figures: Path, data: Path, *,
+                  settings: ReportSettings | None = None) -> Section:
+    """Critical friction, mu_e = mu + tan(theta), the run-out tolerance and sensitivities.
+
+    A model without an onset on a flat disc gets no sensitivities and no onset mode, and the
+    text says so."""
+    settings = settings or ReportSettings.paper()
+    mu_design, wavelength = settings.mu_design, settings.sro_wavelength
     thetas = np.radians([-8.0, -4.0, 0.0, 4.0, 8.0])
     curve = critical_friction_curve(model, thetas)
     mu_e = curve.mu_e_critical.values
     c0 = critical_friction(model, 0.0)
     cd = critical_friction(model, 0.0, damped=True)
     tol = runout_tolerance(model, mu_design, wavelength=wavelength)
-    spread = float(np.ptp(mu_e) / np.mean(mu_e))
+    fin = mu_e[np.isfinite(mu_e)]
+    spread = float(np.ptp(fin) / np.mean(fin)) if fin.size == mu_e.size else math.nan
     rows = tuple((float(np.degrees(t)), float(m), float(me), float(f)) for t, m, me, f in zip(
         thetas, curve.mu_critical.values, mu_e, curve.frequency_hz.values, strict=True))
-    sens = critical_friction_sensitivity(model)
-    comps = (
-        Comparison("spread of critical mu + tan(theta) over theta = -8..8 deg", None, 100 * spread, "%", spread < 0.01,
-                   "eqs. 5-6 predict the SRO incline acts exactly like friction (0 % spread)"),
-    )
-    paragraphs = (_onset_text(model, c0, cd), _tolerance_text(tol, mu_design, wavelength))
-    tables = (
-        Table("Critical friction over the SRO incline", ("theta [deg]", "mu_crit", "mu_crit + tan(theta)",
-                                                           "onset frequency [Hz]"), rows),
-        Table("Which parameter buys the most margin (elasticity = % change of mu_crit per % change)",
-              ("parameter", "value", "unit", "d mu_crit / d p", "elasticity"),
-              tuple((r["parameter"], r["value"], r["unit"], r["dmu_dp"], r["elasticity"]) for r in sens)),
-    )
+    comps: tuple[Comparison, ...] = ()
+    if math.isfinite(spread):  # eqs. 5-6 are checked where there is an onset at every incline
+        comps = (Comparison("spread of critical mu + tan(theta) over theta = -8..8 deg", None, 100 * spread, "%",
+                            spread < 0.01, "eqs. 5-6 predict the SRO incline acts exactly like friction (0 % spread)"),)
+    paragraphs = (_onset_text(model, c0, cd), _tolerance_text(tol, settings))
+    tables = [Table("Critical friction over the SRO incline", ("theta [deg]", "mu_crit", "mu_crit + tan(theta)",
+                                                             "onset frequency [Hz]"), rows)]
+    if c0.status == "onset":  # a sensitivity of mu_crit needs a mu_crit
+        sens = critical_friction_sensitivity(model)
+        tables.append(Table(
+            "Which parameter buys the most margin (elasticity = % change of mu_crit per % change)",
+            ("parameter", "value", "unit", "d mu_crit / d p", "elasticity"),
+            tuple((r["parameter"], r["value"], r["unit"], r["dmu_dp"], r["elasticity"]) for r in sens)))
+    else:
+        paragraphs += ("With no undamped onset on a flat disc there is no critical friction to be sensitive: no "
+                       "sensitivities and no onset mode shape are computed.",)
     numbers = {"mu_crit": c0.mu_critical, "mu_crit_damped": cd.mu_critical,
                "mu_e_spread": spread, "tan_theta_max": tol.tan_theta_max,
-               "q0_max": tol.q0_max or math.nan, "mu_e_crit": float(np.mean(mu_e))}
+               "q0_max": tol.q0_max if tol.q0_max is not None else math.nan,
+               "mu_e_crit": float(np.mean(mu_e)), "mu_design": mu_design, "wavelength": wavelength,
+               "tolerance_flat_unstable": float(tol.limiting_side == "flat" or tol.tan_theta_max <= 0)}
     refs: tuple[FigureRef, ...] = ()
     files: tuple[str, ...] = ()
     if c0.status == "onset":
         shape_text, shape_numbers = _onset_mode(model, figures, data)
         paragraphs += (shape_text,)
         numbers.update(shape_numbers)
-        refs = (FigureRef("onset_mode", "Shape of the mode that loses stability at mu_crit (undamped, flat "
-                                           "disc): amplitude and phase of each degree of freedom"),)
+        refs = (FigureRef("onset_mode", "Shapes of the modes at mu_crit (undamped, flat disc), the ones that lose "
+                                           "stability marked: amplitude and phase of each degree of freedom"),)
         files = ("onset_modes.nc",)
-    return Section("critical", "§3: critical friction and the run-out tolerance", paragraphs, comps, tables,
+    return Section("critical", "§3: critical friction and the run-out tolerance", paragraphs, comps, tuple(tables),
                    refs, files, numbers=numbers)
 
 
@@ -243,6 +264,9 @@ def _onset_text(model: FrictionModel, c0, cd) -> str:
         first = (f"On a flat disc the undamped model loses stability at mu_crit = {c0.mu_critical:.5f} "
                  f"({c0.frequency_hz:.1f} Hz).")
     damp = damping_text(model)
+    p = model.parameters()
+    if damp and all(p[k] == 0 for k in ("c1", "c2", "c3", "c") if isinstance(p.get(k), int | float)):
+        return first + f" The model has no damping ({damp}): the damped analysis is the same."
     with_damping = f"With the model's damping ({damp})" if damp else "With the model's damping"
     if not math.isfinite(cd.mu_critical):
         return first + f" {with_damping} it stays stable over the friction range searched."
@@ -257,9 +281,12 @@ def _onset_text(model: FrictionModel, c0, cd) -> str:
     return first + f" {with_damping} onset comes later, at mu_crit = {cd.mu_critical:.5f}."
 
 
-def _tolerance_text(tol, mu_design: float, wavelength: float) -> str:
-    """The run-out tolerance at the design friction, and how the paper's Fig. 4 SRO compares with it."""
-    fig4_slope = 2 * math.pi * 0.08e-3 / 1e-3
+def _tolerance_text(tol, settings: ReportSettings) -> str:
+    """The run-out tolerance at the design friction, and how the report's Fig. 4 SRO compares with it."""
+    mu_design, wavelength = settings.mu_design, settings.sro_wavelength
+    fig4_slope = settings.sro_slope
+    whose = "paper" if settings.is_paper else "report"
+    sro = f"The {whose}'s Fig. 4 SRO (q0 = {settings.sro_amplitude * 1e6:.3g} um, lambda = {wavelength * 1e3:.3g} mm"
     if tol.limiting_side == "flat" or tol.tan_theta_max <= 0:
         return (f"Run-out tolerance at mu = {mu_design}: none; the model is already unstable on a flat disc there, "
                 "so no run-out slope is tolerated.")
@@ -273,9 +300,9 @@ def _tolerance_text(tol, mu_design: float, wavelength: float) -> str:
                  f"q0 = {tol.q0_max * 1e6:.2f} um (eq. 11)")
     text += "."
     if tol.tan_theta_max < fig4_slope:
-        text += f" The paper's Fig. 4 SRO (q0 = 80 um, lambda = 1 mm) has slopes up to {fig4_slope:.3f}: beyond it."
+        text += f" {sro}) has slopes up to {fig4_slope:.3f}: beyond it."
     else:
-        text += f" The paper's Fig. 4 SRO (q0 = 80 um, lambda = 1 mm, slopes up to {fig4_slope:.3f}) is within it."
+        text += f" {sro}, slopes up to {fig4_slope:.3f}) is within it."
     return text
 
 
@@ -299,7 +326,10 @@ def _onset_mode(model: FrictionModel, figures: Path, data: Path) -> tuple[str, d
     share = ds.participation.values[k]
     top = int(np.argmax(share))
     freq = float(ds.frequency_hz[k])
-    text = (f"At onset (mu_crit = {ds.attrs['mu']:.5f}, undamped, flat disc) the mode that loses stability vibrates "
+    who = ("the two modes that merge (one double root with one shape: at the coalescence neither is the stable or "
+           "the growing one) vibrate" if ds.attrs.get("onset_kind") == "coalescence" else
+           "the mode that loses stability vibrates")
+    text = (f"At onset (mu_crit = {ds.attrs['mu']:.5f}, undamped, flat disc) {who} "
             f"at {freq:.1f} Hz, mostly in {names[lead]}"
             + (f"; {' and '.join(moves)}" if moves else "")
             + f"; {ds.dof.values[top]} carries {100 * share[top]:.1f} % of the mode's "

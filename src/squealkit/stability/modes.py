@@ -324,10 +324,12 @@ def onset_modes(
     """The modes at the critical friction, with the mode that loses stability marked.
 
     The critical friction comes from :func:`~squealkit.stability.critical_friction`; the
-    modes are those of :func:`modes` at it. ``loses_stability`` marks the mode nearest to
-    the one that grows just above mu_crit (1e-6 relative), i.e. the mode that crosses the
-    imaginary axis (damped) or the pair that merges (undamped mode coupling: at the
-    coalescence both have one shape).
+    modes are those of :func:`modes` at it. ``loses_stability`` marks the root that grows just
+    above mu_crit (1e-6 relative): the mode that crosses the imaginary axis (damped), or both
+    roots of the pair that merges (undamped mode coupling: at the coalescence they are one
+    double root with one shape, and which of the two carries a round-off sigma of +1e-9 or
+    -1e-9 says nothing about which branch grows). The attribute ``onset_kind`` says which:
+    ``"crossing"`` or ``"coalescence"``.
 
     Parameters
     ----------
@@ -345,8 +347,9 @@ def onset_modes(
     -------
     xarray.Dataset
         The :func:`modes` result at ``mu = mu_critical`` with the boolean variable
-        ``loses_stability`` over ``mode`` (True for one mode) and the attributes
-        ``mu_critical``, ``mu_e_critical`` and ``onset_frequency_hz`` [Hz].
+        ``loses_stability`` over ``mode`` (True for one mode, or for the two roots of a
+        coalescing pair) and the attributes ``mu_critical``, ``mu_e_critical``,
+        ``onset_frequency_hz`` [Hz] and ``onset_kind``.
 
     Raises
     ------
@@ -375,10 +378,14 @@ def onset_modes(
     _, _, _, lam_up, _, _ = _solve(model, mu_c + 1e-6 * max(1.0, abs(mu_c)), t, damped)
     grow = lam_up[np.argmax(lam_up.real)]
     lam = ds.growth_rate.values + 1j * ds.omega.values
-    flag = np.zeros(lam.size, dtype=bool)
-    flag[np.argmin(np.abs(lam - grow))] = True
-    ds["loses_stability"] = ("mode", flag, {"long_name": "mode that loses stability at mu_crit"})
+    dist = np.abs(lam - grow)
+    # the root the growing one continues: at a coalescence the two roots of the pair are equally near
+    # (their split at mu_crit is round-off, far below the square-root split 1e-6 past it)
+    flag = dist <= 2.0 * dist.min()
+    ds["loses_stability"] = ("mode", flag, {"long_name": "mode that loses stability at mu_crit (both roots of a "
+                                                         "coalescing pair)"})
     ds.attrs.update(mu_critical=mu_c, mu_e_critical=crit.mu_e_critical, onset_frequency_hz=crit.frequency_hz,
+                    onset_kind="coalescence" if int(flag.sum()) > 1 else "crossing",
                     title="Complex modes at the critical friction")
     return ds
 
