@@ -67,9 +67,11 @@ def _transient() -> None:
 def _nonlinear() -> None:
     from .models import get_preset
     from .nonlinear import limit_cycle_branch
-    from .report.steps_nonlinear import HARMONICS, MU_RANGE, SPEED
+    from .report.settings import ReportSettings
+    from .report.steps_nonlinear import HARMONICS, MU_RANGE
 
-    limit_cycle_branch(get_preset("lv2013"), MU_RANGE, harmonics=HARMONICS, n_points=2, speed=SPEED)
+    speed = ReportSettings.__dataclass_fields__["speed"].default
+    limit_cycle_branch(get_preset("lv2013"), MU_RANGE, harmonics=HARMONICS, n_points=2, speed=speed)
 
 
 def _measurement() -> None:
