@@ -46,6 +46,7 @@ from numpy.typing import ArrayLike, NDArray
 from . import __version__
 from ._validation import InputError, check_memory, validate_angle, validate_finite
 from .models import FrictionModel, load_model
+from .models._base import resolve_damped
 from .models.config import _read_toml
 from .stability import ONSET_STATUS
 
@@ -411,7 +412,7 @@ def squeal_propensity(
     *,
     samples: int,
     theta: float = 0.0,
-    damped: bool = False,
+    damped: bool | None = None,
     seed: int = 0,
     confidence: float = 0.95,
     sensitivity: bool = True,
@@ -452,8 +453,9 @@ def squeal_propensity(
         Independent Monte Carlo samples (>= 2).
     theta : float
         Run-out incline [rad] (tan(theta) enters as in eq. 6).
-    damped : bool
-        Include the damping matrix (the paper's sweep, eq. 7, is undamped).
+    damped : bool, optional
+        Include the damping matrix C. Not given: left out (paper eq. 7 is undamped), with a
+        warning when the model has damping.
     seed : int
         Seed of the draw (``numpy.random.SeedSequence``); the same seed gives the same
         result whatever ``batch_size`` or ``client``.
@@ -496,6 +498,7 @@ def squeal_propensity(
     >>> ds.sobol_total.values.round(2).tolist()          # k3 drives mu_critical, m does not
     [1.03, 0.0]
     """
+    damped = resolve_damped(model, damped)
     from .scale import map_tasks
     from .stability import ModelEnsemble, ensemble_onset, ensemble_unstable
     from .stability.ensemble import _grid

@@ -104,13 +104,32 @@ def build_model_from_options(preset: str | None, config: Path | None, sets: tupl
     """
     from ..models import FEModel, build_model, load_rig, parse_assignments
 
-    model = build_model(preset, config, parse_assignments(sets))
+    overrides = parse_assignments(sets)
+    model = build_model(preset, config, overrides)
     if isinstance(model, FEModel) and not allow_fe:
         raise InputError(f"FE models (model = \"fe\") work with {', '.join(FE_COMMANDS)} only.")
-    rig = load_rig(config) if config is not None and not isinstance(model, FEModel) else None
+    rig = load_rig(config, overrides) if config is not None and not isinstance(model, FEModel) else None
     if rig is not None:
         PENDING_NOTES.append(f"squealkit: rig frequencies: {rig.describe()}")
     return model
+
+
+def damping_option(f: F) -> F:
+    """--damped/--undamped: the model's damping is used unless --undamped (the paper's eq. 7 sweep)."""
+    return click.option(
+        "--damped/--undamped", "damped", default=True, show_default=True,
+        help="Use the model's damping matrix (the default), or leave it out with --undamped (the paper's "
+        "Fig. 2 sweep, eq. 7, is undamped). A note on stderr says when damping the model has is left out.",
+    )(f)
+
+
+def note_damping(model: Any, damped: bool) -> None:
+    """One line on stderr (after the command succeeded) when damping the model has is left out."""
+    from ..models._base import damping_names
+
+    names = damping_names(model)
+    if not damped and names:
+        PENDING_NOTES.append(f"squealkit: the model's damping ({names}) is left out (--undamped).")
 
 
 def _jsonable(obj: Any) -> Any:

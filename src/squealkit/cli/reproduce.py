@@ -99,12 +99,17 @@ def report(preset, config, sets, out_dir: Path, force: bool, recording, mic, dis
           --mic mic --displacement probe --rpm 900 --radius 0.05
     """
     from .._validation import InputError
-    from ..models import load_rig
+    from ..models import load_rig, parse_assignments
+    from ..models._base import damping_names
     from ..report import RecordingSpec
-    from ._options import build_model_from_options
+    from ._options import PENDING_NOTES, build_model_from_options
 
     model = build_model_from_options(preset, config, sets)
-    rig = load_rig(config) if config is not None else None
+    rig = load_rig(config, parse_assignments(sets)) if config is not None else None
+    if damping_names(model):
+        PENDING_NOTES.append(f"squealkit: the report's eigenvalue map, critical friction and run-out tolerance "
+                             f"follow the paper (undamped, eq. 7); the model's damping ({damping_names(model)}) "
+                             "enters its damped onset and transients.")
     spec = None
     if recording is not None:
         if rpm is None or radius is None:

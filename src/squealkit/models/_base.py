@@ -28,6 +28,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import warnings
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -45,6 +46,11 @@ from .._validation import (
 from .friction import Stribeck, require_point_contact
 
 __all__ = ["KINEMATICS", "FrictionModel", "SystemMatrices", "param"]
+
+#: What an analysis says when it leaves a model's damping out because ``damped`` was not given.
+_DAMPING_LEFT_OUT = ("The model's damping ({names}) is left out: the analysis is undamped unless asked "
+                     "(paper eq. 7). Pass damped=True to include it, or damped=False to leave it out "
+                     "without this warning.")
 
 #: Kinds of scalar parameter and the validator that checks each.
 _KINDS = {
@@ -534,3 +540,28 @@ class FrictionModel(ABC):
             if v["unit"].startswith("N s/m")
         }
         return self.replace(**zeros)
+
+
+def damping_names(model: Any) -> str:
+    """The model's nonzero damping parameters, e.g. ``"c1=220, c2=220"`` ("" when it has none).
+
+    A model whose damping is not a parameter (a matrix model) says ``"C"`` when C is not zero.
+    """
+    if not isinstance(model, FrictionModel):
+        return ""
+    named = [f"{k}={getattr(model, k):g}" for k, v in model.parameter_info().items()
+             if v["unit"].startswith("N s/m") and v["kind"] != "array" and getattr(model, k) != 0]
+    if named:
+        return ", ".join(named)
+    return "C" if np.any(model.damping_matrix()) else ""
+
+
+def resolve_damped(model: Any, damped: bool | None, *, stacklevel: int = 3) -> bool:
+    """``damped`` of an analysis: as given, and False when not given (None), with a warning then
+    if the model has damping, so that no damping is left out without a word."""
+    if damped is not None:
+        return bool(damped)
+    names = damping_names(model)
+    if names:
+        warnings.warn(_DAMPING_LEFT_OUT.format(names=names), UserWarning, stacklevel=stacklevel)
+    return False

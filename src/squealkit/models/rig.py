@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from scipy.linalg import expm
@@ -406,8 +406,20 @@ class PinOnDiscRig:
         return "; ".join(f"{name.replace('_', ' ')} {v['frequency_hz']:.1f} Hz ({v['source']})"
                          for name, v in self.frequency_sources().items())
 
-    def to_model(self) -> PinOnDisc3DOF:
-        """The 3-DOF model (paper eq. 4) with every stiffness derived from this rig."""
+    def to_model(self, **changes: Any) -> PinOnDisc3DOF:
+        """The 3-DOF model (paper eq. 4) with every stiffness derived from this rig.
+
+        Parameters
+        ----------
+        **changes
+            Model parameters changed before a ``preload = "contact_force"`` is scaled (as
+            :meth:`FrictionModel.replace`), so that the static contact force is ``P`` for the
+            model returned.
+
+        Returns
+        -------
+        PinOnDisc3DOF
+        """
         m1 = self.pin_mass_factor * self.pin_mass()
         model = PinOnDisc3DOF(
             m1=m1,
@@ -418,6 +430,8 @@ class PinOnDiscRig:
             kc=contact_stiffness(self.pin_diameter, self.pin_length, self.pin_youngs_modulus),
             c1=self.c1, c2=self.c2, c3=self.c3, alpha=self.alpha, P=self.P, sliding=self.sliding,
         )
+        if changes:
+            model = model.replace(**changes)
         if self.preload == "contact_force" and self.P > 0:
             # the static contact force is linear in P: scale P so that it equals the requested force
             per_newton = float(model.replace(P=1.0).static_contact_force(0.0))

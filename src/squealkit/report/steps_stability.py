@@ -139,7 +139,7 @@ def fig2_step(model: FrictionModel, figures: Path, data: Path, *, n_mu: int = 16
     mu = np.linspace(0.0, 0.8, n_mu)
     theta = np.radians(np.linspace(-8.0, 8.0, n_theta))
     ds = stability_map(model, mu, theta, damped=False)
-    crit = critical_friction_curve(model, theta[:: max(1, n_theta // 40)])
+    crit = critical_friction_curve(model, theta[:: max(1, n_theta // 40)], damped=False)
     save_dataset(ds, data / "fig2_eigenvalues.nc")
     save_dataset(crit, data / "critical_friction_curve.nc")
     _save_fig(fig2_plot(ds), figures, "fig2_eigenvalues")
@@ -186,15 +186,15 @@ def critical_step(model: FrictionModel, figures: Path, data: Path, *, wavelength
                   mu_design: float = 0.3) -> Section:
     """Critical friction, mu_e = mu + tan(theta), the run-out tolerance and sensitivities."""
     thetas = np.radians([-8.0, -4.0, 0.0, 4.0, 8.0])
-    curve = critical_friction_curve(model, thetas)
+    curve = critical_friction_curve(model, thetas, damped=False)
     mu_e = curve.mu_e_critical.values
-    c0 = critical_friction(model, 0.0)
+    c0 = critical_friction(model, 0.0, damped=False)
     cd = critical_friction(model, 0.0, damped=True)
-    tol = runout_tolerance(model, mu_design, wavelength=wavelength)
+    tol = runout_tolerance(model, mu_design, wavelength=wavelength, damped=False)
     spread = float(np.ptp(mu_e) / np.mean(mu_e))
     rows = tuple((float(np.degrees(t)), float(m), float(me), float(f)) for t, m, me, f in zip(
         thetas, curve.mu_critical.values, mu_e, curve.frequency_hz.values, strict=True))
-    sens = critical_friction_sensitivity(model)
+    sens = critical_friction_sensitivity(model, damped=False)
     comps = (
         Comparison("spread of critical mu + tan(theta) over theta = -8..8 deg", None, 100 * spread, "%", spread < 0.01,
                    "eqs. 5-6 predict the SRO incline acts exactly like friction (0 % spread)"),
@@ -284,7 +284,7 @@ def _onset_mode(model: FrictionModel, figures: Path, data: Path) -> tuple[str, d
     its data and one sentence from its numbers."""
     from ..plotting.modes import modes_plot
 
-    ds = onset_modes(model)
+    ds = onset_modes(model, damped=False)
     save_dataset(ds, data / "onset_modes.nc")
     _save_fig(modes_plot(ds), figures, "onset_mode")
     k = int(np.argmax(ds.loses_stability.values))

@@ -1,0 +1,118 @@
+"""A user's own files and values: the model's damping used, one model per file, units that mean what they say.
+
+Issue 27 ("Silent defaults and one model per file", "Units"). References: the damped and undamped
+onsets are the stability engine's own (tests/test_stability.py checks it against LAPACK); the rig's
+stiffnesses are ``k = m (2 pi f)^2`` (paper §3); units are converted by pint.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import warnings
+
+import pytest
+
+#: The paper's model with one strong damper beside k1 only: stable undamped at mu = 0.3 (the undamped
+#: onset is mu = 0.4448, paper §3), unstable with its damping from mu = 0.0378 on (unequal modal damping
+#: destabilises mode coupling).
+DAMPED_RIG = 'preset = "lv2013"\n[parameters]\nc1 = 2000.0\nc2 = 0.0\nc3 = 0.0\n'
+
+
+@pytest.fixture()
+def damped_rig(tmp_path):
+    p = tmp_path / "damped.toml"
+    p.write_text(DAMPED_RIG)
+    return p
+
+
+# -- 1. the model's damping is used unless --undamped ---------------------------------------------------
+
+
+def test_stability_uses_the_models_damping_by_default(run, damped_rig):
+    r = run("stability", "--config", str(damped_rig), "--mu", "0.3", "--theta", "0", "--json")
+    assert r.exit_code == 0, r.output
+    out = json.loads(r.stdout)
+    assert out["damped"] is True and out["unstable_fraction"] == 1.0
+    r = run("stability", "--config", str(damped_rig), "--mu", "0.3", "--theta", "0", "--undamped", "--json")
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["unstable_fraction"] == 0.0
+    # leaving the model's damping out is said in one line
+    assert "damping" in r.stderr and "left out" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_critical_rig_and_montecarlo_use_the_models_damping(run, damped_rig, tmp_path):
+    r = run("critical", "--config", str(damped_rig), "--mu-max", "0.8", "--json")
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["mu_critical"] == pytest.approx(0.0378, abs=1e-3)
+    r = run("critical", "--config", str(damped_rig), "--damped", "--mu-max", "0.8", "--json")  # old flag: a no-op
+    assert r.exit_code == 0 and json.loads(r.stdout)["mu_critical"] == pytest.approx(0.0378, abs=1e-3)
+    r = run("critical", "--config", str(damped_rig), "--undamped", "--json")
+    assert json.loads(r.stdout)["mu_critical"] == pytest.approx(0.4448, abs=1e-3)   # paper §3
+    unc = tmp_path / "unc.toml"
+    unc.write_text(DAMPED_RIG + '[uncertain]\nk3 = {dist = "normal", mean = 9.452e8, std = 1e6}\n')
+    r = run("montecarlo", "--config", str(unc), "--samples", "16", "--mu", "0.3", "--no-sensitivity", "--json")
+    assert r.exit_code == 0, r.output
+    out = json.loads(r.stdout)
+    assert out["damped"] is True and out["probability_unstable"] == [1.0]
+
+
+def test_api_warns_when_a_damped_model_is_analysed_undamped():
+    from squealkit.models import get_preset
+    from squealkit.stability import critical_friction, stability_map
+
+    model = get_preset("lv2013")
+    with pytest.warns(UserWarning, match="damping .* left out"):
+        critical_friction(model)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        critical_friction(model, damped=False)          # asked for: no warning
+        stability_map(model.undamped(), [0.3], [0.0])   # nothing left out: no warning
+
+
+# -- 2. one file, one model ----------------------------------------------------------------------------
+
+RIG_WITH_PARAMETERS = """
+[rig]
+pin_diameter = 0.028
+pin_length = 0.045
+disc_freq = 2346.0
+pin_axial_freq = 8653.0
+pin_bending_freq = 2500.0
+preload = "contact_force"
+P = 20.0
+[parameters]
+alpha_deg = 3.0
+c1 = 0.0
+c2 = 0.0
+c3 = 0.0
+"""
+
+
+def test_rig_and_critical_give_one_model_from_one_file(run, tmp_path):
+    cfg = tmp_path / "rig.toml"
+    cfg.write_text(RIG_WITH_PARAMETERS)
+    r = run("rig", "--config", str(cfg), "--json")
+    assert r.exit_code == 0, r.output
+    rig_out = json.loads(r.stdout)
+    r = run("critical", "--config", str(cfg), "--json")
+    assert r.exit_code == 0, r.output
+    assert rig_out["mu_crit"] == pytest.approx(json.loads(r.stdout)["mu_critical"], rel=1e-9)
+    # the static contact force is the requested 20 N at the file's alpha (3 deg), not at the default 2 deg
+    assert rig_out["static_contact_force"] == pytest.approx(20.0, rel=1e-9)
+
+
+def test_parameters_of_the_rig_reach_the_rig_and_the_model(tmp_path):
+    from squealkit.models import load_model, load_rig
+
+    cfg = tmp_path / "rig.toml"
+    cfg.write_text("[rig]\ndisc_freq = 2346.0\n[parameters]\nP = 56.8\nalpha_deg = 3.0\n")
+    model, rig = load_model(cfg), load_rig(cfg)
+    assert model.P == rig.P == 56.8
+    assert model.alpha == rig.alpha == pytest.approx(math.radians(3.0))
+    # --set overrides go the same way
+    from squealkit.models import build_model
+
+    cfg.write_text(RIG_WITH_PARAMETERS)
+    m = build_model(config=cfg, overrides={"alpha_deg": 5.0})
+    assert float(m.static_contact_force(0.0)) == pytest.approx(20.0, rel=1e-9)
