@@ -11,6 +11,7 @@ import json
 import math
 import warnings
 
+import numpy as np
 import pytest
 
 #: The paper's model with one strong damper beside k1 only: stable undamped at mu = 0.3 (the undamped
@@ -116,3 +117,47 @@ def test_parameters_of_the_rig_reach_the_rig_and_the_model(tmp_path):
     cfg.write_text(RIG_WITH_PARAMETERS)
     m = build_model(config=cfg, overrides={"alpha_deg": 5.0})
     assert float(m.static_contact_force(0.0)) == pytest.approx(20.0, rel=1e-9)
+
+
+# -- 3. [uncertain] takes what a rig engineer measures --------------------------------------------------
+
+RIG_UNCERTAIN = """
+[rig]
+pin_bending_freq = 2561.0
+pin_axial_freq = 8653.0
+[parameters]
+c1 = 0.0
+c2 = 0.0
+c3 = 0.0
+[uncertain]
+disc_freq = {dist = "uniform", lower = 2300.0, upper = 2400.0}
+pin_diameter = {dist = "normal", mean = 0.030, std = 0.0003}
+"""
+
+
+def test_uncertain_rig_quantities_are_sampled_through_the_rig(run, tmp_path):
+    from squealkit.models import load_model, load_rig_model
+    from squealkit.stability import critical_friction
+    from squealkit.uncertainty import load_uncertain, squeal_propensity
+
+    cfg = tmp_path / "rig.toml"
+    cfg.write_text(RIG_UNCERTAIN)
+    rig = load_rig_model(cfg)
+    unc = load_uncertain(cfg, rig)
+    ds = squeal_propensity(load_model(cfg), unc, np.linspace(0.1, 0.8, 141), samples=8, sensitivity=False,
+                           damped=False, rig=rig)
+    assert list(ds.parameter_unit.values) == ["Hz", "m"]
+    # each sample is the model derived from its own rig (k3 = m2 (2 pi f)^2, kc = E A / L): its onset is
+    # the one critical_friction finds for that rig, to the grid's resolution (0.005)
+    f, d = ds.parameter_value.values[0]
+    ref = critical_friction(rig.rig.__class__.paper(disc_freq=f, pin_diameter=d, c1=0.0, c2=0.0, c3=0.0).to_model(),
+                            damped=False)
+    assert float(ds.mu_critical[0]) == pytest.approx(ref.mu_critical, abs=5e-3)
+    assert np.ptp(ds.mu_critical.values) > 0.01    # the disc frequency moves the onset
+    r = run("montecarlo", "--config", str(cfg), "--samples", "8", "--mu", "0.3:0.6:7", "--no-sensitivity",
+            "--json")
+    assert r.exit_code == 0, r.output
+    # without a [rig] table the message says what is missing
+    cfg.write_text('preset = "lv2013"\n[uncertain]\ndisc_freq = {dist = "normal", mean = 2346.0, std = 10.0}\n')
+    r = run("montecarlo", "--config", str(cfg), "--samples", "8")
+    assert r.exit_code == 2 and "rig quantity" in r.stderr and "[rig] table" in r.stderr

@@ -93,7 +93,10 @@ def montecarlo(preset, config, sets, uncertain_path, samples, mu_spec, theta_deg
     if source is None:
         raise InputError("montecarlo needs an [uncertain] table: give --config FILE.toml that has one, "
                          "or --uncertain FILE.toml (see examples/uncertain_rig.toml).")
-    uncertain = load_uncertain(source, model)
+    from ..models import load_rig_model, parse_assignments
+
+    rig = load_rig_model(config, parse_assignments(sets)) if config is not None else None
+    uncertain = load_uncertain(source, rig or model)
     mu = parse_range("--mu", mu_spec)
     if not abs(theta_deg) < 90.0:
         raise InputError(f"--theta {theta_deg!r}: the angle must lie strictly between -90 and 90 deg.")
@@ -102,7 +105,7 @@ def montecarlo(preset, config, sets, uncertain_path, samples, mu_spec, theta_deg
     ) as cb:
         ds = squeal_propensity(model, uncertain, mu, samples=samples, theta=math.radians(theta_deg), damped=damped,
                                seed=seed, confidence=confidence, sensitivity=not no_sensitivity, client=client,
-                               progress=cb)
+                               progress=cb, rig=rig)
     if out_path is not None:
         save_dataset(ds, out_path)
     if plot_path is not None:

@@ -90,6 +90,15 @@ def param(default: Any, *, unit: str, doc: str, kind: str = "positive",
     return field(default=default, metadata=meta)
 
 
+def parameter_info(cls: Any) -> dict[str, dict[str, str]]:
+    """Unit, meaning and kind of each field of ``cls`` declared with :func:`param`, in declaration order."""
+    return {
+        f.name: {"unit": f.metadata["unit"], "doc": f.metadata["doc"], "kind": f.metadata["kind"]}
+        for f in dataclasses.fields(cls)
+        if "unit" in f.metadata
+    }
+
+
 @dataclass(frozen=True)
 class SystemMatrices:
     """Mass, damping and stiffness matrices of a model at given friction and slope.
@@ -477,11 +486,7 @@ class FrictionModel(ABC):
     @classmethod
     def parameter_info(cls) -> dict[str, dict[str, str]]:
         """Each parameter's unit, meaning and kind, in declaration order."""
-        return {
-            f.name: {"unit": f.metadata["unit"], "doc": f.metadata["doc"], "kind": f.metadata["kind"]}
-            for f in dataclasses.fields(cls)
-            if "unit" in f.metadata
-        }
+        return parameter_info(cls)
 
     def parameters(self) -> dict[str, Any]:
         """Parameter values in SI units (angles in radians), as plain Python objects."""

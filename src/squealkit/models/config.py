@@ -45,9 +45,10 @@ from .fe import FEModel
 from .hoffmann import Hoffmann2002
 from .matrix import MatrixModel
 from .pin_on_disc import PinOnDisc3DOF
-from .rig import PinOnDiscRig
+from .rig import PinOnDiscRig, RigModel
 
-__all__ = ["PRESETS", "build_model", "get_preset", "load_model", "load_rig", "model_from_dict", "parse_assignments"]
+__all__ = ["PRESETS", "build_model", "get_preset", "load_model", "load_rig", "load_rig_model", "model_from_dict",
+           "parse_assignments", "rig_model_from_dict"]
 
 #: Built-in presets: name -> (description, factory).
 PRESETS: dict[str, tuple[str, Any]] = {
@@ -214,8 +215,7 @@ def model_from_dict(doc: Mapping[str, Any], base_dir: str | Path | None = None,
     elif "rig" in doc:
         if kind != "pin_on_disc":
             raise InputError("A [rig] table describes a pin-on-disc rig; set model = \"pin_on_disc\".")
-        to_rig, rest = _split_rig_parameters(_parameters(doc, overrides))
-        return _rig_from_table(doc["rig"], to_rig).to_model(**rest)
+        return rig_model_from_dict(doc, overrides).to_model()  # type: ignore[union-attr]
     elif preset is not None:
         model = get_preset(preset)
     else:
@@ -300,11 +300,66 @@ def load_rig(path: str | Path, overrides: Mapping[str, Any] | None = None) -> Pi
 
 
 def rig_from_dict(doc: Mapping[str, Any], overrides: Mapping[str, Any] | None = None) -> PinOnDiscRig | None:
-    """The rig of a parsed model file's ``[rig]`` table (None without one), as :func:`load_rig`."""
+    """The rig of a parsed model file's ``[rig]`` table (None without one), as :func:`load_rig`.
+
+    Parameters
+    ----------
+    doc : mapping
+        The parsed model file.
+    overrides : mapping, optional
+        Parameter values applied after its ``[parameters]`` (``--set``).
+
+    Returns
+    -------
+    PinOnDiscRig or None
+    """
+    rm = rig_model_from_dict(doc, overrides)
+    return None if rm is None else rm.rig
+
+
+def rig_model_from_dict(doc: Mapping[str, Any], overrides: Mapping[str, Any] | None = None) -> RigModel | None:
+    """The rig of a parsed model file and the model changes after its derivation (None without a [rig]).
+
+    ``rig_model_from_dict(doc).to_model()`` is :func:`model_from_dict`'s model; its ``to_model(**changes)``
+    derives the model anew with rig quantities changed (a Monte Carlo over ``disc_freq``, pin sizes...).
+
+    Parameters
+    ----------
+    doc : mapping
+        The parsed model file.
+    overrides : mapping, optional
+        Parameter values applied after its ``[parameters]`` (``--set``).
+
+    Returns
+    -------
+    RigModel or None
+    """
     table = doc.get("rig")
     if table is None:
         return None
-    return _rig_from_table(table, _split_rig_parameters(_parameters(doc, overrides))[0])
+    to_rig, rest = _split_rig_parameters(_parameters(doc, overrides))
+    return RigModel(_rig_from_table(table, to_rig), rest)
+
+
+def load_rig_model(path: str | Path, overrides: Mapping[str, Any] | None = None) -> RigModel | None:
+    """:func:`rig_model_from_dict` of a model file (None without a [rig] table); errors name the file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The model file (TOML).
+    overrides : mapping, optional
+        Parameter values applied after the file's ``[parameters]`` (``--set``).
+
+    Returns
+    -------
+    RigModel or None
+        The rig and the model changes after its derivation; ``.to_model()`` is :func:`load_model`'s model.
+    """
+    try:
+        return rig_model_from_dict(_read_toml(path), overrides)
+    except InputError as e:
+        raise InputError(f"{Path(path).name}: {e}") from e
 
 
 def parse_assignments(items: Iterable[str]) -> dict[str, float | str]:
