@@ -161,3 +161,44 @@ def test_uncertain_rig_quantities_are_sampled_through_the_rig(run, tmp_path):
     cfg.write_text('preset = "lv2013"\n[uncertain]\ndisc_freq = {dist = "normal", mean = 2346.0, std = 10.0}\n')
     r = run("montecarlo", "--config", str(cfg), "--samples", "8")
     assert r.exit_code == 2 and "rig quantity" in r.stderr and "[rig] table" in r.stderr
+
+
+# -- 6. a CSV's sample rate from its whole time column ---------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def rounded_time_csv(tmp_path_factory):
+    """1 s at 48 kHz, a 2900 Hz tone (1 Pa), times written with 7 decimals (steps of 2.08e-5 or 2.09e-5 s)."""
+    fs, n = 48000.0, 48000
+    t = np.arange(n) / fs
+    f = tmp_path_factory.mktemp("fs") / "rounded.csv"
+    f.write_text("time [s],mic [Pa]\n" + "".join(f"{a:.7f},{b:.9g}\n" for a, b in
+                                                 zip(t, np.sin(2 * np.pi * 2900.0 * t), strict=True)))
+    return f
+
+
+def test_csv_sample_rate_is_the_least_squares_slope_of_its_time_column(rounded_time_csv):
+    from squealkit.measurement import open_recording, read_recording
+
+    src = open_recording(rounded_time_csv)
+    # the time base is exactly 48 kHz; rounding to 1e-7 s leaves it unbiased over 48000 samples
+    assert src.fs == pytest.approx(48000.0, rel=1e-6)
+    ds = read_recording(rounded_time_csv)
+    assert ds.attrs["fs"] == pytest.approx(48000.0, rel=1e-6)
+    # the jitter is the rounding: uniform over +-0.5e-7 s, RMS 1e-7 / sqrt(12) = 2.9e-8 s
+    assert ds.attrs["time_jitter_rms"] == pytest.approx(1e-7 / math.sqrt(12), rel=0.1)
+    spec = np.abs(np.fft.rfft(ds["mic"].values))
+    freq = np.fft.rfftfreq(ds.sizes["time"], 1.0 / ds.attrs["fs"])
+    assert freq[np.argmax(spec)] == pytest.approx(2900.0, abs=0.5)   # was 2904.6 Hz from the median step
+
+
+def test_csv_with_a_jittery_time_column_warns(tmp_path):
+    from squealkit.measurement import open_recording
+
+    rng = np.random.default_rng(1)
+    t = np.arange(2000) / 1000.0 + rng.uniform(-2e-4, 2e-4, 2000)   # +-0.2 sample intervals of jitter
+    f = tmp_path / "jitter.csv"
+    f.write_text("time,mic\n" + "".join(f"{a:.9f},1\n" for a in t))
+    with pytest.warns(UserWarning, match="jitter"):
+        src = open_recording(f)
+    assert src.fs == pytest.approx(1000.0, rel=1e-3)
