@@ -14,6 +14,8 @@ import warnings
 import numpy as np
 import pytest
 
+from squealkit._validation import InputError
+
 #: The paper's model with one strong damper beside k1 only: stable undamped at mu = 0.3 (the undamped
 #: onset is mu = 0.4448, paper §3), unstable with its damping from mu = 0.0378 on (unequal modal damping
 #: destabilises mode coupling).
@@ -202,3 +204,108 @@ def test_csv_with_a_jittery_time_column_warns(tmp_path):
     with pytest.warns(UserWarning, match="jitter"):
         src = open_recording(f)
     assert src.fs == pytest.approx(1000.0, rel=1e-3)
+
+
+# -- 4. channel units applied where a channel is read ----------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def recording_in_um(tmp_path_factory):
+    """The synthetic rig recording (squeal at 2388 Hz) as CSV twice: the probe in m, and in um."""
+    from squealkit.measurement import synthetic_recording
+
+    rec = synthetic_recording(duration=0.5, seed=1)
+    t, p, q = rec["time"].values, rec["mic"].values, rec["displacement"].values
+    d = tmp_path_factory.mktemp("units")
+    si, um = d / "si.csv", d / "um.csv"
+    rows = list(zip(t, p, q, strict=True))
+    si.write_text("time [s],mic [Pa],probe [m]\n" + "".join(f"{a:.9g},{b:.9g},{c:.9g}\n" for a, b, c in rows))
+    um.write_text("time [s],mic [Pa],probe [um]\n" + "".join(f"{a:.9g},{b:.9g},{c * 1e6:.9g}\n" for a, b, c in rows))
+    return si, um
+
+
+def test_channel_units_from_the_header_and_unit_option_are_applied(recording_in_um, tmp_path):
+    from squealkit.measurement import open_recording, read_recording
+
+    si, um = recording_in_um
+    a, b = read_recording(si), read_recording(um)
+    assert b["probe"].attrs["units"] == "m" and b["probe"].attrs["file_units"] == "um"
+    np.testing.assert_allclose(b["probe"].values, a["probe"].values, rtol=1e-8, atol=1e-15)
+    # --unit (units=) says it for a file whose header does not
+    bare = tmp_path / "bare.csv"
+    bare.write_text(um.read_text().replace("probe [um]", "probe"))
+    src = open_recording(bare, units={"probe": "um"})
+    assert src.units["probe"] == "m" and src.scales["probe"] == 1e-6
+    # an in-memory recording with a probe in mm is analysed in metres too
+    from squealkit.measurement.analysis import _DatasetSource
+
+    ds = a.copy()
+    ds["probe"] = ds["probe"] * 1e3
+    ds["probe"].attrs["units"] = "mm"
+    blk = next(_DatasetSource(ds, None).iter_blocks(["probe"]))[1]["probe"]
+    np.testing.assert_allclose(blk, a["probe"].values[: blk.size], rtol=1e-12)
+
+
+def test_analyze_reports_the_runout_of_a_probe_in_um_in_metres(run, recording_in_um):
+    out = {}
+    for f in recording_in_um:
+        r = run("analyze", str(f), "--mic", "mic", "--displacement", "probe", "--rpm", "900", "--radius", "0.05",
+                "--json")
+        assert r.exit_code == 0, r.output
+        out[f.stem] = json.loads(r.stdout)["runout"]
+    # the same run-out whichever unit the file is written in (was 1e6 times larger: "40.8 m p-p")
+    assert out["um"]["sro_p2p_m"] == pytest.approx(out["si"]["sro_p2p_m"], rel=1e-6)
+    assert out["um"]["max_tan_theta"] == pytest.approx(out["si"]["max_tan_theta"], rel=1e-6)
+    assert out["si"]["sro_p2p_m"] < 1e-3
+
+
+# -- 5. values with units, and unit slips refused ---------------------------------------------------------
+
+
+def test_model_files_take_values_with_units(tmp_path):
+    from squealkit.models import PinOnDiscRig, load_model
+
+    cfg = tmp_path / "rig.toml"
+    cfg.write_text('[rig]\npin_diameter = "30 mm"\npin_length = "45 mm"\ndisc_freq = "2.346 kHz"\n'
+                   'pin_youngs_modulus = "2.95 GPa"\npin_density = "1.04 g/cm^3"\npin_bending_freq = "2561 Hz"\n'
+                   'pin_axial_freq = "8.653 kHz"\n[parameters]\nalpha_deg = 2.0\nc1 = "220 N s/m"\n')
+    # the same model as the paper's rig in SI (Table 1 frequencies), to rounding
+    ref = PinOnDiscRig.paper().to_model()
+    m = load_model(cfg)
+    for k, v in ref.parameters().items():
+        assert getattr(m, k) == (pytest.approx(v, rel=1e-12) if isinstance(v, float) else v), k
+
+
+@pytest.mark.parametrize(("table", "says"), [
+    ("disc_freq = 3.15", "did you mean 3.15 kHz? write '3.15 kHz'"),
+    ("pin_diameter = 15", "did you mean 15 mm? write '15 mm'"),
+    ("pin_youngs_modulus = 2.95", "did you mean 2.95 GPa?"),
+    ('pin_diameter = "15 Hz"', "is not in a unit of 'm'"),
+])
+def test_unit_slips_in_a_rig_table_are_refused_naming_the_slip(run, tmp_path, table, says):
+    cfg = tmp_path / "rig.toml"
+    cfg.write_text(f"[rig]\n{table}\n")
+    r = run("rig", "--config", str(cfg))
+    assert r.exit_code == 2 and says in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.output
+
+
+def test_set_takes_a_unit_and_parameters_convert_to_their_declared_unit():
+    from squealkit.models import build_model, parse_assignments
+
+    m = build_model(overrides=parse_assignments(["m1=33 g", "c1=0.22 kN s/m", "alpha_deg=3"]))
+    assert (m.m1, m.c1, m.alpha) == (0.033, 220.0, pytest.approx(math.radians(3.0)))
+    with pytest.raises(InputError, match="not in a unit of 'kg'"):
+        build_model(overrides={"m1": "33 Hz"})
+
+
+def test_cli_lengths_take_units_and_refuse_unit_slips(run, recording_in_um):
+    si = recording_in_um[0]
+    r = run("analyze", str(si), "--mic", "mic", "--displacement", "probe", "--rpm", "900", "--radius", "60")
+    assert r.exit_code == 2 and "did you mean 60 mm? write '60 mm'" in r.stderr, r.output
+    r = run("simulate", "--mu", "0.3", "--sro-amplitude", "80", "--duration", "0.001")
+    assert r.exit_code == 2 and "did you mean 80 um? write '80 um'" in r.stderr, r.output
+    r = run("simulate", "--mu", "0.3", "--sro-amplitude", "80 um", "--duration", "0.002", "--json")
+    assert r.exit_code == 0, r.output
+    from squealkit._units import parse_quantity
+
+    assert parse_quantity("--radius", "60 mm", "m") == 0.06 and parse_quantity("q", "80 µm", "m") == 8e-5

@@ -17,6 +17,36 @@ from .._validation import InputError
 F = Callable[..., Any]
 
 
+class Quantity(click.ParamType):
+    """A CLI value in a declared SI unit: a bare number in that unit, or a number with its own unit
+    ("60 mm", "80 um", "2.9 kHz") converted; a bare number outside ``plausible`` that a common unit
+    slip explains is refused naming it (see :mod:`squealkit._units`)."""
+
+    name = "quantity"
+
+    def __init__(self, unit: str, *, plausible: tuple[float, float] | None = None, what: str | None = None) -> None:
+        self.unit, self.plausible, self.what = unit, plausible, what
+
+    def get_metavar(self, param: click.Parameter, *args: Any, **kwargs: Any) -> str:
+        return f"VALUE[{self.unit}]|'N UNIT'"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> float:
+        from .._units import parse_quantity
+
+        if isinstance(value, float):
+            return value  # a default, already in the unit
+        name = param.opts[0] if param is not None and param.opts else "value"
+        return parse_quantity(name, value, self.unit, plausible=self.plausible, what=self.what)
+
+
+#: The probe's radius on the disc (analyze, report, campaign, synth): a lab disc is 5 mm to 1 m.
+PROBE_RADIUS = Quantity("m", plausible=(5e-3, 1.0), what="the probe radius on the disc")
+#: A disc surface run-out amplitude (sine q0, or RMS of roughness): micrometres to 2 mm.
+RUNOUT_AMPLITUDE = Quantity("m", plausible=(1e-8, 2e-3), what="a disc run-out amplitude")
+#: A run-out wavelength along the disc: 10 um to 2 m.
+RUNOUT_WAVELENGTH = Quantity("m", plausible=(1e-5, 2.0), what="a run-out wavelength")
+
+
 def model_options(f: F) -> F:
     """--preset, --config and --set: which model a command works on."""
     f = click.option(

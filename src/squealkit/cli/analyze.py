@@ -8,6 +8,7 @@ import click
 
 from .._validation import InputError, validate_finite
 from ._options import (
+    PROBE_RADIUS,
     check_output_suffix,
     criteria_from_options,
     criteria_options,
@@ -58,7 +59,8 @@ def _figure_stem(ctx: click.Context, param: click.Parameter, value: Path | None)
 @click.option("--mic", required=True, help="Microphone channel [Pa]: name or 0-based index.")
 @click.option("--displacement", required=True, help="Eddy-current probe channel [m]: name or index.")
 @click.option("--rpm", type=float, default=None, help="Disc speed [rpm] (constant; or give --tacho).")
-@click.option("--radius", type=float, required=True, help="Probe radius on the disc [m].")
+@click.option("--radius", type=PROBE_RADIUS, required=True,
+              help="Probe radius on the disc [m], or with a unit: '60 mm'.")
 @click.option("--tacho", default=None, help="Tacho channel (name or index): disc angle and speed from it.")
 @click.option("--tacho-kind", type=click.Choice(["pulses", "angle"]), default="pulses", show_default=True,
               help="Tacho channel: a pulse train or an angle (degrees).")

@@ -8,6 +8,7 @@ import click
 
 from .._validation import InputError
 from ._options import (
+    RUNOUT_WAVELENGTH,
     build_model_from_options,
     check_output_suffix,
     damping_option,
@@ -23,7 +24,8 @@ from ._options import (
               help="Friction coefficient(s).")
 @click.option("--sro-amplitude", "amp_spec", default="8e-5", show_default=True, metavar="Q0|START:STOP:N",
               help="Sine run-out amplitude q0 in METRES (a range makes a map).")
-@click.option("--sro-wavelength", type=float, default=1e-3, show_default=True, help="Run-out wavelength [m].")
+@click.option("--sro-wavelength", type=RUNOUT_WAVELENGTH, default=1e-3, show_default=True,
+              help="Run-out wavelength [m].")
 @click.option("--speed", type=float, default=0.02, show_default=True, help="Sliding speed v [m/s].")
 @damping_option
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON on stdout.")

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ._options import emit_json, model_options
+from ._options import PROBE_RADIUS, emit_json, model_options
 
 
 def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = False, as_json: bool,
@@ -78,7 +78,8 @@ def reproduce(out_dir: Path, force: bool, quick: bool, as_json: bool) -> None:
 @click.option("--displacement", default="displacement", show_default=True,
               help="Displacement channel (name or index) in --recording.")
 @click.option("--rpm", type=float, default=None, help="Disc speed [rpm] of --recording.")
-@click.option("--radius", type=float, default=None, help="Probe radius [m] of --recording.")
+@click.option("--radius", type=PROBE_RADIUS, default=None,
+              help="Probe radius [m] of --recording, or with a unit: '60 mm'.")
 @click.option("--fs", type=float, default=None, help="Sample rate [Hz] of a CSV --recording without a time column.")
 @click.option("--quick", is_flag=True, help="Coarser grids and shorter runs: a preview in seconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print the computed numbers as JSON on stdout.")

@@ -629,7 +629,10 @@ def open_recording(
         Factor per channel from file values to physical units (e.g. Pa per full scale of
         a WAV channel). Keys of a mapping are channel names (resolved like channels).
     units : mapping, optional
-        Unit per channel, overriding the file's own (e.g. ``{"ch0": "Pa"}``).
+        Unit per channel, overriding the file's own (e.g. ``{"ch0": "Pa"}``). A channel in a
+        unit of length, pressure, velocity, acceleration, force or voltage other than the SI
+        one (``um``, ``mm``, ``mPa``, ``mm/s^2``, ``mV``) is read in SI: its samples
+        scaled, its unit the SI one (the file's kept as ``file_units`` by :func:`read_recording`).
 
     Returns
     -------
@@ -680,7 +683,32 @@ def open_recording(
         unit_map[src.resolve(k)] = str(v)
     scales = {src.resolve(k): validate_positive(f"scale of {k}", v)
               for k, v in _scales_for(src.channels, scale).items()}
-    return RecordingSource(src.path, src.fmt, src.fs, src.n_samples, src.channels, unit_map, scales, src._extra)
+    unit_map, scales, file_units = _to_si(p, unit_map, scales)
+    extra = {**src._extra, "file_units": file_units} if file_units else src._extra
+    return RecordingSource(src.path, src.fmt, src.fs, src.n_samples, src.channels, unit_map, scales, extra)
+
+
+def _to_si(p: Path, units: dict[str, str], scales: dict[str, float]
+           ) -> tuple[dict[str, str], dict[str, float], dict[str, str]]:
+    """Channels' units in SI (``um`` -> ``m`` with a factor 1e-6 on the samples, ``mPa`` -> ``Pa``).
+
+    The unit of a channel (the file's, or ``units``) says what its values (after ``scale``) are
+    in; a length, pressure, velocity, acceleration, force or voltage in another unit is read in
+    its SI unit, the factor joining the channel's scale. Returns the SI units, the scales, and
+    each converted channel's own unit. A unit pint does not know is kept, with a warning.
+    """
+    from .._units import channel_to_si
+
+    si_units, out_scales, file_units = dict(units), dict(scales), {}
+    for name, unit in units.items():
+        factor, si, known = channel_to_si(unit)
+        if not known:
+            warnings.warn(f"Recording {str(p)!r}: channel {name!r} has the unit {unit!r}, which squealkit does not "
+                          "know; its values are taken as they are.", UserWarning, stacklevel=3)
+        if si != unit:
+            si_units[name], file_units[name] = si, unit
+            out_scales[name] = out_scales.get(name, 1.0) * factor
+    return si_units, out_scales, file_units
 
 
 def _csv_rows(p: Path, n_fields: int) -> int:
@@ -1193,4 +1221,8 @@ def read_recording(path: str | Path, channels: Sequence[str | int] | None = None
     if "time_jitter_rms" in src._extra:
         attrs |= {"fs_method": "least-squares slope of the time column against the sample index",
                   "time_jitter_rms": src._extra["time_jitter_rms"]}
-    return recording_dataset(data, src.fs, {n: src.units.get(n, "") for n in names}, attrs)
+    ds = recording_dataset(data, src.fs, {n: src.units.get(n, "") for n in names}, attrs)
+    for n, unit in src._extra.get("file_units", {}).items():
+        if n in ds:
+            ds[n].attrs["file_units"] = unit  # the file's (or --unit's) unit, converted to units
+    return ds

@@ -39,6 +39,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+from .._units import parse_quantity
 from .._validation import InputError, validate_finite
 from ._base import FrictionModel
 from .fe import FEModel
@@ -106,7 +107,7 @@ def _rig_from_table(table: Mapping[str, Any], changes: Mapping[str, Any] | None 
     for key, value in [*table.items(), *(changes or {}).items()]:
         name = key
         if key == "alpha_deg":
-            name, value = "alpha", math.radians(validate_finite(key, value))
+            name, value = "alpha", math.radians(validate_finite(key, parse_quantity(key, value, "deg")))
         if name not in known:
             raise InputError(f"Unknown [rig] key {key!r}; known: {', '.join(sorted(known))}.")
         kwargs[name] = value

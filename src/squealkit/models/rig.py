@@ -21,7 +21,7 @@ from scipy.linalg import expm
 from scipy.optimize import brentq
 
 from .._validation import InputError, validate_positive
-from ._base import param, parameter_info
+from ._base import declared_value, param, parameter_info
 from .pin_on_disc import PinOnDisc3DOF
 
 __all__ = [
@@ -313,19 +313,23 @@ class PinOnDiscRig:
     2855.9
     """
 
-    pin_diameter: float = param(0.030, unit="m", doc="diameter of the round pin")
-    pin_length: float = param(0.045, unit="m", doc="free length of the pin")
-    pin_youngs_modulus: float = param(2.95e9, unit="Pa", doc="Young's modulus of the pin")
-    pin_density: float = param(1040.0, unit="kg/m^3", doc="density of the pin")
+    pin_diameter: float = param(0.030, unit="m", doc="diameter of the round pin", plausible=(1e-3, 0.2))
+    pin_length: float = param(0.045, unit="m", doc="free length of the pin", plausible=(1e-3, 0.5))
+    pin_youngs_modulus: float = param(2.95e9, unit="Pa", doc="Young's modulus of the pin", plausible=(1e7, 1.5e12))
+    pin_density: float = param(1040.0, unit="kg/m^3", doc="density of the pin", plausible=(100.0, 25e3))
     pin_poisson: float = param(0.35, unit="1", doc="Poisson's ratio of the pin", kind="finite")
-    disc_mass: float = param(4.35, unit="kg", doc="modal mass of the disc's out-of-plane mode")
-    disc_freq: float = param(2346.0, unit="Hz", doc="frequency of that disc mode")
-    pin_bending_freq: float | str | None = param(None, unit="Hz", doc="pin bending frequency (None: beam theory)")
-    pin_axial_freq: float | str | None = param(None, unit="Hz", doc="pin axial frequency (None: quarter-wave rod)")
+    disc_mass: float = param(4.35, unit="kg", doc="modal mass of the disc's out-of-plane mode",
+                             plausible=(1e-3, 500.0))
+    disc_freq: float = param(2346.0, unit="Hz", doc="frequency of that disc mode", plausible=(20.0, 50e3))
+    pin_bending_freq: float | str | None = param(None, unit="Hz", doc="pin bending frequency (None: beam theory)",
+                                                 plausible=(20.0, 100e3))
+    pin_axial_freq: float | str | None = param(None, unit="Hz", doc="pin axial frequency (None: quarter-wave rod)",
+                                               plausible=(20.0, 100e3))
     pin_bending_theory: Literal["euler_bernoulli", "timoshenko"] = param(
         "timoshenko", unit="", doc="beam theory of a pin bending frequency not given", kind="choice",
         choices=tuple(_BENDING_THEORIES))
-    alpha: float = param(math.radians(2.0), unit="rad", doc="incline of the pin spring k2", kind="angle")
+    alpha: float = param(math.radians(2.0), unit="rad", doc="incline of the pin spring k2", kind="angle",
+                         plausible=(0.0, 0.8))
     P: float = param(10.0, unit="N", doc="axial load (its meaning set by preload)", kind="nonnegative")
     c1: float = param(220.0, unit="N s/m", doc="damper beside k1", kind="nonnegative")
     c2: float = param(220.0, unit="N s/m", doc="damper beside k2", kind="nonnegative")
@@ -337,6 +341,12 @@ class PinOnDiscRig:
     _derived: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        for f in fields(self):  # text with a unit ("25 mm", "2.9 kHz") in the declared unit; unit slips refused
+            v = getattr(self, f.name)
+            theory_name = f.name in ("pin_bending_freq", "pin_axial_freq") and isinstance(v, str) and not any(
+                ch.isdigit() for ch in v)  # a theory's name, checked below
+            if not theory_name:
+                object.__setattr__(self, f.name, declared_value(f, v, what="the rig's "))
         skip = ("pin_bending_theory", "sliding", "alpha", "pin_poisson", "preload", "pin_bending_freq",
                 "pin_axial_freq")
         for f in fields(self):
