@@ -146,6 +146,7 @@ def test_uncertain_rig_quantities_are_sampled_through_the_rig(run, tmp_path):
     cfg.write_text(RIG_UNCERTAIN)
     rig = load_rig_model(cfg)
     unc = load_uncertain(cfg, rig)
+    assert load_uncertain(cfg) == unc   # the file's own rig by default
     ds = squeal_propensity(load_model(cfg), unc, np.linspace(0.1, 0.8, 141), samples=8, sensitivity=False,
                            damped=False, rig=rig)
     assert list(ds.parameter_unit.values) == ["Hz", "m"]

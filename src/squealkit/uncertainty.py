@@ -273,7 +273,9 @@ def load_uncertain(
             'k3 = {dist = "normal", mean = 9.452e8, std = 4.7e7}.'
         )
     if model is None:
-        model = load_model(p)
+        from .models import load_rig_model
+
+        model = load_rig_model(p) or load_model(p)
     try:
         return parse_uncertain(doc["uncertain"], model)
     except InputError as e:
