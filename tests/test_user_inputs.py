@@ -190,6 +190,11 @@ def test_csv_sample_rate_is_the_least_squares_slope_of_its_time_column(rounded_t
     assert ds.attrs["fs"] == pytest.approx(48000.0, rel=1e-6)
     # the jitter is the rounding: uniform over +-0.5e-7 s, RMS 1e-7 / sqrt(12) = 2.9e-8 s
     assert ds.attrs["time_jitter_rms"] == pytest.approx(1e-7 / math.sqrt(12), rel=0.1)
+    # an in-memory recording with the same rounded time coordinate and no fs attribute: the same
+    from squealkit.measurement.analysis import _DatasetSource
+
+    mem = ds.drop_attrs().assign_coords(time=np.round(ds["time"].values, 7))
+    assert _DatasetSource(mem, None).fs == pytest.approx(48000.0, rel=1e-6)
     spec = np.abs(np.fft.rfft(ds["mic"].values))
     freq = np.fft.rfftfreq(ds.sizes["time"], 1.0 / ds.attrs["fs"])
     assert freq[np.argmax(spec)] == pytest.approx(2900.0, abs=0.5)   # was 2904.6 Hz from the median step

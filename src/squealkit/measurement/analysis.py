@@ -426,7 +426,10 @@ class _DatasetSource:
             if "fs" in ds.attrs:
                 fs = ds.attrs["fs"]
             elif "time" in ds.coords and ds.sizes["time"] > 1:
-                fs = 1.0 / float(np.median(np.diff(ds["time"].values[:64])))
+                # least-squares slope of the whole time coordinate: rounded times leave it unbiased
+                t = np.asarray(ds["time"].values, dtype=np.float64)
+                k = np.arange(t.size, dtype=np.float64) - (t.size - 1) / 2.0
+                fs = float(np.dot(k, k) / np.dot(k, t - t.mean())) if t.size > 2 else 1.0 / float(t[1] - t[0])
             else:
                 raise InputError("The recording has no 'fs' attribute or time coordinate; give fs.")
         self.fs = validate_fs(fs)
