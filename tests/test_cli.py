@@ -10,7 +10,7 @@ from squealkit.io import load_dataset
 
 
 def test_stability_json_reports_paper_band(run):
-    r = run("stability", "--json")
+    r = run("stability", "--undamped", "--json")   # the paper's Fig. 2 is undamped (eq. 7)
     assert r.exit_code == 0, r.output
     out = json.loads(r.stdout)
     lo, hi = out["unstable_omega_rad_s"]
@@ -31,7 +31,7 @@ def test_stability_writes_dataset_and_figures(run, tmp_path):
 
 
 def test_critical_json(run):
-    r = run("critical", "--theta", "0", "--json")
+    r = run("critical", "--theta", "0", "--undamped", "--json")
     out = json.loads(r.stdout)
     assert out["status"] == "onset"
     assert out["mu_critical"] == pytest.approx(0.4448, abs=1e-3)
@@ -174,7 +174,7 @@ def test_tolerance_words_for_inf_flat_and_unphysical(run):
 
 def test_critical_and_tolerance_write_dataset_and_figure(run, tmp_path):
     nc, png = tmp_path / "c.nc", tmp_path / "c.png"
-    r = run("critical", "--theta", "-8:8:3", "--out", str(nc), "--plot", str(png))
+    r = run("critical", "--theta", "-8:8:3", "--undamped", "--out", str(nc), "--plot", str(png))
     assert r.exit_code == 0, r.output
     ds = load_dataset(nc)
     np.testing.assert_allclose(ds.theta_deg.values, [-8, 0, 8])

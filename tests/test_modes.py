@@ -305,7 +305,7 @@ def test_dataset_round_trip_and_summary(tmp_path):
 
 
 def test_cli_modes_json(run):
-    r = run("modes", "--mu", "0.6", "--theta", "0", "--json")
+    r = run("modes", "--mu", "0.6", "--theta", "0", "--undamped", "--json")  # the paper's §3 sweep
     assert r.exit_code == 0, r.output
     out = json.loads(r.stdout)
     assert {"mu", "theta_deg", "damped", "model", "modes"} <= set(out)

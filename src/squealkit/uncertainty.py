@@ -23,7 +23,9 @@ Distributions (each backed by a frozen ``scipy.stats`` distribution):
   (std/mean)^2)``), or ``median`` and ``sigma`` (the standard deviation of ``ln x``).
 
 A name is any scalar parameter of the model (``squealkit presets`` lists them), in SI
-units, or ``NAME_deg`` for an angle in degrees. Every sampled value must lie in the
+units, or ``NAME_deg`` for an angle in degrees. With a ``[rig]`` table it may also be any
+quantity of the rig (``disc_freq = {dist = "normal", mean = 2346.0, std = 30.0}``, pin sizes,
+its material): each sample's model is then derived anew from its rig (paper §5.1). Every sampled value must lie in the
 parameter's allowed range (a stiffness > 0, an angle within +-90 deg): a draw outside it
 is an error naming the parameter, never silently clipped (choose a lognormal for a
 positive quantity with a large scatter).
@@ -45,7 +47,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import __version__
 from ._validation import InputError, check_memory, validate_angle, validate_dataset, validate_finite, validate_model
-from .models import FrictionModel, load_model
+from .models import FrictionModel, RigModel, load_model
+from .models._base import resolve_damped
 from .models.config import _read_toml
 from .stability import ONSET_STATUS
 
@@ -180,9 +183,14 @@ class UncertainParameter:
 
 
 def _resolve_name(name: str, info: Mapping[str, Mapping[str, str]], kind: str) -> None:
+    from .models import PinOnDiscRig
+
     uncertain = [k for k, v in info.items() if v["kind"] in _UNCERTAIN_KINDS]
     known = ", ".join(uncertain + [f"{k}_deg" for k in uncertain if info[k]["kind"] == "angle"])
     base = name[:-4] if name.endswith("_deg") and name not in info else name
+    if base not in info and base in PinOnDiscRig.parameter_info():
+        raise InputError(f"Uncertain parameter {name!r} is a rig quantity: it needs a model file with a [rig] table "
+                         f"(the model is derived from the rig for every sample); model {kind!r} knows: {known}.")
     if base not in info or (base != name and info[base]["kind"] != "angle"):
         raise InputError(f"Unknown uncertain parameter {name!r} for model {kind!r}; known: {known}.")
     if info[base]["kind"] not in _UNCERTAIN_KINDS:
@@ -190,7 +198,7 @@ def _resolve_name(name: str, info: Mapping[str, Mapping[str, str]], kind: str) -
 
 
 def parse_uncertain(
-    table: Mapping[str, Any], model: FrictionModel | type[FrictionModel]
+    table: Mapping[str, Any], model: FrictionModel | type[FrictionModel] | RigModel
 ) -> tuple[UncertainParameter, ...]:
     """Parse an ``[uncertain]`` table for ``model``: ``NAME = {dist = ..., ...}`` entries.
 
@@ -198,8 +206,10 @@ def parse_uncertain(
     ----------
     table : mapping
         Parameter name -> ``{"dist": ..., <distribution keys>}`` (see the module docstring).
-    model : FrictionModel or its class
-        Names are checked against its parameters.
+    model : FrictionModel or its class, or RigModel
+        Names are checked against its parameters; a :class:`~squealkit.models.RigModel` (a
+        model file with a ``[rig]`` table) also takes every quantity of the rig (``disc_freq``,
+        ``pin_diameter``, ``pin_bending_freq``, ...).
 
     Returns
     -------
@@ -239,7 +249,7 @@ def parse_uncertain(
 
 
 def load_uncertain(
-    path: str | Path, model: FrictionModel | type[FrictionModel] | None = None
+    path: str | Path, model: FrictionModel | type[FrictionModel] | RigModel | None = None
 ) -> tuple[UncertainParameter, ...]:
     """Read the ``[uncertain]`` table of a TOML file.
 
@@ -247,8 +257,9 @@ def load_uncertain(
     ----------
     path : path-like
         The file (usually the model file; other tables are ignored here).
-    model : FrictionModel or its class, optional
-        The model the names refer to; default the model the file itself describes.
+    model : FrictionModel or its class, or RigModel, optional
+        The model the names refer to (a RigModel: also the rig's quantities); default the
+        model the file itself describes.
 
     Returns
     -------
@@ -262,7 +273,9 @@ def load_uncertain(
             'k3 = {dist = "normal", mean = 9.452e8, std = 4.7e7}.'
         )
     if model is None:
-        model = load_model(p)
+        from .models import load_rig_model
+
+        model = load_rig_model(p) or load_model(p)
     try:
         return parse_uncertain(doc["uncertain"], model)
     except InputError as e:
@@ -305,7 +318,7 @@ def sample_parameters(
     return out
 
 
-def _check_samples(uncertain: Sequence[UncertainParameter], values: NDArray, model: FrictionModel) -> None:
+def _check_samples(uncertain: Sequence[UncertainParameter], values: NDArray, model: FrictionModel | RigModel) -> None:
     """Every sampled value inside its parameter's allowed range, or one line saying which is not."""
     info = model.parameter_info()
     for j, p in enumerate(uncertain):
@@ -330,11 +343,13 @@ def _check_samples(uncertain: Sequence[UncertainParameter], values: NDArray, mod
             )
 
 
-def _sample_models(model: FrictionModel, names: Sequence[tuple[str, bool]], values: NDArray) -> list[FrictionModel]:
+def _sample_models(model: FrictionModel | RigModel, names: Sequence[tuple[str, bool]],
+                   values: NDArray) -> list[FrictionModel]:
+    """One model per row of ``values``: with a rig, derived anew from the sampled rig."""
     out = []
     for row in values:
         changes = {name: (math.radians(v) if deg else float(v)) for (name, deg), v in zip(names, row, strict=True)}
-        out.append(model.replace(**changes))
+        out.append(model.to_model(**changes) if isinstance(model, RigModel) else model.replace(**changes))
     return out
 
 
@@ -411,13 +426,14 @@ def squeal_propensity(
     *,
     samples: int,
     theta: float = 0.0,
-    damped: bool = False,
+    damped: bool | None = None,
     seed: int = 0,
     confidence: float = 0.95,
     sensitivity: bool = True,
     batch_size: int = _BATCH,
     client: Any = None,
     progress: Callable[[int, int], None] | None = None,
+    rig: RigModel | None = None,
 ) -> xr.Dataset:
     """Probability of instability against friction, for parameters with given distributions.
 
@@ -452,8 +468,9 @@ def squeal_propensity(
         Independent Monte Carlo samples (>= 2).
     theta : float
         Run-out incline [rad] (tan(theta) enters as in eq. 6).
-    damped : bool
-        Include the damping matrix (the paper's sweep, eq. 7, is undamped).
+    damped : bool, optional
+        Include the damping matrix C. Not given: left out (paper eq. 7 is undamped), with a
+        warning when the model has damping.
     seed : int
         Seed of the draw (``numpy.random.SeedSequence``); the same seed gives the same
         result whatever ``batch_size`` or ``client``.
@@ -468,6 +485,10 @@ def squeal_propensity(
         identical to the local run.
     progress : callable, optional
         ``progress(done, total)`` in model evaluations.
+    rig : RigModel, optional
+        The rig ``model`` is derived from (:func:`~squealkit.models.config.load_rig_model`):
+        then every quantity of the rig can be uncertain (``disc_freq``, ``pin_diameter``, ...),
+        and each sample's model is derived anew from its sampled rig (``rig.to_model(...)``).
 
     Returns
     -------
@@ -497,14 +518,18 @@ def squeal_propensity(
     [1.03, 0.0]
     """
     validate_model(model, kind="friction")
+    damped = resolve_damped(model, damped)
     from .scale import map_tasks
     from .stability import ModelEnsemble, ensemble_onset, ensemble_unstable
     from .stability.ensemble import _grid
 
-    unc = parse_uncertain(uncertain, model) if isinstance(uncertain, Mapping) else tuple(uncertain)
+    if rig is not None and not isinstance(rig, RigModel):
+        raise InputError(f"rig must be a squealkit RigModel (load_rig_model), not {type(rig).__name__}.")
+    source = model if rig is None else rig  # what the samples change
+    unc = parse_uncertain(uncertain, source) if isinstance(uncertain, Mapping) else tuple(uncertain)
     if not unc or not all(isinstance(p, UncertainParameter) for p in unc):
         raise InputError("uncertain must be a non-empty sequence of UncertainParameter (or an [uncertain] table).")
-    parse_uncertain({p.name: {"dist": p.dist, **p.params} for p in unc}, model)  # names valid for this model
+    parse_uncertain({p.name: {"dist": p.dist, **p.params} for p in unc}, source)  # names valid for this model
     mu_a = _grid(mu)
     samples = _positive_int("samples", samples, 2)
     batch_size = _positive_int("batch_size", batch_size, 1)
@@ -525,7 +550,7 @@ def squeal_propensity(
                  "Use fewer samples or mu points (or a smaller batch_size).")
     sample_seq, boot_seq = np.random.SeedSequence(seed).spawn(2)
     X = sample_parameters(unc, samples, np.random.default_rng(sample_seq))
-    _check_samples(unc, X, model)
+    _check_samples(unc, X, source)
     rows = X
     if n_base:
         A, B = X[:n_base], X[n_base:2 * n_base]
@@ -536,7 +561,7 @@ def squeal_propensity(
 
     names = [(p.model_parameter, p.is_degrees) for p in unc]
     starts = list(range(0, rows.shape[0], batch_size))
-    tasks = [(model, names, rows[a:a + batch_size], mu_a, tan_t, damped) for a in starts]
+    tasks = [(source, names, rows[a:a + batch_size], mu_a, tan_t, damped) for a in starts]
     weights = [min(batch_size, rows.shape[0] - a) for a in starts]
     count = np.zeros(mu_a.size, dtype=np.int64)
     mu_c = np.empty(rows.shape[0])
@@ -560,7 +585,7 @@ def squeal_propensity(
             "widen the mu range to resolve them.", CensoredWarning, stacklevel=2)
     lower, upper = _binomial_band(count, samples, confidence)
 
-    info = model.parameter_info()
+    info = source.parameter_info()
     units = ["deg" if p.is_degrees else info[p.model_parameter]["unit"] for p in unc]
     dists = [p.distribution for p in unc]
     data_vars: dict[str, Any] = {

@@ -17,6 +17,36 @@ from .._validation import InputError
 F = Callable[..., Any]
 
 
+class Quantity(click.ParamType):
+    """A CLI value in a declared SI unit: a bare number in that unit, or a number with its own unit
+    ("60 mm", "80 um", "2.9 kHz") converted; a bare number outside ``plausible`` that a common unit
+    slip explains is refused naming it (see :mod:`squealkit._units`)."""
+
+    name = "quantity"
+
+    def __init__(self, unit: str, *, plausible: tuple[float, float] | None = None, what: str | None = None) -> None:
+        self.unit, self.plausible, self.what = unit, plausible, what
+
+    def get_metavar(self, param: click.Parameter, *args: Any, **kwargs: Any) -> str:
+        return f"VALUE[{self.unit}]|'N UNIT'"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> float:
+        from .._units import parse_quantity
+
+        if isinstance(value, float):
+            return value  # a default, already in the unit
+        name = param.opts[0] if param is not None and param.opts else "value"
+        return parse_quantity(name, value, self.unit, plausible=self.plausible, what=self.what)
+
+
+#: The probe's radius on the disc (analyze, report, campaign, synth): a lab disc is 5 mm to 1 m.
+PROBE_RADIUS = Quantity("m", plausible=(5e-3, 1.0), what="the probe radius on the disc")
+#: A disc surface run-out amplitude (sine q0, or RMS of roughness): micrometres to 2 mm.
+RUNOUT_AMPLITUDE = Quantity("m", plausible=(1e-8, 2e-3), what="a disc run-out amplitude")
+#: A run-out wavelength along the disc: 10 um to 2 m.
+RUNOUT_WAVELENGTH = Quantity("m", plausible=(1e-5, 2.0), what="a run-out wavelength")
+
+
 def model_options(f: F) -> F:
     """--preset, --config and --set: which model a command works on."""
     f = click.option(
@@ -104,13 +134,32 @@ def build_model_from_options(preset: str | None, config: Path | None, sets: tupl
     """
     from ..models import FEModel, build_model, load_rig, parse_assignments
 
-    model = build_model(preset, config, parse_assignments(sets))
+    overrides = parse_assignments(sets)
+    model = build_model(preset, config, overrides)
     if isinstance(model, FEModel) and not allow_fe:
         raise InputError(f"FE models (model = \"fe\") work with {', '.join(FE_COMMANDS)} only.")
-    rig = load_rig(config) if config is not None and not isinstance(model, FEModel) else None
+    rig = load_rig(config, overrides) if config is not None and not isinstance(model, FEModel) else None
     if rig is not None:
         PENDING_NOTES.append(f"squealkit: rig frequencies: {rig.describe()}")
     return model
+
+
+def damping_option(f: F) -> F:
+    """--damped/--undamped: the model's damping is used unless --undamped (the paper's eq. 7 sweep)."""
+    return click.option(
+        "--damped/--undamped", "damped", default=True, show_default=True,
+        help="Use the model's damping matrix (the default), or leave it out with --undamped (the paper's "
+        "Fig. 2 sweep, eq. 7, is undamped). A note on stderr says when damping the model has is left out.",
+    )(f)
+
+
+def note_damping(model: Any, damped: bool) -> None:
+    """One line on stderr (after the command succeeded) when damping the model has is left out."""
+    from ..models._base import damping_names
+
+    names = damping_names(model)
+    if not damped and names:
+        PENDING_NOTES.append(f"squealkit: the model's damping ({names}) is left out (--undamped).")
 
 
 def _jsonable(obj: Any) -> Any:
@@ -333,7 +382,8 @@ def recording_options(*, required: bool = True) -> Callable[[F], F]:
         click.option("--mic", help="Microphone channel [Pa]: name or 0-based index.", **mic),
         click.option("--displacement", help="Eddy-current probe channel [m]: name or index.", **disp),
         click.option("--rpm", type=float, default=None, help="Disc speed [rpm] (constant; or give --tacho)."),
-        click.option("--radius", type=float, help="Probe radius on the disc [m].", **radius),
+        click.option("--radius", type=PROBE_RADIUS, help="Probe radius on the disc [m], or with a unit: '60 mm'.",
+                     **radius),
         click.option("--tacho", default=None, help="Tacho channel (name or index): disc angle and speed from it."),
         click.option("--tacho-kind", type=click.Choice(["pulses", "angle"]), default="pulses", show_default=True,
                      help="Tacho channel: a pulse train or an angle (degrees)."),

@@ -6,7 +6,14 @@ from pathlib import Path
 
 import click
 
-from ._options import criteria_from_options, criteria_options, emit_json, progress_callback, scheduler_option
+from ._options import (
+    PROBE_RADIUS,
+    criteria_from_options,
+    criteria_options,
+    emit_json,
+    progress_callback,
+    scheduler_option,
+)
 
 
 @click.command()
@@ -15,7 +22,8 @@ from ._options import criteria_from_options, criteria_options, emit_json, progre
               help="Output folder: campaign.duckdb, summary.json, report.html, figures/.")
 @click.option("--mic", required=True, help="Microphone channel [Pa]: name or 0-based index.")
 @click.option("--displacement", required=True, help="Eddy-current probe channel [m]: name or index.")
-@click.option("--radius", type=float, required=True, help="Probe radius on the disc [m].")
+@click.option("--radius", type=PROBE_RADIUS, required=True,
+              help="Probe radius on the disc [m], or with a unit: '60 mm'.")
 @click.option("--tacho", default=None, help="Tacho channel (name or index); else --rpm or the matrix's rpm column.")
 @click.option("--pulses-per-rev", type=int, default=1, show_default=True, help="Tacho pulses per revolution.")
 @click.option("--rpm", type=float, default=None, help="Disc speed [rpm] where there is no tacho nor rpm column.")

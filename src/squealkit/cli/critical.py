@@ -9,6 +9,7 @@ import click
 from ._options import (
     build_model_from_options,
     check_output_suffix,
+    damping_option,
     emit_json,
     fe_kwargs_from_options,
     fe_options,
@@ -16,6 +17,7 @@ from ._options import (
     friction_json,
     friction_options,
     model_options,
+    note_damping,
     output_options,
 )
 
@@ -35,7 +37,7 @@ def no_onset_text(status: str, mu_max: float) -> str:
 @model_options
 @click.option("--theta", "theta_spec", default="0", show_default=True, metavar="DEG|START:STOP:N",
               help="Run-out incline in DEGREES, or a range for a curve mu_crit(theta).")
-@click.option("--damped", is_flag=True, help="Include the damping matrix.")
+@damping_option
 @friction_options
 @click.option("--mu-max", default=2.0, show_default=True, type=float, help="Search friction up to this value.")
 @click.option("--sensitivity", is_flag=True,
@@ -63,7 +65,8 @@ def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed
       squealkit critical --theta -8:8:17
       squealkit critical --theta 0 --sensitivity
       squealkit critical --preset hoffmann2002
-      squealkit critical --damped --stribeck 0.6,0.01 --speed 0.02
+      squealkit critical --undamped          # the paper's eq. 7 (no damping)
+      squealkit critical --stribeck 0.6,0.01 --speed 0.02
       squealkit critical --theta -8:8:17 --out crit.nc --plot crit.png
 
     \b
@@ -103,14 +106,15 @@ def critical(ctx, preset, config, sets, theta_spec, damped, stribeck_spec, speed
     check_output_suffix(out_path, (".nc", ".zarr"), "--out")
     check_output_suffix(plot_path, (".png", ".svg", ".pdf"), "--plot")
     model = build_model_from_options(preset, config, sets, allow_fe=True)
+    note_damping(model, damped)
     fe = fe_kwargs_from_options(model, rpm_spec, band_spec, method, n_modes)
     theta_deg = parse_range("--theta", theta_spec)
     if any(abs(t) >= 90.0 for t in theta_deg):
         raise InputError(f"--theta {theta_spec!r}: angles must lie strictly between -90 and 90 deg.")
     if fe:
-        if stribeck_spec is not None or sensitivity or damped or theta_deg.size != 1:
-            raise InputError("For FE models critical takes one --theta, and no --stribeck, --sensitivity or --damped "
-                             "(damping is always included).")
+        if stribeck_spec is not None or sensitivity or not damped or theta_deg.size != 1:
+            raise InputError("For FE models critical takes one --theta, and no --stribeck, --sensitivity or "
+                             "--undamped (damping is always included).")
         if out_path is not None or plot_path is not None:
             raise InputError("--out and --plot are for the small models; for FE models use 'squealkit stability "
                              "--config ... --out/--plot'.")

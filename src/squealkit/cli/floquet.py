@@ -7,7 +7,15 @@ from pathlib import Path
 import click
 
 from .._validation import InputError
-from ._options import build_model_from_options, check_output_suffix, emit_json, model_options
+from ._options import (
+    RUNOUT_WAVELENGTH,
+    build_model_from_options,
+    check_output_suffix,
+    damping_option,
+    emit_json,
+    model_options,
+    note_damping,
+)
 
 
 @click.command()
@@ -16,15 +24,16 @@ from ._options import build_model_from_options, check_output_suffix, emit_json, 
               help="Friction coefficient(s).")
 @click.option("--sro-amplitude", "amp_spec", default="8e-5", show_default=True, metavar="Q0|START:STOP:N",
               help="Sine run-out amplitude q0 in METRES (a range makes a map).")
-@click.option("--sro-wavelength", type=float, default=1e-3, show_default=True, help="Run-out wavelength [m].")
+@click.option("--sro-wavelength", type=RUNOUT_WAVELENGTH, default=1e-3, show_default=True,
+              help="Run-out wavelength [m].")
 @click.option("--speed", type=float, default=0.02, show_default=True, help="Sliding speed v [m/s].")
-@click.option("--undamped", is_flag=True, help="Leave out the damping matrix (the paper's transients are damped).")
+@damping_option
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON on stdout.")
 @click.option("--out", "out_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write the map to a .nc or .zarr file.")
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Figure of the Floquet exponent over mu and amplitude (.png, .svg, .pdf).")
-def floquet(preset, config, sets, mu_spec, amp_spec, sro_wavelength, speed, undamped, as_json, out_path,
+def floquet(preset, config, sets, mu_spec, amp_spec, sro_wavelength, speed, damped, as_json, out_path,
             plot_path) -> None:
     """Floquet exponent of a sine run-out: the exact growth rate of the periodic system.
 
@@ -50,11 +59,12 @@ def floquet(preset, config, sets, mu_spec, amp_spec, sro_wavelength, speed, unda
     check_output_suffix(out_path, (".nc", ".zarr"), "--out")
     check_output_suffix(plot_path, (".png", ".svg", ".pdf"), "--plot")
     model = build_model_from_options(preset, config, sets)
+    note_damping(model, damped)
     mu = parse_range("--mu", mu_spec)
     amp = parse_range("--sro-amplitude", amp_spec)
     if mu.size == 1 and amp.size == 1 and out_path is None and plot_path is None:
         r = floquet_point(model, mu=float(mu[0]), amplitude=float(amp[0]), wavelength=sro_wavelength, speed=speed,
-                          damped=not undamped)
+                          damped=damped)
         if as_json:
             emit_json(r.to_dict())
             return
@@ -66,7 +76,7 @@ def floquet(preset, config, sets, mu_spec, amp_spec, sro_wavelength, speed, unda
         return
     if (mu.size < 2 or amp.size < 2) and plot_path is not None:
         raise InputError("--plot draws a map: give ranges for both --mu and --sro-amplitude.")
-    ds = floquet_map(model, mu=mu, amplitude=amp, wavelength=sro_wavelength, speed=speed, damped=not undamped)
+    ds = floquet_map(model, mu=mu, amplitude=amp, wavelength=sro_wavelength, speed=speed, damped=damped)
     if out_path is not None:
         from ..io import save_dataset
 

@@ -10,10 +10,12 @@ import click
 from ._options import (
     build_model_from_options,
     check_output_suffix,
+    damping_option,
     emit_json,
     fe_kwargs_from_options,
     fe_options,
     model_options,
+    note_damping,
     output_options,
 )
 
@@ -23,7 +25,7 @@ from ._options import (
 @click.option("--mu", type=float, default=None, help="Friction coefficient (or use --at-onset).")
 @click.option("--theta", "theta_deg", default=0.0, show_default=True, type=float, metavar="DEG",
               help="Run-out incline in DEGREES.")
-@click.option("--damped", is_flag=True, help="Include the damping matrix (the paper's sweep, eq. 7, is undamped).")
+@damping_option
 @click.option("--at-onset", is_flag=True,
               help="Use the critical friction at this theta instead of --mu, and mark the mode that loses stability.")
 @fe_options(rpm_help="Disc speed in rpm (one value). FE models only.")
@@ -42,7 +44,7 @@ def modes(preset, config, sets, mu, theta_deg, damped, at_onset, rpm_spec, band_
     \b
     Examples:
       squealkit modes --mu 0.6
-      squealkit modes --at-onset --damped --plot onset_mode.png
+      squealkit modes --at-onset --plot onset_mode.png
       squealkit modes --mu 0.3 --theta 4 --json
       squealkit modes --preset hoffmann2002 --mu 0.3 --out modes.nc
 
@@ -78,6 +80,7 @@ def modes(preset, config, sets, mu, theta_deg, damped, at_onset, rpm_spec, band_
     if abs(theta_deg) >= 90.0:
         raise InputError(f"--theta {theta_deg!r}: the angle must lie strictly between -90 and 90 deg.")
     model = build_model_from_options(preset, config, sets, allow_fe=True)
+    note_damping(model, damped)
     theta = math.radians(theta_deg)
     fe = fe_kwargs_from_options(model, rpm_spec, band_spec, method, n_modes)
     if fe:

@@ -11,8 +11,10 @@ import numpy as np
 from ._options import (
     build_model_from_options,
     check_output_suffix,
+    damping_option,
     emit_json,
     model_options,
+    note_damping,
     output_options,
     progress_callback,
     scheduler_option,
@@ -32,7 +34,7 @@ _TABLE_ROWS = 21
               help="Friction coefficients: N points from START to STOP (increasing).")
 @click.option("--theta", "theta_deg", default=0.0, show_default=True, type=float, metavar="DEG",
               help="Run-out incline in DEGREES.")
-@click.option("--damped", is_flag=True, help="Include the damping matrix (the paper's sweep, eq. 7, is undamped).")
+@damping_option
 @click.option("--seed", default=0, show_default=True, type=int, help="Seed of the draw: same seed, same numbers.")
 @click.option("--confidence", default=0.95, show_default=True, type=float,
               help="Level of the confidence band and of the Sobol' intervals.")
@@ -86,11 +88,15 @@ def montecarlo(preset, config, sets, uncertain_path, samples, mu_spec, theta_deg
     check_output_suffix(out_path, (".nc", ".zarr"), "--out")
     check_output_suffix(plot_path, (".png", ".svg", ".pdf"), "--plot")
     model = build_model_from_options(preset, config, sets)
+    note_damping(model, damped)
     source = uncertain_path or config
     if source is None:
         raise InputError("montecarlo needs an [uncertain] table: give --config FILE.toml that has one, "
                          "or --uncertain FILE.toml (see examples/uncertain_rig.toml).")
-    uncertain = load_uncertain(source, model)
+    from ..models import load_rig_model, parse_assignments
+
+    rig = load_rig_model(config, parse_assignments(sets)) if config is not None else None
+    uncertain = load_uncertain(source, rig or model)
     mu = parse_range("--mu", mu_spec)
     if not abs(theta_deg) < 90.0:
         raise InputError(f"--theta {theta_deg!r}: the angle must lie strictly between -90 and 90 deg.")
@@ -99,7 +105,7 @@ def montecarlo(preset, config, sets, uncertain_path, samples, mu_spec, theta_deg
     ) as cb:
         ds = squeal_propensity(model, uncertain, mu, samples=samples, theta=math.radians(theta_deg), damped=damped,
                                seed=seed, confidence=confidence, sensitivity=not no_sensitivity, client=client,
-                               progress=cb)
+                               progress=cb, rig=rig)
     if out_path is not None:
         save_dataset(ds, out_path)
     if plot_path is not None:

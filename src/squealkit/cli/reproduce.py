@@ -102,12 +102,17 @@ def report(ctx: click.Context, preset, config, sets, out_dir: Path, force: bool,
           --displacement 1 --scale 0=120 --tacho 2 --radius 0.05
     """
     from .._validation import InputError
-    from ..models import load_rig
+    from ..models import load_rig, parse_assignments
+    from ..models._base import damping_names
     from ..report import RecordingSpec
-    from ._options import build_model_from_options
+    from ._options import PENDING_NOTES, build_model_from_options
 
     model = build_model_from_options(preset, config, sets)
-    rig = load_rig(config) if config is not None else None
+    rig = load_rig(config, parse_assignments(sets)) if config is not None else None
+    if damping_names(model):
+        PENDING_NOTES.append(f"squealkit: the report's eigenvalue map, critical friction and run-out tolerance "
+                             f"follow the paper (undamped, eq. 7); the model's damping ({damping_names(model)}) "
+                             "enters its damped onset and transients.")
     spec = None
     if recording is None:  # a recording option without a recording would be silently ignored
         given = [p.opts[0] for p in ctx.command.params if p.name not in ("preset", "config", "sets", "out_dir",

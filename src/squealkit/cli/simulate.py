@@ -9,6 +9,8 @@ import xarray as xr
 
 from .._validation import InputError, parse_range
 from ._options import (
+    RUNOUT_AMPLITUDE,
+    RUNOUT_WAVELENGTH,
     build_model_from_options,
     check_output_suffix,
     emit_json,
@@ -29,9 +31,9 @@ from ._options import (
     "--sro", type=click.Choice(["sine", "file", "random", "none"]), default="sine", show_default=True,
     help="Disc surface run-out profile.",
 )
-@click.option("--sro-amplitude", type=float, default=0.08e-3, show_default=True,
+@click.option("--sro-amplitude", type=RUNOUT_AMPLITUDE, default=0.08e-3, show_default=True,
               help="Sine amplitude q0, or RMS of random roughness [m].")
-@click.option("--sro-wavelength", type=float, default=1e-3, show_default=True,
+@click.option("--sro-wavelength", type=RUNOUT_WAVELENGTH, default=1e-3, show_default=True,
               help="Sine wavelength lambda, or longest random wavelength [m].")
 @click.option("--sro-file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Profile for --sro file: two columns, position [m] and q [m].")

@@ -10,6 +10,7 @@ import click
 from ._options import (
     build_model_from_options,
     check_output_suffix,
+    damping_option,
     emit_json,
     fe_kwargs_from_options,
     fe_options,
@@ -17,6 +18,7 @@ from ._options import (
     friction_json,
     friction_options,
     model_options,
+    note_damping,
     output_options,
     progress_callback,
     scheduler_option,
@@ -30,7 +32,7 @@ from ._options import (
               help="Friction coefficients: N points from START to STOP, or one number.")
 @click.option("--theta", "theta_spec", default="-8:8:81", show_default=True, metavar="START:STOP:N",
               help="Run-out incline angles in DEGREES: N points from START to STOP, or one number.")
-@click.option("--damped", is_flag=True, help="Include the damping matrix (the paper's sweep, eq. 7, is undamped).")
+@damping_option
 @friction_options
 @click.option("--plot-map", "map_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               callback=writable,
@@ -43,7 +45,7 @@ def stability(ctx, preset, config, sets, mu_spec, theta_spec, damped, stribeck_s
               band_spec, method, n_modes, scheduler, as_json, out_path, plot_path) -> None:
     """Complex eigenvalues over friction mu and SRO incline theta (paper §3, Fig. 2).
 
-    Solves M x'' + K(mu, tan theta) x = 0 (or with C, --damped) at every grid
+    Solves M x'' + C x' + K(mu, tan theta) x = 0 (without C: --undamped) at every grid
     point, tracks the modes across the grid and reports where they lock in and
     grow. Prints a summary; --json for machine-readable output.
 
@@ -52,9 +54,9 @@ def stability(ctx, preset, config, sets, mu_spec, theta_spec, damped, stribeck_s
       squealkit stability --plot fig2.png
       squealkit stability --mu 0:0.8:401 --theta -8:8:401 --out map.nc --json
       squealkit stability --preset hoffmann2002 --mu 0:0.5:201 --theta 0
-      squealkit stability --set alpha_deg=3 --damped --plot-map map.png
+      squealkit stability --set alpha_deg=3 --plot-map map.png
       squealkit stability --mu 0:0.8:20001 --theta -8:8:20001 --out big.zarr --scheduler local
-      squealkit stability --damped --stribeck 0.6,0.001 --speed 0.0015 --mu 0:0.8:81 --theta 0
+      squealkit stability --stribeck 0.6,0.001 --speed 0.0015 --mu 0:0.8:81 --theta 0
 
     \b
     With --stribeck the friction falls (or rises) with the sliding speed; the
@@ -62,7 +64,7 @@ def stability(ctx, preset, config, sets, mu_spec, theta_spec, damped, stribeck_s
     coefficient, K uses mu(speed), and the slope dmu/dv adds the damping
     dmu/dv N0 D (N0 the static contact force): falling friction is negative
     damping, a second way to squeal beside mode coupling. It is added with or
-    without --damped. Needs a model with one point contact.
+    with --undamped. Needs a model with one point contact.
 
     \b
     With --out FILE.zarr the map is written tile by tile (blocks of mu rows), never held
@@ -98,6 +100,7 @@ def stability(ctx, preset, config, sets, mu_spec, theta_spec, damped, stribeck_s
     check_output_suffix(plot_path, (".png", ".svg", ".pdf"), "--plot")
     check_output_suffix(map_path, (".png", ".svg", ".pdf"), "--plot-map")
     model = build_model_from_options(preset, config, sets, allow_fe=True)
+    note_damping(model, damped)
     fe = fe_kwargs_from_options(model, rpm_spec, band_spec, method, n_modes)
     if fe:
         return _stability_fe(ctx, model, fe, mu_spec, theta_spec, stribeck_spec, scheduler, map_path, as_json,

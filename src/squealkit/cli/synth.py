@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ._options import check_output_suffix, emit_json
+from ._options import PROBE_RADIUS, check_output_suffix, emit_json
 
 
 @click.command()
@@ -23,7 +23,8 @@ from ._options import check_output_suffix, emit_json
               help="-1: the probe reads the run-out reversed.")
 @click.option("--acoustic-delay", type=float, default=0.0, show_default=True, help="Pin to microphone delay [s].")
 @click.option("--tacho-ppr", type=int, default=1, show_default=True, help="Tacho pulses per revolution.")
-@click.option("--radius", type=float, default=0.05, show_default=True, help="Probe radius [m].")
+@click.option("--radius", type=PROBE_RADIUS, default=0.05, show_default=True,
+              help="Probe radius [m], or with a unit: '50 mm'.")
 @click.option("--freq", type=float, default=2388.0, show_default=True, help="Squeal frequency [Hz].")
 @click.option("--level-dba", type=float, default=90.0, show_default=True, help="Saturated squeal level [dB(A)].")
 @click.option("--squeal-on", type=click.Choice(["rising", "falling", "none"]), default="rising",

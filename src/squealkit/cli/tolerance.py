@@ -9,10 +9,12 @@ import click
 from ._options import (
     build_model_from_options,
     check_output_suffix,
+    damping_option,
     emit_json,
     fe_kwargs_from_options,
     fe_options,
     model_options,
+    note_damping,
     output_options,
 )
 
@@ -70,7 +72,7 @@ def _state_text(tol) -> str:
 @click.option("--mu", "mu_spec", required=True, metavar="MU|START:STOP:N", help="Friction coefficient(s).")
 @click.option("--wavelength", type=float, default=None,
               help="Run-out wavelength lambda in METRES; gives the amplitude tolerance q0 (eq. 11).")
-@click.option("--damped", is_flag=True, help="Include the damping matrix.")
+@damping_option
 @fe_options()
 @click.option("--mu-max", default=2.0, show_default=True, type=float, help="FE models: search friction up to this.")
 @output_options()
@@ -114,6 +116,7 @@ def tolerance(preset, config, sets, mu_spec, wavelength, damped, rpm_spec, band_
     check_output_suffix(out_path, (".nc", ".zarr"), "--out")
     check_output_suffix(plot_path, (".png", ".svg", ".pdf"), "--plot")
     model = build_model_from_options(preset, config, sets, allow_fe=True)
+    note_damping(model, damped)
     mus = parse_range("--mu", mu_spec)
     fe = fe_kwargs_from_options(model, rpm_spec, band_spec, method, n_modes)
     if fe:

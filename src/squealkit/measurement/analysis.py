@@ -28,7 +28,7 @@ from .._validation import InputError, validate_fs, validate_positive
 from .criteria import SquealCriteria, band_weighted_signal, exponential_average, squeal_criteria
 from .events import DEFAULT_MIN_TNR_DB, SquealEvent, link_components, tonal_components, tone_to_noise_ratio
 from .filters import lowpass, lowpass_decimated
-from .readers import DEFAULT_BLOCK, RecordingSource, open_recording
+from .readers import DEFAULT_BLOCK, RecordingSource, _to_si, open_recording
 from .runout import revolution_frequency, surface_speed
 from .spectral import P_REF, a_weighting_db, phase_advance_freq, refine_peak
 from .tacho import ConstantSpeed, read_tacho
@@ -433,14 +433,18 @@ class _DatasetSource:
             if "fs" in ds.attrs:
                 fs = ds.attrs["fs"]
             elif "time" in ds.coords and ds.sizes["time"] > 1:
-                fs = 1.0 / float(np.median(np.diff(ds["time"].values[:64])))
+                # least-squares slope of the whole time coordinate: rounded times leave it unbiased
+                t = np.asarray(ds["time"].values, dtype=np.float64)
+                k = np.arange(t.size, dtype=np.float64) - (t.size - 1) / 2.0
+                fs = float(np.dot(k, k) / np.dot(k, t - t.mean())) if t.size > 2 else 1.0 / float(t[1] - t[0])
             else:
                 raise InputError("The recording has no 'fs' attribute or time coordinate; give fs.")
         self.fs = validate_fs(fs)
         self.channels = tuple(str(n) for n in ds.data_vars if ds[n].ndim == 1)
         self.n_samples = int(ds.sizes[ds[self.channels[0]].dims[0]]) if self.channels else 0
-        self.units = {n: str(ds[n].attrs.get("units", "")) for n in self.channels}
         self.path = Path(str(ds.attrs.get("source", "<dataset>")))
+        self.units, self._factors, _ = _to_si(self.path, {n: str(ds[n].attrs.get("units", ""))
+                                                          for n in self.channels}, {})
         self.fmt = "dataset"
 
     resolve = RecordingSource.resolve
@@ -451,6 +455,8 @@ class _DatasetSource:
             out = {}
             for n in names:
                 v = np.asarray(self.ds[n].values[start:start + block], dtype=np.float64)
+                if n in self._factors:  # a channel in um, mm, mPa...: in SI as every reader gives it
+                    v = v * self._factors[n]
                 if not np.all(np.isfinite(v)):
                     i = int(np.argmax(~np.isfinite(v)))
                     raise InputError(f"Channel {n!r} has a non-finite sample ({v[i]!r}) at sample {start + i}.")

@@ -1,7 +1,16 @@
 """Models of friction-coupled brake systems (paper §2) and their parameters (§3, §5.1)."""
 
 from ._base import FrictionModel, SystemMatrices
-from .config import PRESETS, build_model, get_preset, load_model, load_rig, model_from_dict, parse_assignments
+from .config import (
+    PRESETS,
+    build_model,
+    get_preset,
+    load_model,
+    load_rig,
+    load_rig_model,
+    model_from_dict,
+    parse_assignments,
+)
 from .fe import FEModel
 from .fe_readers import load_fe_model
 from .friction import Stribeck
@@ -10,6 +19,7 @@ from .matrix import MatrixModel
 from .pin_on_disc import PinOnDisc3DOF
 from .rig import (
     PinOnDiscRig,
+    RigModel,
     cantilever_bending_frequency,
     contact_stiffness,
     modal_stiffness,
@@ -25,6 +35,7 @@ __all__ = [
     "MatrixModel",
     "PinOnDisc3DOF",
     "PinOnDiscRig",
+    "RigModel",
     "Stribeck",
     "SystemMatrices",
     "build_model",
@@ -34,6 +45,7 @@ __all__ = [
     "load_fe_model",
     "load_model",
     "load_rig",
+    "load_rig_model",
     "modal_stiffness",
     "model_from_dict",
     "parse_assignments",

@@ -28,6 +28,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import warnings
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -45,6 +46,11 @@ from .._validation import (
 from .friction import Stribeck, require_point_contact
 
 __all__ = ["KINEMATICS", "FrictionModel", "SystemMatrices", "param"]
+
+#: What an analysis says when it leaves a model's damping out because ``damped`` was not given.
+_DAMPING_LEFT_OUT = ("The model's damping ({names}) is left out: the analysis is undamped unless asked "
+                     "(paper eq. 7). Pass damped=True to include it, or damped=False to leave it out "
+                     "without this warning.")
 
 #: Kinds of scalar parameter and the validator that checks each.
 _KINDS = {
@@ -68,20 +74,57 @@ def validate_choice(name: str, value: object, choices: tuple[str, ...]) -> str:
 
 
 def param(default: Any, *, unit: str, doc: str, kind: str = "positive",
-          choices: tuple[str, ...] = ()) -> Any:
+          choices: tuple[str, ...] = (), plausible: tuple[float, float] | None = None) -> Any:
     """Declare a model parameter: a dataclass field with its unit, meaning and check.
 
     ``kind="choice"`` declares an option, one of the strings ``choices`` (e.g. the contact
     kinematics); it has no unit, no derivative and is not sampled.
+
+    The declared ``unit`` is the SI unit the value is held in; a value given as text with its
+    own unit (``"25 mm"``, ``"2.9 kHz"``) is converted to it on construction. ``plausible``
+    ``(lo, hi)`` is the range of ``|value|`` a real one has: outside it, a bare number that a
+    common unit slip (mm written as m, kHz as Hz) would bring inside is refused naming the slip,
+    and any other value warns (see :mod:`squealkit._units`).
     """
     if kind not in _KINDS and kind not in ("array", "choice"):
         raise ValueError(f"unknown parameter kind {kind!r}")
     if (kind == "choice") != bool(choices) or (choices and default not in choices):
         raise ValueError(f"parameter kind {kind!r} with choices {choices!r} and default {default!r}")
-    meta = {"unit": unit, "doc": doc, "kind": kind}
+    meta: dict[str, Any] = {"unit": unit, "doc": doc, "kind": kind}
     if choices:
         meta["choices"] = tuple(choices)
+    if plausible is not None:
+        meta["plausible"] = (float(plausible[0]), float(plausible[1]))
     return field(default=default, metadata=meta)
+
+
+def declared_value(f: dataclasses.Field, value: Any, *, what: str = "") -> Any:
+    """``value`` of the numeric field ``f`` in its declared unit: text with a unit converted, and a
+    value outside the declared ``plausible`` range refused (a unit slip) or warned about.
+
+    Other values (arrays, choices, None) come back as they are, for the field's own check.
+    """
+    from .._units import check_plausible, parse_quantity
+
+    meta = f.metadata
+    if meta.get("kind") not in _KINDS or value is None:
+        return value
+    doc = f"{what}{meta['doc']}"
+    if isinstance(value, str):
+        return parse_quantity(f.name, value, meta["unit"], plausible=meta.get("plausible"), what=doc)
+    if "plausible" in meta and isinstance(value, int | float | np.floating | np.integer) \
+            and not isinstance(value, bool) and math.isfinite(value):
+        check_plausible(f.name, float(value), meta["unit"], meta["plausible"], what=doc)
+    return value
+
+
+def parameter_info(cls: Any) -> dict[str, dict[str, str]]:
+    """Unit, meaning and kind of each field of ``cls`` declared with :func:`param`, in declaration order."""
+    return {
+        f.name: {"unit": f.metadata["unit"], "doc": f.metadata["doc"], "kind": f.metadata["kind"]}
+        for f in dataclasses.fields(cls)
+        if "unit" in f.metadata
+    }
 
 
 @dataclass(frozen=True)
@@ -120,7 +163,7 @@ class FrictionModel(ABC):
         for f in dataclasses.fields(self):
             kind = f.metadata.get("kind")
             if kind in _KINDS:
-                value = _KINDS[kind](f.name, getattr(self, f.name))
+                value = _KINDS[kind](f.name, declared_value(f, getattr(self, f.name), what="the "))
                 object.__setattr__(self, f.name, value)
             elif kind == "choice":
                 validate_choice(f.name, getattr(self, f.name), f.metadata["choices"])
@@ -471,11 +514,7 @@ class FrictionModel(ABC):
     @classmethod
     def parameter_info(cls) -> dict[str, dict[str, str]]:
         """Each parameter's unit, meaning and kind, in declaration order."""
-        return {
-            f.name: {"unit": f.metadata["unit"], "doc": f.metadata["doc"], "kind": f.metadata["kind"]}
-            for f in dataclasses.fields(cls)
-            if "unit" in f.metadata
-        }
+        return parameter_info(cls)
 
     def parameters(self) -> dict[str, Any]:
         """Parameter values in SI units (angles in radians), as plain Python objects."""
@@ -509,8 +548,10 @@ class FrictionModel(ABC):
         for key, value in changes.items():
             name = key
             if key not in info and key.endswith("_deg") and info.get(key[:-4], {}).get("kind") == "angle":
+                from .._units import parse_quantity
+
                 name = key[:-4]
-                value = math.radians(validate_finite(key, value))
+                value = math.radians(validate_finite(key, parse_quantity(key, value, "deg")))
             if name not in info:
                 known = ", ".join(sorted(info))
                 raise InputError(f"Unknown parameter {key!r} for model {self.kind!r}; known: {known}.")
@@ -534,3 +575,28 @@ class FrictionModel(ABC):
             if v["unit"].startswith("N s/m")
         }
         return self.replace(**zeros)
+
+
+def damping_names(model: Any) -> str:
+    """The model's nonzero damping parameters, e.g. ``"c1=220, c2=220"`` ("" when it has none).
+
+    A model whose damping is not a parameter (a matrix model) says ``"C"`` when C is not zero.
+    """
+    if not isinstance(model, FrictionModel):
+        return ""
+    named = [f"{k}={getattr(model, k):g}" for k, v in model.parameter_info().items()
+             if v["unit"].startswith("N s/m") and v["kind"] != "array" and getattr(model, k) != 0]
+    if named:
+        return ", ".join(named)
+    return "C" if np.any(model.damping_matrix()) else ""
+
+
+def resolve_damped(model: Any, damped: bool | None, *, stacklevel: int = 3) -> bool:
+    """``damped`` of an analysis: as given, and False when not given (None), with a warning then
+    if the model has damping, so that no damping is left out without a word."""
+    if damped is not None:
+        return bool(damped)
+    names = damping_names(model)
+    if names:
+        warnings.warn(_DAMPING_LEFT_OUT.format(names=names), UserWarning, stacklevel=stacklevel)
+    return False

@@ -43,15 +43,17 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+from .._units import parse_quantity
 from .._validation import InputError, validate_finite
 from ._base import FrictionModel
 from .fe import FEModel
 from .hoffmann import Hoffmann2002
 from .matrix import MatrixModel
 from .pin_on_disc import PinOnDisc3DOF
-from .rig import PinOnDiscRig
+from .rig import PinOnDiscRig, RigModel
 
-__all__ = ["PRESETS", "build_model", "get_preset", "load_model", "load_rig", "model_from_dict", "parse_assignments"]
+__all__ = ["PRESETS", "build_model", "get_preset", "load_model", "load_rig", "load_rig_model", "model_from_dict",
+           "parse_assignments", "rig_model_from_dict"]
 
 #: Built-in presets: name -> (description, factory).
 PRESETS: dict[str, tuple[str, Any]] = {
@@ -154,13 +156,14 @@ def get_preset(name: str) -> FrictionModel:
     return PRESETS[name][1]()
 
 
-def _rig_from_table(table: Mapping[str, Any]) -> PinOnDiscRig:
+def _rig_from_table(table: Mapping[str, Any], changes: Mapping[str, Any] | None = None) -> PinOnDiscRig:
+    """The rig of a [rig] table, with ``changes`` (rig fields, e.g. from [parameters]) applied last."""
     known = {f for f in PinOnDiscRig.__dataclass_fields__ if not f.startswith("_")}
     kwargs: dict[str, Any] = {}
-    for key, value in table.items():
+    for key, value in [*table.items(), *(changes or {}).items()]:
         name = key
         if key == "alpha_deg":
-            name, value = "alpha", math.radians(validate_finite(key, value))
+            name, value = "alpha", math.radians(validate_finite(key, parse_quantity(key, value, "deg")))
         if name not in known:
             raise InputError(f"Unknown [rig] key {key!r}; known: {', '.join(sorted(known))}.")
         kwargs[name] = value
@@ -168,6 +171,24 @@ def _rig_from_table(table: Mapping[str, Any]) -> PinOnDiscRig:
         return PinOnDiscRig(**kwargs)
     except TypeError as e:
         raise InputError(f"Bad [rig] table: {e}") from e
+
+
+def _split_rig_parameters(params: Mapping[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Model parameters a rig also has (P, alpha, the dampers, sliding) and the rest.
+
+    The first go into the rig, so that the rig and its model agree (a P under [parameters] is the
+    rig's P, scaled by ``preload`` at the file's alpha); the rest change the derived model.
+    """
+    shared = set(PinOnDiscRig.__dataclass_fields__) & set(PinOnDisc3DOF.parameter_info())
+    to_rig = {k: v for k, v in params.items() if k in shared or (k == "alpha_deg" and "alpha" in shared)}
+    return to_rig, {k: v for k, v in params.items() if k not in to_rig}
+
+
+def _parameters(doc: Mapping[str, Any], overrides: Mapping[str, Any] | None) -> dict[str, Any]:
+    params = doc.get("parameters", {})
+    if not isinstance(params, Mapping):
+        raise InputError("[parameters] must be a table of NAME = VALUE.")
+    return {**params, **(overrides or {})}
 
 
 def _fe_from_table(table: Any, base_dir: Path | None) -> FEModel:
@@ -189,7 +210,8 @@ def _fe_from_table(table: Any, base_dir: Path | None) -> FEModel:
                          **refs)
 
 
-def model_from_dict(doc: Mapping[str, Any], base_dir: str | Path | None = None) -> FrictionModel | FEModel:
+def model_from_dict(doc: Mapping[str, Any], base_dir: str | Path | None = None,
+                    overrides: Mapping[str, Any] | None = None) -> FrictionModel | FEModel:
     """Build a model from a parsed model file (see the module docstring).
 
     Parameters
@@ -201,11 +223,17 @@ def model_from_dict(doc: Mapping[str, Any], base_dir: str | Path | None = None) 
     base_dir : str or Path, optional
         The folder relative matrix file paths of an ``[fe]`` table start from (default: the
         current directory).
+    overrides : mapping, optional
+        Parameter values applied after the ``[parameters]`` table, in the same way (``--set``).
 
     Returns
     -------
     FrictionModel or FEModel
-        The model, with the ``[parameters]`` table applied.
+        The model, with the ``[parameters]`` table and ``overrides`` applied. With a ``[rig]``
+        table, the parameters the rig also has (``P``, ``alpha``, the dampers, ``sliding``) are
+        set on the rig before the model is derived, and the others on the derived model before
+        a ``preload = "contact_force"`` is scaled: one file gives one model, whichever command
+        reads it.
 
     Raises
     ------
@@ -250,15 +278,13 @@ def model_from_dict(doc: Mapping[str, Any], base_dir: str | Path | None = None) 
     elif "rig" in doc:
         if kind != "pin_on_disc":
             raise InputError("A [rig] table describes a pin-on-disc rig; set model = \"pin_on_disc\".")
-        model = _rig_from_table(doc["rig"]).to_model()
+        return rig_model_from_dict(doc, overrides).to_model()  # type: ignore[union-attr]
     elif preset is not None:
         model = get_preset(preset)
     else:
         model = _MODEL_KINDS[kind]()
 
-    params = doc.get("parameters", {})
-    if not isinstance(params, Mapping):
-        raise InputError("[parameters] must be a table of NAME = VALUE.")
+    params = _parameters(doc, overrides)
     return model.replace(**params) if params else model
 
 
@@ -284,13 +310,15 @@ def _read_toml(path: str | Path) -> dict[str, Any]:
     return doc
 
 
-def load_model(path: str | Path) -> FrictionModel | FEModel:
+def load_model(path: str | Path, overrides: Mapping[str, Any] | None = None) -> FrictionModel | FEModel:
     """Read a model file (TOML). Errors name the file and what is wrong in it.
 
     Parameters
     ----------
     path : str or Path
         The model file (TOML, at most 16 MiB; see the module docstring for its tables).
+    overrides : mapping, optional
+        Parameter values applied after the file's ``[parameters]`` (see :func:`model_from_dict`).
 
     Returns
     -------
@@ -305,30 +333,94 @@ def load_model(path: str | Path) -> FrictionModel | FEModel:
     p = Path(path)
     doc = _read_toml(p)
     try:
-        return model_from_dict(doc, base_dir=p.parent)
+        return model_from_dict(doc, base_dir=p.parent, overrides=overrides)
     except InputError as e:
         raise InputError(f"{p.name}: {e}") from e
 
 
-def load_rig(path: str | Path) -> PinOnDiscRig | None:
+def load_rig(path: str | Path, overrides: Mapping[str, Any] | None = None) -> PinOnDiscRig | None:
     """The rig described by a model file's ``[rig]`` table, or None if it has none.
+
+    The ``[parameters]`` the rig also has (``P``, ``alpha``, the dampers, ``sliding``), then those
+    of ``overrides``, are applied to it: it is the rig of :func:`load_model`'s model.
 
     Parameters
     ----------
     path : str or Path
         The model file (TOML).
+    overrides : mapping, optional
+        Parameter values applied after the file's ``[parameters]`` (``--set``).
 
     Returns
     -------
     PinOnDiscRig or None
         The rig (fields as in :class:`PinOnDiscRig`), or ``None`` without a ``[rig]`` table.
     """
-    doc = _read_toml(path)
+    try:
+        return rig_from_dict(_read_toml(path), overrides)
+    except InputError as e:
+        raise InputError(f"{Path(path).name}: {e}") from e
+
+
+def rig_from_dict(doc: Mapping[str, Any], overrides: Mapping[str, Any] | None = None) -> PinOnDiscRig | None:
+    """The rig of a parsed model file's ``[rig]`` table (None without one), as :func:`load_rig`.
+
+    Parameters
+    ----------
+    doc : mapping
+        The parsed model file.
+    overrides : mapping, optional
+        Parameter values applied after its ``[parameters]`` (``--set``).
+
+    Returns
+    -------
+    PinOnDiscRig or None
+    """
+    rm = rig_model_from_dict(doc, overrides)
+    return None if rm is None else rm.rig
+
+
+def rig_model_from_dict(doc: Mapping[str, Any], overrides: Mapping[str, Any] | None = None) -> RigModel | None:
+    """The rig of a parsed model file and the model changes after its derivation (None without a [rig]).
+
+    ``rig_model_from_dict(doc).to_model()`` is :func:`model_from_dict`'s model; its ``to_model(**changes)``
+    derives the model anew with rig quantities changed (a Monte Carlo over ``disc_freq``, pin sizes...).
+
+    Parameters
+    ----------
+    doc : mapping
+        The parsed model file.
+    overrides : mapping, optional
+        Parameter values applied after its ``[parameters]`` (``--set``).
+
+    Returns
+    -------
+    RigModel or None
+    """
     table = doc.get("rig")
     if table is None:
         return None
+    to_rig, rest = _split_rig_parameters(_parameters(doc, overrides))
+    return RigModel(_rig_from_table(table, to_rig), rest)
+
+
+def load_rig_model(path: str | Path, overrides: Mapping[str, Any] | None = None) -> RigModel | None:
+    """:func:`rig_model_from_dict` of a model file (None without a [rig] table); errors name the file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The model file (TOML).
+    overrides : mapping, optional
+        Parameter values applied after the file's ``[parameters]`` (``--set``).
+
+    Returns
+    -------
+    RigModel or None
+        The rig and the model changes after its derivation; ``.to_model()`` is :func:`load_model`'s model.
+    """
     try:
-        return _rig_from_table(table)
+        return rig_model_from_dict(_read_toml(path), overrides)
     except InputError as e:
         raise InputError(f"{Path(path).name}: {e}") from e
 
@@ -415,5 +507,7 @@ def build_model(
     """
     if preset is not None and config is not None:
         raise InputError("Give either a preset or a model file, not both.")
-    model = load_model(config) if config is not None else get_preset(preset or "lv2013")
+    if config is not None:
+        return load_model(config, overrides)
+    model = get_preset(preset or "lv2013")
     return model.replace(**overrides) if overrides else model

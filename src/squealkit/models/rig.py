@@ -10,20 +10,24 @@ Timoshenko (shear and rotary inertia), which matters for the paper's stubby pin
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from scipy.linalg import expm
 from scipy.optimize import brentq
 
 from .._validation import InputError, validate_positive
+from ._base import declared_value, param, parameter_info
 from .pin_on_disc import PinOnDisc3DOF
 
 __all__ = [
     "CANTILEVER_TIP_MASS_FACTOR",
     "PinOnDiscRig",
+    "RigModel",
     "cantilever_bending_frequency",
     "contact_stiffness",
     "modal_stiffness",
@@ -309,27 +313,40 @@ class PinOnDiscRig:
     2855.9
     """
 
-    pin_diameter: float = 0.030
-    pin_length: float = 0.045
-    pin_youngs_modulus: float = 2.95e9
-    pin_density: float = 1040.0
-    pin_poisson: float = 0.35
-    disc_mass: float = 4.35
-    disc_freq: float = 2346.0
-    pin_bending_freq: float | str | None = None
-    pin_axial_freq: float | str | None = None
-    pin_bending_theory: Literal["euler_bernoulli", "timoshenko"] = "timoshenko"
-    alpha: float = math.radians(2.0)
-    P: float = 10.0
-    c1: float = 220.0
-    c2: float = 220.0
-    c3: float = 220.0
-    sliding: int = -1
-    pin_mass_factor: float = 1.0
-    preload: Literal["pin_load", "contact_force"] = "pin_load"
+    pin_diameter: float = param(0.030, unit="m", doc="diameter of the round pin", plausible=(1e-3, 0.2))
+    pin_length: float = param(0.045, unit="m", doc="free length of the pin", plausible=(1e-3, 0.5))
+    pin_youngs_modulus: float = param(2.95e9, unit="Pa", doc="Young's modulus of the pin", plausible=(1e7, 1.5e12))
+    pin_density: float = param(1040.0, unit="kg/m^3", doc="density of the pin", plausible=(100.0, 25e3))
+    pin_poisson: float = param(0.35, unit="1", doc="Poisson's ratio of the pin", kind="finite")
+    disc_mass: float = param(4.35, unit="kg", doc="modal mass of the disc's out-of-plane mode",
+                             plausible=(1e-3, 500.0))
+    disc_freq: float = param(2346.0, unit="Hz", doc="frequency of that disc mode", plausible=(20.0, 50e3))
+    pin_bending_freq: float | str | None = param(None, unit="Hz", doc="pin bending frequency (None: beam theory)",
+                                                 plausible=(20.0, 100e3))
+    pin_axial_freq: float | str | None = param(None, unit="Hz", doc="pin axial frequency (None: quarter-wave rod)",
+                                               plausible=(20.0, 100e3))
+    pin_bending_theory: Literal["euler_bernoulli", "timoshenko"] = param(
+        "timoshenko", unit="", doc="beam theory of a pin bending frequency not given", kind="choice",
+        choices=tuple(_BENDING_THEORIES))
+    alpha: float = param(math.radians(2.0), unit="rad", doc="incline of the pin spring k2", kind="angle",
+                         plausible=(0.0, 0.8))
+    P: float = param(10.0, unit="N", doc="axial load (its meaning set by preload)", kind="nonnegative")
+    c1: float = param(220.0, unit="N s/m", doc="damper beside k1", kind="nonnegative")
+    c2: float = param(220.0, unit="N s/m", doc="damper beside k2", kind="nonnegative")
+    c3: float = param(220.0, unit="N s/m", doc="damper beside k3", kind="nonnegative")
+    sliding: int = param(-1, unit="1", doc="sliding direction", kind="sign")
+    pin_mass_factor: float = param(1.0, unit="1", doc="pin modal mass as a share of the pin mass")
+    preload: Literal["pin_load", "contact_force"] = param(
+        "pin_load", unit="", doc="what P is", kind="choice", choices=("pin_load", "contact_force"))
     _derived: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        for f in fields(self):  # text with a unit ("25 mm", "2.9 kHz") in the declared unit; unit slips refused
+            v = getattr(self, f.name)
+            theory_name = f.name in ("pin_bending_freq", "pin_axial_freq") and isinstance(v, str) and not any(
+                ch.isdigit() for ch in v)  # a theory's name, checked below
+            if not theory_name:
+                object.__setattr__(self, f.name, declared_value(f, v, what="the rig's "))
         skip = ("pin_bending_theory", "sliding", "alpha", "pin_poisson", "preload", "pin_bending_freq",
                 "pin_axial_freq")
         for f in fields(self):
@@ -352,6 +369,14 @@ class PinOnDiscRig:
             raise InputError(f"Parameter pin_mass_factor={self.pin_mass_factor!r} must lie in (0, 1].")
         if self.preload not in ("pin_load", "contact_force"):
             raise InputError(f"Parameter preload={self.preload!r} must be 'pin_load' or 'contact_force'.")
+
+    #: What the rig's parameters are called in reports.
+    kind = "pin_on_disc_rig"
+
+    @classmethod
+    def parameter_info(cls) -> dict[str, dict[str, str]]:
+        """Each parameter's unit, meaning and kind, in declaration order (as a model's)."""
+        return parameter_info(cls)
 
     @classmethod
     def paper(cls, **changes) -> PinOnDiscRig:
@@ -406,8 +431,20 @@ class PinOnDiscRig:
         return "; ".join(f"{name.replace('_', ' ')} {v['frequency_hz']:.1f} Hz ({v['source']})"
                          for name, v in self.frequency_sources().items())
 
-    def to_model(self) -> PinOnDisc3DOF:
-        """The 3-DOF model (paper eq. 4) with every stiffness derived from this rig."""
+    def to_model(self, **changes: Any) -> PinOnDisc3DOF:
+        """The 3-DOF model (paper eq. 4) with every stiffness derived from this rig.
+
+        Parameters
+        ----------
+        **changes
+            Model parameters changed before a ``preload = "contact_force"`` is scaled (as
+            :meth:`FrictionModel.replace`), so that the static contact force is ``P`` for the
+            model returned.
+
+        Returns
+        -------
+        PinOnDisc3DOF
+        """
         m1 = self.pin_mass_factor * self.pin_mass()
         model = PinOnDisc3DOF(
             m1=m1,
@@ -418,8 +455,50 @@ class PinOnDiscRig:
             kc=contact_stiffness(self.pin_diameter, self.pin_length, self.pin_youngs_modulus),
             c1=self.c1, c2=self.c2, c3=self.c3, alpha=self.alpha, P=self.P, sliding=self.sliding,
         )
+        if changes:
+            model = model.replace(**changes)
         if self.preload == "contact_force" and self.P > 0:
             # the static contact force is linear in P: scale P so that it equals the requested force
             per_newton = float(model.replace(P=1.0).static_contact_force(0.0))
             model = model.replace(P=self.P / per_newton)
         return model
+
+
+@dataclass(frozen=True)
+class RigModel:
+    """A rig and the model parameters changed after its derivation: a model file with a [rig] table.
+
+    ``to_model()`` is the model every command builds from the file; ``to_model(**changes)`` the
+    same with some rig quantities (``disc_freq``, ``pin_diameter``, ...) or model parameters
+    changed, derived anew (for a Monte Carlo over what a rig engineer measures).
+
+    Parameters
+    ----------
+    rig : PinOnDiscRig
+        The rig (with the file's ``P``, ``alpha``, dampers and ``sliding``).
+    changes : mapping, optional
+        Parameters of the derived model set after the derivation (e.g. ``kinematics``).
+
+    Examples
+    --------
+    >>> rm = RigModel(PinOnDiscRig.paper())
+    >>> round(rm.to_model(disc_freq=2400.0).k3 / rm.to_model().k3, 4)   # k3 = m2 (2 pi f)^2
+    1.0466
+    """
+
+    rig: PinOnDiscRig
+    changes: Mapping[str, Any] = field(default_factory=dict)
+
+    kind = "pin_on_disc_rig"
+
+    def parameter_info(self) -> dict[str, dict[str, str]]:
+        """The rig's parameters, then the model's that the rig does not have."""
+        rig = self.rig.parameter_info()
+        return {**rig, **{k: v for k, v in PinOnDisc3DOF.parameter_info().items() if k not in rig}}
+
+    def to_model(self, **changes: Any) -> PinOnDisc3DOF:
+        """The derived model, with ``changes`` (rig quantities or model parameters) applied."""
+        rig_fields = self.rig.parameter_info()
+        to_rig = {k: v for k, v in changes.items() if k in rig_fields}
+        rig = dataclasses.replace(self.rig, **to_rig) if to_rig else self.rig
+        return rig.to_model(**{**self.changes, **{k: v for k, v in changes.items() if k not in to_rig}})

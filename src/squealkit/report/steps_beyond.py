@@ -32,7 +32,7 @@ FRICTIONLESS_SLOPE = 0.5
 def _curves(models: dict[str, FrictionModel]) -> xr.Dataset:
     """Critical-friction curves of each model over THETA_DEG, stacked along ``kinematics``."""
     keep = ["mu_critical", "mu_e_critical", "frequency_hz", "status"]
-    parts = [critical_friction_curve(m, np.radians(THETA_DEG))[keep] for m in models.values()]
+    parts = [critical_friction_curve(m, np.radians(THETA_DEG), damped=False)[keep] for m in models.values()]
     ds = xr.concat(parts, dim="kinematics", combine_attrs="drop_conflicts")
     ds = ds.assign_coords(kinematics=("kinematics", list(models)))
     ds.attrs.update(title="Critical friction over the run-out incline for two contact kinematics",
@@ -129,7 +129,7 @@ def beyond_step(model: FrictionModel, figures: Path, data: Path, *,
     models = {k: model.replace(kinematics=k) for k in ("paper", "consistent")}
     ds = _curves(models)
     save_dataset(ds, data / "critical_kinematics.nc")
-    tol = {k: runout_tolerance(m, mu_design, wavelength=wavelength) for k, m in models.items()}
+    tol = {k: runout_tolerance(m, mu_design, wavelength=wavelength, damped=False) for k, m in models.items()}
     frictionless = {k: str(stability_verdict(m, 0.0, FRICTIONLESS_SLOPE).item()) for k, m in models.items()}
 
     mu_c = {k: ds.mu_critical.sel(kinematics=k).values for k in models}

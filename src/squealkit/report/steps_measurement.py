@@ -66,7 +66,7 @@ def model_frequency(model: FrictionModel) -> tuple[float | None, str]:
     onset = critical_friction(model, 0.0, damped=True)
     if math.isfinite(onset.frequency_hz):
         return onset.frequency_hz, f"the model's damped onset (mu_crit = {onset.mu_critical:.4f}, flat disc)"
-    onset = critical_friction(model, 0.0)
+    onset = critical_friction(model, 0.0, damped=False)
     if math.isfinite(onset.frequency_hz):
         return onset.frequency_hz, (f"the model's undamped coalescence (mu_crit = {onset.mu_critical:.4f}, flat "
                                     "disc; damped it stays stable)")

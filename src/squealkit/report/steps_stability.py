@@ -151,7 +151,7 @@ def fig2_step(model: FrictionModel, figures: Path, data: Path, *, n_mu: int = 16
     mu = np.linspace(0.0, 0.8, n_mu)
     theta = np.radians(np.linspace(-8.0, 8.0, n_theta))
     ds = stability_map(model, mu, theta, damped=False)
-    crit = critical_friction_curve(model, theta[:: max(1, n_theta // 40)])
+    crit = critical_friction_curve(model, theta[:: max(1, n_theta // 40)], damped=False)
     save_dataset(ds, data / "fig2_eigenvalues.nc")
     save_dataset(crit, data / "critical_friction_curve.nc")
     _save_fig(fig2_plot(ds), figures, "fig2_eigenvalues")
@@ -201,11 +201,11 @@ def critical_step(model: FrictionModel, figures: Path, data: Path, *,
     settings = settings or ReportSettings.paper()
     mu_design, wavelength = settings.mu_design, settings.sro_wavelength
     thetas = np.radians([-8.0, -4.0, 0.0, 4.0, 8.0])
-    curve = critical_friction_curve(model, thetas)
+    curve = critical_friction_curve(model, thetas, damped=False)
     mu_e = curve.mu_e_critical.values
-    c0 = critical_friction(model, 0.0)
+    c0 = critical_friction(model, 0.0, damped=False)
     cd = critical_friction(model, 0.0, damped=True)
-    tol = runout_tolerance(model, mu_design, wavelength=wavelength)
+    tol = runout_tolerance(model, mu_design, wavelength=wavelength, damped=False)
     fin = mu_e[np.isfinite(mu_e)]
     spread = float(np.ptp(fin) / np.mean(fin)) if fin.size == mu_e.size else math.nan
     rows = tuple((float(np.degrees(t)), float(m), float(me), float(f)) for t, m, me, f in zip(
@@ -218,7 +218,7 @@ def critical_step(model: FrictionModel, figures: Path, data: Path, *,
     tables = [Table("Critical friction over the SRO incline", ("theta [deg]", "mu_crit", "mu_crit + tan(theta)",
                                                              "onset frequency [Hz]"), rows)]
     if c0.status == "onset":  # a sensitivity of mu_crit needs a mu_crit
-        sens = critical_friction_sensitivity(model)
+        sens = critical_friction_sensitivity(model, damped=False)
         tables.append(Table(
             "Which parameter buys the most margin (elasticity = % change of mu_crit per % change)",
             ("parameter", "value", "unit", "d mu_crit / d p", "elasticity"),
@@ -311,7 +311,7 @@ def _onset_mode(model: FrictionModel, figures: Path, data: Path) -> tuple[str, d
     its data and one sentence from its numbers."""
     from ..plotting.modes import modes_plot
 
-    ds = onset_modes(model)
+    ds = onset_modes(model, damped=False)
     save_dataset(ds, data / "onset_modes.nc")
     _save_fig(modes_plot(ds), figures, "onset_mode")
     k = int(np.argmax(ds.loses_stability.values))

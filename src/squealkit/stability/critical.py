@@ -24,6 +24,7 @@ from .. import __version__
 from .._threads import honour_thread_limit
 from .._validation import InputError, validate_array_finite, validate_finite, validate_model, validate_positive
 from ..models import FrictionModel
+from ..models._base import resolve_damped
 from ..models.friction import Stribeck, validate_friction
 from ._solve import IndeterminateWarning
 from ._windows import ONSET_STATUS, SCAN_POINTS, Windows, find_windows
@@ -135,7 +136,7 @@ def critical_friction_curve(
     model: FrictionModel,
     theta: ArrayLike,
     *,
-    damped: bool = False,
+    damped: bool | None = None,
     mu_max: float = 2.0,
     scan: int = SCAN_POINTS,
     friction: Stribeck | None = None,
@@ -154,8 +155,9 @@ def critical_friction_curve(
     model : FrictionModel
     theta : array_like
         Run-out inclines [rad], each strictly inside (-90, 90) deg.
-    damped : bool
-        Include damping.
+    damped : bool, optional
+        Include the damping matrix C. Not given: left out (paper eq. 7 is undamped), with a
+        warning when the model has damping.
     mu_max : float
         Search range for ``|mu|``.
     scan : int
@@ -184,6 +186,7 @@ def critical_friction_curve(
         would need friction no brake material has.
     """
     validate_model(model)
+    damped = resolve_damped(model, damped)
     friction, speed = validate_friction(model, friction, speed)
     fr = {} if friction is None else {"friction": friction, "speed": speed}
     th = np.atleast_1d(validate_array_finite("theta", theta)).astype(float)
@@ -271,7 +274,7 @@ def critical_friction(
     model: FrictionModel,
     theta: float = 0.0,
     *,
-    damped: bool = False,
+    damped: bool | None = None,
     mu_max: float = 2.0,
     friction: Stribeck | None = None,
     speed: float | None = None,
@@ -286,8 +289,9 @@ def critical_friction(
         The system, e.g. ``get_preset("lv2013")``.
     theta : float
         Run-out incline [rad], strictly inside (-90, 90) deg; ``tan(theta)`` enters the model.
-    damped : bool
-        Include the damping matrix C.
+    damped : bool, optional
+        Include the damping matrix C. Not given: left out (paper eq. 7 is undamped), with a
+        warning when the model has damping.
     mu_max : float
         Upper end of the friction search range ``[0, mu_max]`` (> 0); when the system is
         unstable already at mu = 0 the search also goes down to ``-mu_max``.
@@ -314,6 +318,7 @@ def critical_friction(
     (True, 1)
     """
     validate_model(model)
+    damped = resolve_damped(model, damped)
     theta = validate_finite("theta", theta)
     ds = critical_friction_curve(model, [theta], damped=damped, mu_max=mu_max, friction=friction, speed=speed)
     r = ds.isel(theta=0)
@@ -379,7 +384,7 @@ def runout_tolerance(
     mu: float,
     *,
     wavelength: float | None = None,
-    damped: bool = False,
+    damped: bool | None = None,
     slope_max: float = math.tan(math.radians(80.0)),
     friction: Stribeck | None = None,
     speed: float | None = None,
@@ -394,8 +399,9 @@ def runout_tolerance(
         Friction coefficient.
     wavelength : float, optional
         Run-out wavelength [m]; with it the amplitude tolerance ``q0_max`` [m] is given.
-    damped : bool
-        Include damping.
+    damped : bool, optional
+        Include the damping matrix C. Not given: left out (paper eq. 7 is undamped), with a
+        warning when the model has damping.
     slope_max : float, default tan(80 deg)
         Largest slope ``tan(theta)`` [1] searched, on each side.
     friction, speed : Stribeck and float, optional
@@ -416,6 +422,7 @@ def runout_tolerance(
     ('rising', True)
     """
     validate_model(model)
+    damped = resolve_damped(model, damped)
     mu = validate_finite("mu", mu)
     slope_max = validate_positive("slope_max", slope_max)
     if wavelength is not None:

@@ -21,6 +21,7 @@ from .. import __version__
 from .._threads import honour_thread_limit, limit_threads, threads_for
 from .._validation import InputError, check_memory, validate_array_finite, validate_dataset, validate_model
 from ..models import FEModel, FrictionModel
+from ..models._base import resolve_damped
 from ..models.friction import Stribeck, validate_friction
 from ._kernels import (
     charpoly_table,
@@ -407,7 +408,7 @@ def stability_map(
     mu: ArrayLike,
     theta: ArrayLike = 0.0,
     *,
-    damped: bool = False,
+    damped: bool | None = None,
     friction: Stribeck | None = None,
     speed: float | None = None,
     track: bool = True,
@@ -435,8 +436,9 @@ def stability_map(
         Friction coefficients.
     theta : array_like, 1-D
         Incline angles of the disc surface run-out [rad]; ``tan(theta)`` enters the model.
-    damped : bool
-        Include damping (False reproduces the paper's undamped eq. 7).
+    damped : bool, optional
+        Include the damping matrix C. Not given: left out (paper eq. 7 is undamped), with a
+        warning when the model has damping.
     friction : Stribeck, optional
         Speed-dependent friction, ``mu`` its kinetic coefficient (see :func:`eigenvalues`).
     speed : float, optional
@@ -488,6 +490,7 @@ def stability_map(
     [('mode', 3), ('mu', 9), ('theta', 5)]
     """
     validate_model(model)
+    damped = resolve_damped(model, damped)
     if isinstance(model, FEModel):
         from .fe_sweep import fe_stability_map
 

@@ -40,6 +40,7 @@ from .. import __version__
 from .._threads import honour_thread_limit
 from .._validation import InputError, validate_dataset, validate_finite, validate_model
 from ..models import FrictionModel
+from ..models._base import resolve_damped
 
 __all__ = ["eigenvalue_sensitivity", "mode_shapes", "modes", "modes_summary", "onset_modes"]
 
@@ -178,7 +179,7 @@ def _point_verdict(model: FrictionModel, mu: float, t: float, damped: bool) -> t
 
 
 @honour_thread_limit
-def modes(model: FrictionModel, mu: float, theta: float = 0.0, *, damped: bool = False) -> xr.Dataset:
+def modes(model: FrictionModel, mu: float, theta: float = 0.0, *, damped: bool | None = None) -> xr.Dataset:
     """Complex modes of the model at friction ``mu`` and run-out incline ``theta``.
 
     Solves ``(lambda^2 M + lambda C + K(mu, tan theta)) phi = 0`` (paper eqs. 4, 7) for its
@@ -193,8 +194,9 @@ def modes(model: FrictionModel, mu: float, theta: float = 0.0, *, damped: bool =
         Friction coefficient.
     theta : float
         Run-out incline [rad], strictly inside (-90, 90) deg.
-    damped : bool
-        Include the damping matrix C.
+    damped : bool, optional
+        Include the damping matrix C. Not given: left out (paper eq. 7 is undamped), with a
+        warning when the model has damping.
 
     Returns
     -------
@@ -231,6 +233,7 @@ def modes(model: FrictionModel, mu: float, theta: float = 0.0, *, damped: bool =
     (True, True)
     """
     validate_model(model)
+    damped = resolve_damped(model, damped)
     mu, theta = _validate_point(mu, theta)
     t = math.tan(theta)
     verdict, thr = _point_verdict(model, mu, t, damped)  # validates the model's magnitudes first
@@ -319,7 +322,7 @@ def mode_shapes(ds: xr.Dataset, *, left: bool = False) -> NDArray[np.complex128]
 
 @honour_thread_limit
 def onset_modes(
-    model: FrictionModel, theta: float = 0.0, *, damped: bool = False, mu_max: float = 2.0
+    model: FrictionModel, theta: float = 0.0, *, damped: bool | None = None, mu_max: float = 2.0
 ) -> xr.Dataset:
     """The modes at the critical friction, with the mode that loses stability marked.
 
@@ -337,8 +340,9 @@ def onset_modes(
         The system, e.g. ``get_preset("lv2013")``.
     theta : float
         Run-out incline [rad], strictly inside (-90, 90) deg.
-    damped : bool
-        Include the damping matrix C.
+    damped : bool, optional
+        Include the damping matrix C. Not given: left out (paper eq. 7 is undamped), with a
+        warning when the model has damping.
     mu_max : float
         Upper end of the friction search range ``[0, mu_max]`` for the critical friction
         (> 0).
@@ -364,6 +368,7 @@ def onset_modes(
     2436.2
     """
     validate_model(model)
+    damped = resolve_damped(model, damped)
     from .critical import critical_friction
 
     crit = critical_friction(model, theta, damped=damped, mu_max=mu_max)
@@ -526,7 +531,7 @@ def _dlambda(
 
 @honour_thread_limit
 def eigenvalue_sensitivity(
-    model: FrictionModel, mu: float, theta: float, parameter: str, *, damped: bool = False
+    model: FrictionModel, mu: float, theta: float, parameter: str, *, damped: bool | None = None
 ) -> xr.Dataset:
     """Exact derivative d lambda / d p of every eigenvalue at one operating point.
 
@@ -550,8 +555,9 @@ def eigenvalue_sensitivity(
         Run-out incline [rad].
     parameter : str
         ``"mu"``, ``"tan_theta"``, ``"theta"`` [per rad] or a model parameter name.
-    damped : bool
-        Include the damping matrix.
+    damped : bool, optional
+        Include the damping matrix C. Not given: left out (paper eq. 7 is undamped), with a
+        warning when the model has damping.
 
     Returns
     -------
@@ -569,6 +575,7 @@ def eigenvalue_sensitivity(
     True
     """
     validate_model(model)
+    damped = resolve_damped(model, damped)
     mu, theta = _validate_point(mu, theta)
     if not isinstance(parameter, str):
         raise InputError(f"Parameter parameter={parameter!r} must be a parameter name.")

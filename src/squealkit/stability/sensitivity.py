@@ -36,6 +36,7 @@ from numpy.typing import NDArray
 from .._threads import honour_thread_limit
 from .._validation import InputError, validate_model, validate_positive
 from ..models import FrictionModel
+from ..models._base import resolve_damped
 from ..models.friction import Stribeck
 from .critical import CriticalFriction, critical_friction
 from .modes import _dlambda, _matrix_derivatives, _parts, _quadratic_eig, _stiffness, _unit_largest
@@ -65,7 +66,7 @@ def critical_friction_sensitivity(
     model: FrictionModel,
     theta: float = 0.0,
     *,
-    damped: bool = False,
+    damped: bool | None = None,
     parameters: Sequence[str] | None = None,
     rel_step: float = 1e-4,
     method: str = "exact",
@@ -83,8 +84,9 @@ def critical_friction_sensitivity(
     model : FrictionModel
     theta : float
         Run-out incline [rad].
-    damped : bool
-        Include damping (then the damper parameters are included by default).
+    damped : bool, optional
+        Include the damping matrix C. Not given: left out (paper eq. 7 is undamped), with a
+        warning when the model has damping.
     parameters : sequence of str, optional
         Parameter names; default every scalar continuous parameter.
     rel_step : float
@@ -114,6 +116,7 @@ def critical_friction_sensitivity(
     (-1.0, True)
     """
     validate_model(model)
+    damped = resolve_damped(model, damped)
     if method not in _METHODS:
         raise InputError(f"Parameter method={method!r} must be one of {', '.join(map(repr, _METHODS))}.")
     fr = {} if friction is None else {"friction": friction, "speed": speed}
