@@ -101,11 +101,13 @@ def report(preset, config, sets, out_dir: Path, force: bool, recording, mic, dis
     from .._validation import InputError
     from ..models import load_rig
     from ..report import RecordingSpec
-    from ._options import build_model_from_options
+    from ._options import build_model_from_options, refuse_options
 
     model = build_model_from_options(preset, config, sets)
     rig = load_rig(config) if config is not None else None
     spec = None
+    if recording is None:
+        refuse_options(("mic", "displacement", "rpm", "radius", "fs"), "describes a --recording; give one with it")
     if recording is not None:
         if rpm is None or radius is None:
             raise InputError("--recording needs --rpm and --radius (disc speed and probe radius).")
