@@ -58,7 +58,8 @@ def _refused(result, *words):
 HUGE = [
     ("stab-grid-1e9-zarr", ["stability", "--mu", "0:0.8:31623", "--theta", "-8:8:31623", "--out", "{tmp}/big.zarr"],
      ["31623 x 31623", "1e+08"]),
-    ("sim-dur-1e300-out", ["simulate", "--duration", "1e300", "--out", "{tmp}/x.nc"], ["1e+300 s", "SQUEALKIT_MAX_HOURS"]),
+    ("sim-dur-1e300-out", ["simulate", "--duration", "1e300", "--out", "{tmp}/x.nc"],
+     ["1e+300 s", "SQUEALKIT_MAX_HOURS"]),
     ("sim-rk4-long", ["simulate", "--method", "rk4", "--duration", "1e6", "--fs", "1"], ["1e+06 s", "h"]),
     ("synth-campaign-huge", ["synth", "{tmp}/camp", "--campaign", "1000000000"], ["1000000000 applications"]),
     ("synth-huge-dur", ["synth", "{tmp}/r.nc", "--duration", "1e300"], ["1e+300 s"]),
@@ -178,7 +179,7 @@ def test_non_physical_sound_pressure_names_the_channel():
 
     rec = synthetic_recording(duration=0.5, seed=1)
     rec = rec.assign(mic=rec["mic"] * 1e297)  # ~1e299 Pa: overflowed the float32 level (gave -2906 dB(A))
-    with pytest.raises(InputError, match="Microphone channel 'mic' holds a sound pressure of .* Pa"):
+    with pytest.raises(InputError, match=r"Microphone channel 'mic' holds a sound pressure of .* Pa"):
         analyze_recording(rec, mic="mic", displacement="displacement", rpm=900, radius=0.05)
 
 
@@ -224,7 +225,8 @@ def test_campaign_options_checked_before_anything_is_written(run, tmp_path, reco
 
 IGNORED = [
     ("tol-mumax-nonfe", ["tolerance", "--mu", "0.3", "--mu-max", "0.5"], ["--mu-max", "FE models only"]),
-    ("report-radius-no-rec", ["report", "--quick", "--radius", "0.05", "--out", "{tmp}/r"], ["--radius", "--recording"]),
+    ("report-radius-no-rec", ["report", "--quick", "--radius", "0.05", "--out", "{tmp}/r"],
+     ["--radius", "--recording"]),
     ("report-rpm-no-rec", ["report", "--quick", "--rpm", "900", "--out", "{tmp}/r"], ["--rpm", "--recording"]),
     ("tol-damped-fe", ["tolerance", "--config", "{fe}", "--mu", "0.3", "--rpm", "60", "--damped"],
      ["--damped", "small models"]),

@@ -172,8 +172,9 @@ def _check_pressure(channel: str, p: NDArray) -> None:
     hi = PLAUSIBLE["pressure_pa"][1]
     big = float(np.max(np.abs(p), initial=0.0))
     if big > hi:
-        raise InputError(f"Microphone channel {channel!r} holds a sound pressure of {big:.3g} Pa, outside the accepted "
-                         f"range [-{hi:g}, {hi:g}] Pa ({PLAUSIBLE['pressure_pa'][3]}): check the channel's unit or scale.")
+        raise InputError(f"Microphone channel {channel!r} holds a sound pressure of {big:.3g} Pa, outside the "
+                         f"accepted range [-{hi:g}, {hi:g}] Pa ({PLAUSIBLE['pressure_pa'][3]}): check the channel's "
+                         "unit or scale.")
 
 
 @dataclass(frozen=True)
