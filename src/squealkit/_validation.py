@@ -209,6 +209,7 @@ def validate_in_range(name: str, value: object, lo: float, hi: float, unit: str 
 #: A value beyond them is a unit or typing mistake (``1e300``): refused with one line before
 #: it reaches a solver, by the API and so by the CLI.
 PLAUSIBLE: dict[str, tuple[float, float, str, str]] = {
+    "friction": (0.0, 100.0, "", "no contact has a friction coefficient above 100"),
     "speed": (0.0, 1e3, "m/s", "no brake or rig slides faster than 1000 m/s"),
     "rpm": (1e-3, 1e6, "rpm", "a disc between one turn in 1000 min and 1e6 rpm"),
     "level_dba": (-50.0, 200.0, "dB(A)", "sound in air stays below about 194 dB"),

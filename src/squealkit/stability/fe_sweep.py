@@ -25,7 +25,14 @@ from threadpoolctl import threadpool_limits
 
 from .. import __version__
 from .._threads import thread_limit
-from .._validation import InputError, check_budget, validate_angle, validate_array_finite, validate_positive
+from .._validation import (
+    InputError,
+    check_budget,
+    validate_angle,
+    validate_array_finite,
+    validate_plausible,
+    validate_positive,
+)
 from ..models.fe import FEModel, rpm_to_omega
 from . import reduction
 from ._kernels import derived_quantities
@@ -521,7 +528,8 @@ def fe_critical_friction(
     0.1
     """
     rpm_a = _validate_grid("rpm", rpm)
-    mu_max = validate_positive("mu_max", 2.0 * model.mu_ref if mu_max is None else mu_max)
+    mu_max = validate_plausible("mu_max", validate_positive("mu_max", 2.0 * model.mu_ref if mu_max is None else mu_max),
+                                "friction")
     t = _tan_theta(theta)
     if isinstance(n_scan, bool) or int(n_scan) != n_scan or n_scan < 2:
         raise InputError(f"Parameter n_scan={n_scan!r} must be an integer >= 2.")
