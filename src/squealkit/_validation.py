@@ -17,9 +17,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "MAX_POINTS",
+    "PLAUSIBLE",
     "InputError",
     "InputTypeError",
     "available_memory",
+    "check_budget",
     "check_memory",
     "parse_range",
     "validate_angle",
@@ -27,10 +30,13 @@ __all__ = [
     "validate_dataset",
     "validate_finite",
     "validate_fs",
+    "validate_in_range",
     "validate_int",
     "validate_model",
+    "validate_plausible",
     "validate_positive",
     "validate_sign",
+    "work_limit_seconds",
 ]
 
 
@@ -188,9 +194,97 @@ def check_memory(nbytes: float, what: str, hint: str = "") -> None:
     make it fit).
     """
     avail = available_memory()
-    if nbytes > 0.8 * avail:
+    if not nbytes <= 0.8 * avail:
         tail = f" {hint}" if hint else ""
         raise InputError(f"{what} needs about {_gib(nbytes)} of memory; {_gib(avail)} is available.{tail}")
+
+
+#: The most grid points (operating points, samples of a sweep) one result may hold: a 10 000 x
+#: 10 000 map, about 8 GB as zarr. No figure or analysis needs more; split the range into runs.
+MAX_POINTS = 10**8
+
+#: The longest run started without being asked for [h]: a run estimated longer is refused up
+#: front. The environment variable ``SQUEALKIT_MAX_HOURS`` sets another limit.
+MAX_HOURS = 2.0
+
+
+def work_limit_seconds() -> float:
+    """The work budget of one run [s]: ``SQUEALKIT_MAX_HOURS`` hours, else :data:`MAX_HOURS`."""
+    text = os.environ.get("SQUEALKIT_MAX_HOURS", "").strip()
+    if not text:
+        return MAX_HOURS * 3600.0
+    try:
+        hours = float(text)
+    except ValueError:
+        hours = float("nan")
+    if not hours > 0:
+        raise InputError(f"SQUEALKIT_MAX_HOURS={text!r} must be a number of hours > 0.")
+    return hours * 3600.0
+
+
+def _duration(seconds: float) -> str:
+    if seconds >= 86400 * 365:
+        return f"{seconds / (86400 * 365):.3g} years"
+    if seconds >= 86400:
+        return f"{seconds / 86400:.3g} days"
+    return f"{seconds / 3600:.3g} h" if seconds >= 3600 else f"{seconds / 60:.3g} min"
+
+
+def check_budget(what: str, *, points: float = 0.0, nbytes: float = 0.0, seconds: float = 0.0,
+                 hint: str = "") -> None:
+    """Refuse, before any work, a run beyond the points, memory or time one run may take.
+
+    Every entry point that can be asked for unbounded work estimates it here first: ``points``
+    (grid points of the result, at most :data:`MAX_POINTS`), ``nbytes`` (peak memory, see
+    :func:`check_memory`) and ``seconds`` (a lower estimate of the run time, at most
+    :func:`work_limit_seconds`). One line names the request, the estimate and the limit.
+    """
+    tail = f" {hint}" if hint else ""
+    if not points <= MAX_POINTS:
+        raise InputError(f"{what} has {points:.3g} points, above the {MAX_POINTS:.0e} one result may hold.{tail}")
+    check_memory(nbytes, what, hint)
+    limit = work_limit_seconds()
+    if not seconds <= limit:
+        raise InputError(f"{what} would take at least {_duration(seconds)}, above the {limit / 3600:g} h one run "
+                         f"may take (SQUEALKIT_MAX_HOURS sets the limit).{tail}")
+
+
+def validate_in_range(name: str, value: object, lo: float, hi: float, unit: str = "", *,
+                      open_low: bool = False, why: str = "") -> float:
+    """Return ``value`` as a finite float in ``[lo, hi]`` (``(lo, hi]`` with ``open_low``).
+
+    The bounds are physical plausibility, not numerics: a value outside them is a unit or
+    typing mistake, refused with one line naming it and the accepted range before it reaches
+    a solver (where 1e300 overflows).
+    """
+    x = validate_finite(name, value)
+    if x > hi or x < lo or (open_low and x == lo):
+        u = f" {unit}" if unit else ""
+        left = "(" if open_low else "["
+        reason = f" ({why})" if why else ""
+        raise InputError(f"Parameter {name}={x!r}{u} is outside the accepted range {left}{lo:g}, {hi:g}]{u}{reason}.")
+    return x
+
+
+#: Physically plausible ranges, declared once per quantity: quantity -> (low, high, unit, why).
+#: A value beyond them is a unit or typing mistake (``1e300``): refused with one line before
+#: it reaches a solver, by the API and so by the CLI.
+PLAUSIBLE: dict[str, tuple[float, float, str, str]] = {
+    "friction": (0.0, 100.0, "", "no contact has a friction coefficient above 100"),
+    "speed": (0.0, 1e3, "m/s", "no brake or rig slides faster than 1000 m/s"),
+    "rpm": (1e-3, 1e6, "rpm", "a disc between one turn in 1000 min and 1e6 rpm"),
+    "level_dba": (-50.0, 200.0, "dB(A)", "sound in air stays below about 194 dB"),
+    "acoustic_delay": (0.0, 1.0, "s", "a microphone within about 340 m of the pin"),
+    "runout_amplitude": (0.0, 1e-2, "m", "disc run-out is micrometres, never above 1 cm"),
+    "pressure_pa": (0.0, 1e6, "Pa", "a microphone's sound pressure stays below 1e6 Pa (214 dB)"),
+}
+
+
+def validate_plausible(name: str, value: object, quantity: str | None = None) -> float:
+    """Return ``value`` as a float within the plausible range of ``quantity`` (default ``name``)
+    declared in :data:`PLAUSIBLE`; one line naming the value and the range otherwise."""
+    lo, hi, unit, why = PLAUSIBLE[quantity or name]
+    return validate_in_range(name, value, lo, hi, unit, why=why)
 
 
 _RANGE_RE = re.compile(r"^\s*([^:]+):([^:]+):([^:]+)\s*$")
@@ -230,5 +324,5 @@ def parse_range(name: str, text: str | Sequence[float] | float) -> NDArray[np.fl
         raise InputError(f"Parameter {name}={text!r}: the point count N={n} must be >= 1.")
     if n == 1 and start != stop:
         raise InputError(f"Parameter {name}={text!r}: one point needs START == STOP.")
-    check_memory(32.0 * n, f"Parameter {name}={text!r} ({n} points)")  # the grid and its derived coordinates
+    check_budget(f"Parameter {name}={text!r}", points=n, nbytes=32.0 * n)  # the grid, derived coordinates
     return np.linspace(start, stop, n)

@@ -131,6 +131,9 @@ def _connect(distributed, address: str):
     if error is not None:
         if isinstance(error, OSError | TimeoutError | ValueError | TypeError):
             raise InputError(f"Cannot reach the Dask scheduler {address!r}: {error}") from error
+        if isinstance(error, Exception):  # e.g. a frame length read from another service's bytes: MemoryError
+            raise InputError(f"The server at {address!r} does not speak Dask's protocol (is a Dask scheduler "
+                             f"listening there?): {type(error).__name__}: {error}") from error
         raise error
     return result["client"]
 

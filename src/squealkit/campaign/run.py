@@ -77,6 +77,18 @@ def _channel_mean(path: str, channel: str) -> float:
     return total / src.n_samples
 
 
+def _check_options(crit: Any, radius: float, rpm: float | None, options: dict[str, Any]) -> None:
+    """The analysis options every application shares, checked once as :func:`analyze_recording`
+    checks them (what depends on a recording, its sample rate, is checked per application)."""
+    from ..measurement.analysis import AnalysisSettings
+
+    try:
+        settings = AnalysisSettings(rpm=rpm, radius=radius, criteria=crit, **options)  # type: ignore[arg-type]
+    except TypeError as e:
+        raise InputError(f"Unknown analysis option: {e}") from e
+    settings.validated()
+
+
 def run_campaign(
     matrix: str | Path,
     out: str | Path,
@@ -151,6 +163,7 @@ def run_campaign(
 
     crit = squeal_criteria(setup, band=band, threshold_dba=threshold_dba, time_weighting=time_weighting,
                            min_duration=min_duration)
+    _check_options(crit, radius, rpm, options)  # bad options: refused before anything is read or written
     apps = read_matrix(matrix)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

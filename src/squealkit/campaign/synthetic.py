@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import InputError
+from .._validation import InputError, check_budget, validate_positive
 
 __all__ = ["SQUEAL_RULES", "synthetic_campaign"]
 
@@ -45,6 +45,10 @@ def _lines(temperature_c: float, pressure_bar: float) -> list[float]:
     if pressure_bar >= 30:
         out.append(12500.0)
     return out
+
+
+#: A lower bound of the time one application takes besides its samples (files, truth) [s].
+_SECONDS_PER_APPLICATION = 0.01
 
 
 def synthetic_campaign(
@@ -87,6 +91,12 @@ def synthetic_campaign(
 
     if not isinstance(n_applications, int) or n_applications < 1:
         raise InputError(f"Parameter n_applications={n_applications!r} must be a whole number >= 1.")
+    from ..measurement.synthetic import SECONDS_PER_SAMPLE
+
+    check_budget(f"A synthetic campaign of {n_applications} applications", points=n_applications,
+                 seconds=n_applications * (validate_positive("duration", duration) * validate_positive("fs", fs)
+                                           * SECONDS_PER_SAMPLE + _SECONDS_PER_APPLICATION),
+                 hint="Use fewer applications.")
     out = Path(out)
     (out / "recordings").mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(seed)

@@ -237,6 +237,20 @@ def friction_options(f: F) -> F:
     return f
 
 
+def refuse_options(names: tuple[str, ...], why: str) -> None:
+    """Refuse options the user gave that would do nothing in this mode, before any work.
+
+    ``names`` are the options' parameter names (``"mu_max"``); the first given on the command
+    line is named in one line with ``why`` (when it applies), e.g. ``--mu-max applies to FE
+    models only``. Every command that ignores options in some mode says so through here,
+    never by silence.
+    """
+    ctx = click.get_current_context()
+    for param in ctx.command.params:
+        if param.name in names and ctx.get_parameter_source(param.name) == click.core.ParameterSource.COMMANDLINE:
+            raise InputError(f"{param.opts[0]} {why}.")
+
+
 def parse_stribeck(spec: str | None):
     """The Stribeck law of ``--stribeck MU_STATIC,V_STRIBECK``, or None without it."""
     from ..models.friction import Stribeck
@@ -260,8 +274,7 @@ def friction_from_options(ctx: click.Context, stribeck_spec: str | None, speed: 
     """
     law = parse_stribeck(stribeck_spec)
     if law is None:
-        if ctx.get_parameter_source("speed") == click.core.ParameterSource.COMMANDLINE:
-            raise InputError("--speed only matters with --stribeck (speed-dependent friction); add --stribeck.")
+        refuse_options(("speed",), "only matters with --stribeck (speed-dependent friction); add --stribeck")
         return {}
     return {"friction": law, "speed": speed}
 

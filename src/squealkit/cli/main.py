@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import errno
 import importlib
+import io
 import os
 import signal
 import sys
@@ -106,6 +107,8 @@ class SquealkitGroup(click.Group):
             for sig in (signal.SIGINT, signal.SIGTERM):
                 handlers[sig] = signal.signal(sig, _on_signal)
         PENDING_NOTES.clear()
+        if sys.stdout is None:  # fd 1 closed ('>&-'): output fails as one line, like a full stdout
+            sys.stdout = _ClosedStdout()
         try:
             rv = super().main(
                 args, prog_name or "squealkit", complete_var, standalone_mode=False, **extra
@@ -208,6 +211,16 @@ def _on_stdout(e: OSError) -> bool:
                 return False
         tb = tb.tb_next
     return False
+
+
+class _ClosedStdout(io.TextIOBase):
+    """Stands for a standard output that was closed before the run: writing to it fails."""
+
+    def write(self, s: str) -> int:
+        raise OSError(errno.EBADF, "cannot write to standard output (it is closed)")
+
+    def fileno(self) -> int:
+        raise OSError(errno.EBADF, "standard output is closed")
 
 
 def _silence_stdout() -> None:

@@ -35,4 +35,5 @@ def presets(as_json: bool) -> None:
     for name, entry in out.items():
         click.echo(f"{name}: {entry['description']}")
         for k, p in entry["parameters"].items():
-            click.echo(f"  {k:<8} = {p['value']:<14.6g} [{p['unit']}]  {p['doc']}")
+            value = f"{p['value']:.6g}" if isinstance(p["value"], int | float) else str(p["value"])
+            click.echo(f"  {k:<8} = {value:<14} [{p['unit']}]  {p['doc']}")

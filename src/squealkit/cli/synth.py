@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ._options import PROBE_RADIUS, check_output_suffix, emit_json
+from ._options import PROBE_RADIUS, check_output_suffix, emit_json, refuse_options
 
 
 @click.command()
@@ -63,8 +63,13 @@ def synth(out: Path, seed: int, duration: float, fs: float, rpm: float, rpm_end:
     if n_campaign is not None:
         from ..campaign import synthetic_campaign
 
+        # each application draws its own speed and squeal lines; a --level-dba given sets every line's level
+        given = click.get_current_context().get_parameter_source("level_dba") == click.core.ParameterSource.COMMANDLINE
+        level = {"level_dba": level_dba} if given else {}
+        refuse_options(("rpm", "rpm_end", "probe_offset_deg", "polarity", "acoustic_delay", "tacho_ppr", "radius",
+                        "freq", "squeal_on"), "describes one recording; a --campaign draws each application's own")
         truth = synthetic_campaign(out, n_applications=n_campaign, duration=duration, fs=fs, suffix=fmt, seed=seed,
-                                   condition_channels=condition_channels)
+                                   condition_channels=condition_channels, **level)
         if as_json:
             emit_json({k: v for k, v in truth.items() if k != "by_application"} | {"out": str(out)})
         else:
@@ -73,6 +78,7 @@ def synth(out: Path, seed: int, duration: float, fs: float, rpm: float, rpm_end:
                        + ", ".join(f"{float(k):g} Hz {v:.1f} %" for k, v in truth["line_occurrence_percent"].items()))
         return
 
+    refuse_options(("fmt", "condition_channels"), "applies to a --campaign only (a recording's format is OUT's suffix)")
     check_output_suffix(out, FORMATS, "OUT")
     from ..io import check_output
 

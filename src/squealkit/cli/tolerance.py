@@ -16,6 +16,7 @@ from ._options import (
     model_options,
     note_damping,
     output_options,
+    refuse_options,
 )
 
 #: Slopes are searched up to this incline [deg] (runout_tolerance's slope_max).
@@ -119,6 +120,10 @@ def tolerance(preset, config, sets, mu_spec, wavelength, damped, rpm_spec, band_
     note_damping(model, damped)
     mus = parse_range("--mu", mu_spec)
     fe = fe_kwargs_from_options(model, rpm_spec, band_spec, method, n_modes)
+    if not fe:
+        refuse_options(("mu_max",), 'applies to FE models only (model = "fe" in the --config file)')
+    else:
+        refuse_options(("damped",), "applies to the small models only (an FE model's damping is its D1 matrix)")
     if fe:
         if out_path is not None or plot_path is not None:
             raise InputError("--out and --plot are for the small models; for FE models use 'squealkit stability "

@@ -24,7 +24,7 @@ from scipy import signal
 
 from .. import __version__
 from .._threads import thread_limit
-from .._validation import InputError, validate_fs, validate_positive
+from .._validation import PLAUSIBLE, InputError, validate_fs, validate_plausible, validate_positive
 from .criteria import SquealCriteria, band_weighted_signal, exponential_average, squeal_criteria
 from .events import DEFAULT_MIN_TNR_DB, SquealEvent, link_components, tonal_components, tone_to_noise_ratio
 from .filters import lowpass, lowpass_decimated
@@ -121,13 +121,14 @@ class AnalysisSettings:
         """Shortest tonal event [s] of the criteria."""
         return self.criteria.min_duration
 
-    def validated(self, fs: float) -> AnalysisSettings:
+    def validated(self, fs: float | None = None) -> AnalysisSettings:
         """These settings, checked against each other and the sample rate.
 
         Parameters
         ----------
-        fs : float
-            Sample rate [Hz] of the recording (the band must lie below ``fs / 2``).
+        fs : float, optional
+            Sample rate [Hz] of the recording (the band must lie below ``fs / 2``); None
+            checks what does not depend on the recording (e.g. a campaign's options up front).
 
         Returns
         -------
@@ -139,16 +140,23 @@ class AnalysisSettings:
         InputError
             If a setting is out of range.
         """
-        if not math.isnan(self.rpm):  # NaN: no disc speed, the run-out link left out (require_runout=False)
-            validate_positive("rpm", self.rpm)
+        # None or NaN: no disc speed here (a campaign's comes from each application or its tacho;
+        # require_runout=False leaves the run-out link out)
+        if self.rpm is not None and not math.isnan(self.rpm):
+            validate_plausible("rpm", self.rpm)
         validate_positive("radius", self.radius)
         validate_positive("chunk_s", self.chunk_s)
-        validate_positive("acoustic_delay", self.acoustic_delay, allow_zero=True)
+        validate_plausible("acoustic_delay", self.acoustic_delay)
+        if self.tacho_kind not in ("pulses", "angle"):
+            raise InputError(f"Parameter tacho_kind={self.tacho_kind!r} must be 'pulses' or 'angle'.")
+        if isinstance(self.pulses_per_rev, bool) or not isinstance(self.pulses_per_rev, int | np.integer) \
+                or self.pulses_per_rev < 1:
+            raise InputError(f"Parameter pulses_per_rev={self.pulses_per_rev!r} must be a whole number >= 1.")
         if self.polarity not in (1, -1):
             raise InputError(f"Parameter polarity={self.polarity!r} must be 1 or -1 (probe reading reversed).")
         if not math.isfinite(self.probe_offset_deg) or abs(self.probe_offset_deg) >= 360:
             raise InputError(f"Parameter probe_offset_deg={self.probe_offset_deg!r} must lie in (-360, 360).")
-        if self.band[1] >= fs / 2:
+        if fs is not None and self.band[1] >= fs / 2:
             raise InputError(f"Parameter band={self.band!r}: upper edge must lie below fs/2 = {fs / 2:g} Hz.")
         if not (isinstance(self.nperseg, int) and self.nperseg >= 16):
             raise InputError(f"Parameter nperseg={self.nperseg!r} must be a whole number >= 16.")
@@ -158,6 +166,17 @@ class AnalysisSettings:
         if not (isinstance(self.hop, int) and 1 <= self.hop <= self.nperseg):
             raise InputError(f"Parameter hop={self.hop!r} must be a whole number in [1, nperseg].")
         return self
+
+
+def _check_pressure(channel: str, p: NDArray) -> None:
+    """One line for a microphone channel whose samples no sound in air has (e.g. 1e299 Pa: a
+    unit or scaling mistake), before they overflow the single-precision level computation."""
+    hi = PLAUSIBLE["pressure_pa"][1]
+    big = float(np.max(np.abs(p), initial=0.0))
+    if big > hi:
+        raise InputError(f"Microphone channel {channel!r} holds a sound pressure of {big:.3g} Pa, outside the "
+                         f"accepted range [-{hi:g}, {hi:g}] Pa ({PLAUSIBLE['pressure_pa'][3]}): check the channel's "
+                         "unit or scale.")
 
 
 @dataclass(frozen=True)
@@ -1377,6 +1396,7 @@ def analyze_recording(
     wanted = [mic_n] if rotation is None else [mic_n, disp_n]  # no speed: the probe is not read
     for c0, c1, w0, data in _windows(src, wanted, plan.core, plan.margin, block):
         win = _Window.at(plan, c0, c1, w0)
+        _check_pressure(mic_n, data[mic_n])
         p = data[mic_n].astype(np.float32)  # the band level and the frames: single precision
         ms = _band_level(plan, s, win, p, acc)
         if win.f1 > win.f0:

@@ -21,7 +21,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
-from .._validation import InputError, check_memory, validate_fs, validate_positive
+from .._validation import InputError, check_budget, check_memory, validate_fs, validate_plausible, validate_positive
 from .criteria import P_REF, a_weighting_db, exponential_average
 from .readers import DEFAULT_BLOCK, RecordingSource, recording_dataset
 
@@ -29,6 +29,8 @@ __all__ = ["SyntheticSource", "synthetic_attrs", "synthetic_recording"]
 
 _N_ANGLE = 8192  # envelope samples per revolution
 _TRUTH_BLOCK = 1 << 18  # points of the truth's level grid per block
+#: A lower bound of the time to generate and write one sample of every channel [s] (work budget).
+SECONDS_PER_SAMPLE = 1e-7
 
 
 @dataclass(frozen=True)
@@ -411,6 +413,9 @@ def synthetic_source(
         raise InputError(f"Squeal freq={freq!r} Hz and its harmonics must lie below fs/2 = {fs / 2:g} Hz.")
     if squeal_on not in ("rising", "falling", "none"):
         raise InputError(f"Parameter squeal_on={squeal_on!r} must be 'rising', 'falling' or 'none'.")
+    level_dba = validate_plausible("level_dba", level_dba)
+    check_budget(f"A synthetic recording of {duration:g} s at {fs:g} Hz", seconds=duration * fs * SECONDS_PER_SAMPLE,
+                 hint="Use a shorter duration or a lower fs.")
     n_samples = round(duration * fs)
     if n_samples < 2:
         raise InputError(f"Parameter duration={duration!r} s gives fewer than 2 samples at fs={fs!r}.")

@@ -54,13 +54,16 @@ _FLOQUET_STEP = 0.1
 
 
 def _sample(Z: NDArray, n_samples: int) -> NDArray:
-    """The Fourier series ``[a_0, a_1..a_H, b_1..b_H]`` (2H+1, n) at ``tau_j = 2 pi j / n_samples``
-    (n_samples > 2H), by inverse real FFT."""
+    """The Fourier series ``[a_0, a_1..a_H, b_1..b_H]`` (2H+1, n) at ``tau_j = 2 pi j / n_samples``,
+    by inverse real FFT (on a finer grid of m n_samples > 2H + 1 points when n_samples is too few
+    to carry H harmonics, of which every m-th point is these instants: exact, no aliasing)."""
     H = (Z.shape[0] - 1) // 2
-    c = np.zeros((n_samples // 2 + 1, Z.shape[1]), complex)
+    m = -(-(2 * H + 2) // n_samples)
+    N = m * n_samples
+    c = np.zeros((N // 2 + 1, Z.shape[1]), complex)
     c[0] = Z[0]
     c[1:H + 1] = 0.5 * (Z[1:H + 1] - 1j * Z[H + 1:])
-    return np.fft.irfft(c, n_samples, axis=0, norm="forward")
+    return np.fft.irfft(c, N, axis=0, norm="forward")[::m]
 
 
 def _variational(system: SecondOrderSystem, cycle: LimitCycle, n_samples: int) -> NDArray:

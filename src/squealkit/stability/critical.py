@@ -22,7 +22,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
 from .._threads import honour_thread_limit
-from .._validation import InputError, validate_array_finite, validate_finite, validate_model, validate_positive
+from .._validation import (
+    InputError,
+    validate_array_finite,
+    validate_finite,
+    validate_model,
+    validate_plausible,
+    validate_positive,
+)
 from ..models import FrictionModel
 from ..models._base import resolve_damped
 from ..models.friction import Stribeck, validate_friction
@@ -194,7 +201,7 @@ def critical_friction_curve(
         raise InputError("theta must be a number or a 1-D array.")
     if np.any(np.abs(th) >= math.pi / 2):
         raise InputError("Parameter theta must lie strictly between -90 and 90 deg.")
-    mu_max = validate_positive("mu_max", mu_max)
+    mu_max = validate_plausible("mu_max", validate_positive("mu_max", mu_max), "friction")
     t = np.tan(th)
     B = t.size
     evaluate = _evaluator(model, damped, None, t, fr)

@@ -18,8 +18,15 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
-from .._threads import honour_thread_limit, limit_threads, threads_for
-from .._validation import InputError, check_memory, validate_array_finite, validate_dataset, validate_model
+from .._threads import honour_thread_limit, limit_threads, thread_limit, threads_for
+from .._validation import (
+    InputError,
+    check_budget,
+    check_memory,
+    validate_array_finite,
+    validate_dataset,
+    validate_model,
+)
 from ..models import FEModel, FrictionModel
 from ..models._base import resolve_damped
 from ..models.friction import Stribeck, validate_friction
@@ -54,6 +61,9 @@ _CHUNK = 4096
 _BLOCK = 1 << 18
 #: Grid points per tile of a streamed (zarr) or distributed sweep.
 _TILE_POINTS = 1 << 20
+#: A lower bound of the time of one map point of a 3-DOF model [s] (measured 3-5.5 us on one
+#: thread, streamed to zarr included), for the work budget.
+_SECONDS_PER_POINT = 1e-6
 
 
 @lru_cache(maxsize=8)
@@ -131,6 +141,25 @@ def check_magnitudes(M: NDArray, C: NDArray, K0: NDArray, Kn: NDArray, Kf: NDArr
                              f"{_MAX_MAGNITUDE:g} {unit}: no physical model has it (check the parameters' units).")
 
 
+def check_contact_factors(Kn: NDArray, Kf: NDArray, g: NDArray, e: NDArray,
+                          slope: tuple[NDArray, NDArray, NDArray] | None = None) -> None:
+    """One-line error, before the compiled kernels, for contact factors that make the stiffness
+    overflow: ``g Kn`` and ``e Kf`` (``g = 1 - mu tan(theta)``, ``e = s (mu + tan(theta))``)
+    beyond :data:`_MAX_MAGNITUDE` N/m, e.g. at ``mu = 1e300``; the kernels would meet inf/NaN."""
+    for name, f, K, what in (("friction", e, Kf, "mu + tan(theta)"), ("normal-contact", g, Kn, "1 - mu tan(theta)")):
+        if f.size == 0:
+            continue
+        i = int(np.argmax(np.abs(f)))
+        worst = abs(float(f.flat[i]))
+        scale = float(np.max(np.abs(K))) if K.size else 0.0
+        if slope is not None:
+            scale *= 1.0 + float(np.max(np.abs(slope[2]), initial=0.0))
+        if not math.isfinite(worst) or worst * scale > _MAX_MAGNITUDE:
+            raise InputError(f"The contact factor {what} = {worst:.3g} makes the {name} stiffness reach "
+                             f"{worst * scale:.3g} N/m, above {_MAX_MAGNITUDE:g} N/m: no physical model has it "
+                             "(check mu and theta).")
+
+
 def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int, high_precision: bool = True,
                  out: tuple[NDArray, ...] | None = None, work: dict | None = None,
                  slope: tuple[NDArray, NDArray, NDArray] | None = None):
@@ -143,6 +172,7 @@ def _solve_block(mats: tuple[NDArray, ...], g: NDArray, e: NDArray, row: int, hi
     ``K = K0 + g Kn + e Kf + st[i] (g Knx + e Kfx)`` (``st = s tan(theta)``).
     """
     M, C, K0, Kn, Kf = mats
+    check_contact_factors(Kn, Kf, g, e, slope)
     if M.shape[0] > 1:
         res = _solve_each(mats, g, e, high_precision)
         if out is not None:
@@ -199,6 +229,7 @@ def _solve_models(mats: tuple[NDArray, ...], which: NDArray, g: NDArray, e: NDAr
     n = mats[0].shape[-1]
     P = g.shape[0]
     M, C, K0, Kn, Kf = mats
+    check_contact_factors(Kn, Kf, g, e)
     if n > _KERNEL_MAX_DOF:
         K = K0[which] + g[:, None, None] * Kn[which] + e[:, None, None] * Kf[which]
         roots, radii = lapack_roots(M[which], C[which], K)
@@ -516,6 +547,10 @@ def stability_map(
         raise InputError("Parameter theta must lie strictly between -90 and 90 deg.")
     tan_t = np.tan(th_a)
     n = model.n_dof
+    points = float(mu_a.size) * th_a.size
+    check_budget(f"A stability map of {mu_a.size} x {th_a.size} points", points=points,
+                 seconds=points * _SECONDS_PER_POINT * (n / 3) ** 3 / thread_limit(),
+                 hint="Use a coarser grid, or split the range into several runs.")
     if store is None:
         # measured peak about 230-450 bytes per point for 3 DOF (results, tracking, labels)
         check_memory(mu_a.size * th_a.size * (110.0 * n + 64.0), f"A stability map of {mu_a.size} x {th_a.size} points",

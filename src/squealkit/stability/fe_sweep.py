@@ -25,7 +25,15 @@ from threadpoolctl import threadpool_limits
 
 from .. import __version__
 from .._threads import honour_thread_limit, thread_limit
-from .._validation import InputError, validate_angle, validate_array_finite, validate_model, validate_positive
+from .._validation import (
+    InputError,
+    check_budget,
+    validate_angle,
+    validate_array_finite,
+    validate_model,
+    validate_plausible,
+    validate_positive,
+)
 from ..models.fe import FEModel, rpm_to_omega
 from . import reduction
 from ._kernels import derived_quantities
@@ -145,6 +153,21 @@ def _validate_grid(name: str, values: ArrayLike) -> NDArray[np.float64]:
     return a
 
 
+def _check_work(model: FEModel, method: str, what: str, points: float, solves: float) -> None:
+    """Refuse an FE sweep beyond the run's budget before any solve (:func:`~squealkit._validation.check_budget`).
+
+    A lower bound of one operating point's cost: a dense solve of the 2n x 2n pencil (about
+    25 (2n)^3 flops at 1e11 flop/s), at least 1 ms for a sparse band solve, 0.1 ms for a
+    reduced one; at least 200 bytes of results per point.
+    """
+    n = model.n_dof
+    if method == "auto":
+        method = "dense" if n <= DENSE_MAX_DOF else "sparse"
+    per = {"dense": max(1e-5, 2.5e-10 * (2 * n) ** 3), "sparse": 1e-3}.get(method, 1e-4)
+    check_budget(what, points=points, nbytes=200.0 * points, seconds=solves * per / thread_limit(),
+                 hint="Use fewer points (--rpm/--mu START:STOP:N).")
+
+
 def _tan_theta(theta: float) -> float:
     return math.tan(validate_angle("theta", theta))
 
@@ -222,6 +245,8 @@ def fe_stability_map(
     rpm_a = _validate_grid("rpm", rpm)
     mu_a = _validate_grid("mu", model.mu_ref if mu is None else mu)
     t = _tan_theta(theta)
+    n_r, n_m = rpm_a.size, mu_a.size
+    _check_work(model, method, f"An FE map of {n_r} speeds x {n_m} frictions", float(n_r) * n_m, float(n_r) * n_m)
     omegas = rpm_to_omega(rpm_a)
     samples = None
     if method == "pod":
@@ -508,10 +533,12 @@ def fe_critical_friction(
     """
     validate_model(model, kind="fe")
     rpm_a = _validate_grid("rpm", rpm)
-    mu_max = validate_positive("mu_max", 2.0 * model.mu_ref if mu_max is None else mu_max)
+    mu_max = validate_plausible("mu_max", validate_positive("mu_max", 2.0 * model.mu_ref if mu_max is None else mu_max),
+                                "friction")
     t = _tan_theta(theta)
     if isinstance(n_scan, bool) or int(n_scan) != n_scan or n_scan < 2:
         raise InputError(f"Parameter n_scan={n_scan!r} must be an integer >= 2.")
+    _check_work(model, method, f"An FE onset search at {rpm_a.size} speeds", rpm_a.size, rpm_a.size * float(n_scan))
     omegas = rpm_to_omega(rpm_a)
     # the middle speed, as fe_stability_map; three frictions over the search range (one band
     # solve per speed instead cost as much as the searches it was to speed up)

@@ -26,8 +26,14 @@ import xarray as xr
 from numpy.typing import ArrayLike
 
 from .. import __version__
-from .._threads import limit_threads, threads_for
-from .._validation import InputError, validate_array_finite, validate_positive
+from .._threads import limit_threads, thread_limit, threads_for
+from .._validation import (
+    InputError,
+    check_budget,
+    validate_array_finite,
+    validate_plausible,
+    validate_positive,
+)
 from ..models import FrictionModel
 from ..stability.eigen import eigenvalues
 from . import _kernels
@@ -41,6 +47,8 @@ _SLOPE_SAMPLES = 8192
 _STEP_FACTOR = 0.05
 #: Samples per period of the frozen-time average.
 _FROZEN_SAMPLES = 512
+#: A lower bound of one RK4 step of one case's monodromy matrix (3 DOF) [s], for the work budget.
+_SECONDS_PER_STEP = 1e-7
 
 
 @dataclass(frozen=True)
@@ -105,14 +113,21 @@ def _steps(model: FrictionModel, mu: np.ndarray, period: float, damped: bool, st
             raise InputError(f"Parameter steps_per_period={steps!r} must be an integer >= 16.")
         return steps
     wmax = float(np.abs(eigenvalues(model, np.unique(mu), 0.0, damped=damped)).max())
-    return max(64, math.ceil(period * wmax / _STEP_FACTOR))
+    need = period * wmax / _STEP_FACTOR
+    return max(64, math.ceil(need)) if math.isfinite(need) else need  # infinite: refused by the work budget
 
 
 def _exponents(model, mu, amplitude, wavelength, speed, damped, steps):
     """Floquet exponents, multipliers and frozen-time statistics over flat arrays mu, amplitude."""
     period = wavelength / speed
     B = mu.size
+    n = model.n_dof
+    check_budget(f"A Floquet analysis of {B} cases", points=B,
+                 nbytes=B * (8.0 * (4 * n * n + 6 * n) + 8.0 * (_SLOPE_SAMPLES + 4 * _FROZEN_SAMPLES * n)))
     n_steps = _steps(model, mu, period, damped, steps)
+    check_budget(f"A Floquet analysis of {B} cases of {n_steps:.3g} steps per period (period {period:.3g} s)",
+                 seconds=B * n_steps * _SECONDS_PER_STEP * (n / 3) ** 3 / thread_limit(),
+                 hint="Raise the sliding speed or shorten the run-out wavelength (the period is wavelength/speed).")
     phase = np.arange(_SLOPE_SAMPLES) / _SLOPE_SAMPLES
     unit = SineRunOut(1.0, wavelength).evaluate(phase * wavelength)[1]  # slope of q0 = 1 m
     tg = np.ascontiguousarray(amplitude[:, None] * unit[None, :])
@@ -122,6 +137,11 @@ def _exponents(model, mu, amplitude, wavelength, speed, damped, steps):
     out = np.empty((B, 2 * model.n_dof, 2 * model.n_dof))
     with limit_threads(threads_for(B, serial_below=2)):
         _kernels.monodromy(tg, np.ascontiguousarray(mu, dtype=float), s, kin, *arrays, period, n_steps, out)
+    bad = ~np.all(np.isfinite(out), axis=(-2, -1))
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        raise InputError(f"The motion at mu={mu[i]:g}, amplitude={amplitude[i]:g} m grows beyond double precision "
+                         f"within one period ({period:.3g} s): no Floquet exponent; use a smaller run-out amplitude.")
     mult = np.linalg.eigvals(out)
     order = np.argsort(-np.abs(mult), axis=-1)
     mult = np.take_along_axis(mult, order, axis=-1)
@@ -135,7 +155,8 @@ def _exponents(model, mu, amplitude, wavelength, speed, damped, steps):
 def _validate(model, wavelength, speed):
     if not isinstance(model, FrictionModel):
         raise InputError(f"Parameter model must be a squealkit FrictionModel; got {type(model).__name__}.")
-    return validate_positive("wavelength", wavelength), validate_positive("speed", speed)
+    speed = validate_positive("speed", speed)
+    return validate_positive("wavelength", wavelength), validate_plausible("speed", speed)
 
 
 def floquet(model: FrictionModel, *, mu: float, amplitude: float, wavelength: float, speed: float,
@@ -171,7 +192,7 @@ def floquet(model: FrictionModel, *, mu: float, amplitude: float, wavelength: fl
     """
     wavelength, speed = _validate(model, wavelength, speed)
     mu_a = np.array([float(validate_array_finite("mu", mu))])
-    amp = np.array([validate_positive("amplitude", amplitude, allow_zero=True)])
+    amp = np.array([validate_plausible("amplitude", amplitude, "runout_amplitude")])
     rho, mult, mean, top, n_steps, period = _exponents(model, mu_a, amp, wavelength, speed, damped, steps_per_period)
     return FloquetResult(float(mu_a[0]), float(amp[0]), wavelength, speed, period, float(rho[0]), float(mean[0]),
                          float(top[0]), tuple(complex(z) for z in mult[0]), n_steps, damped)
@@ -198,6 +219,9 @@ def floquet_map(model: FrictionModel, *, mu: ArrayLike, amplitude: ArrayLike, wa
     amp = np.atleast_1d(validate_array_finite("amplitude", amplitude)).astype(float)
     if mu_a.ndim != 1 or amp.ndim != 1 or np.any(amp < 0):
         raise InputError("mu and amplitude must be 1-D grids, amplitude >= 0.")
+    for a in amp:
+        validate_plausible("amplitude", a, "runout_amplitude")
+    check_budget(f"A Floquet map of {mu_a.size} x {amp.size} cases", points=float(mu_a.size) * amp.size)
     M, Q = np.meshgrid(mu_a, amp, indexing="ij")
     rho, _mult, mean, top, n_steps, period = _exponents(model, M.ravel(), Q.ravel(), wavelength, speed, damped,
                                                         steps_per_period)

@@ -38,14 +38,16 @@ import xarray as xr
 from numpy.typing import ArrayLike
 
 from .._deprecation import renamed_kwargs
-from .._threads import limit_threads, threads_for
+from .._threads import limit_threads, thread_limit, threads_for
 from .._validation import (
     InputError,
+    check_budget,
     check_memory,
     validate_dataset,
     validate_finite,
     validate_fs,
     validate_model,
+    validate_plausible,
     validate_positive,
 )
 from ..models import FrictionModel
@@ -71,6 +73,8 @@ _FORCING_PER_SAMPLE = 4
 _CHUNK_SAMPLES = 1 << 14
 #: Events recorded per run (contact loss/closure, stick/slip); later ones are counted only.
 _MAX_EVENTS = 4096
+#: A lower bound of the time of one integration step of one 3-DOF run [s] (for the work budget).
+_SECONDS_PER_STEP = 2e-7
 METHODS = ("dopri5", "rosenbrock", "rk4")
 _EVENT_NAMES = {1: "contact_opens", 2: "contact_closes", 3: "stick", 4: "slip"}
 _STATUS = {0: "completed", 1: "diverged", 2: "failed"}
@@ -218,8 +222,7 @@ def step_bound(model: FrictionModel, *, mu: float, contact: Contact | str = "lin
     True
     """
     validate_model(model)
-    run = _Run(_validate_model(model), validate_finite("mu", mu), Smooth(), validate_positive("speed", speed,
-                                                                                              allow_zero=True))
+    run = _Run(_validate_model(model), validate_finite("mu", mu), Smooth(), validate_plausible("speed", speed))
     return _bounds([run], as_contact(contact), _validate_method(method))
 
 
@@ -337,6 +340,12 @@ def _prepare(
     _check_sampling(fs, bounds["omega_max"])
     n_steps = (n_out - 1) * stride
     t_end = (n_out - 1) / fs
+    # adaptive methods take at least t_end / dt_max steps; a step of R runs costs at least
+    # _SECONDS_PER_STEP (n / 3)^2 each (measured 0.8-2.3 us on the 3-DOF paper model)
+    least = max(n_steps if method == "rk4" else 0, t_end / dt)
+    check_budget(f"A transient run of {t_end:.6g} s ({least:.3g} steps" + (f" x {len(runs)} runs)" if len(runs) > 1
+                 else ")"), seconds=len(runs) * least * _SECONDS_PER_STEP * (n / 3) ** 2 / thread_limit(),
+                 hint="Use a shorter duration.")
     for run in runs:
         run.profile.check_range(min(x_start, x_start + run.speed * t_end), max(x_start, x_start + run.speed * t_end))
 
@@ -624,7 +633,7 @@ def _as_runs(models, mus, profiles, speeds) -> list[_Run]:
                 _validate_model(pick(models, i)),
                 validate_finite("mu", pick(mus, i)),
                 profile,
-                validate_positive("speed", pick(speeds, i), allow_zero=True),
+                validate_plausible("speed", pick(speeds, i)),
             )
         )
     return out
