@@ -19,6 +19,9 @@ from .html import render_html
 
 __all__ = ["RecordingSpec", "ReproduceResult", "reproduce"]
 
+#: What a report writes in its folder: with ``force``, a file of the user's among them is refused up front.
+REPORT_FILES = ("report.html", "figures", "data")
+
 Step = Callable[[Path, Path], Section]
 
 
@@ -151,7 +154,7 @@ def reproduce(
     ReproduceResult
     """
     out = Path(out_dir)
-    check_output(out, directory=True, force=force)  # before the work, not after
+    check_output(out, directory=True, force=force, names=REPORT_FILES)  # before the work, not after
     default = model is None
     model = get_preset("lv2013") if model is None else model
     if rig is None and default:
