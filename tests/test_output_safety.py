@@ -381,3 +381,35 @@ def test_campaign_interrupted_in_its_report_writes_no_summary(tmp_path, small_ca
     assert code == 130, err
     # the database stays (a re-run resumes it) and is squealkit's; nothing of the unfinished report
     assert sorted(n for n in os.listdir(cwd / "o") if not n.endswith(".wal")) == [MANIFEST, "campaign.duckdb"]
+
+
+# ---------------------------------------------------------------------------------------------
+# A full disk: one line, exit 2, nothing left (it used to end in SIGSEGV, exit 139)
+
+
+@pytest.fixture(scope="module")
+def tiny_disk(tmp_path_factory):
+    """A 5 MB tmpfs (as in the adversarial round); skipped where mounting needs rights we lack."""
+    d = tmp_path_factory.mktemp("tiny")
+    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=5m", "tmpfs", str(d)], capture_output=True)
+    if r.returncode != 0:
+        pytest.skip("mounting a small tmpfs needs root")
+    yield d
+    subprocess.run(["umount", "-l", str(d)], check=False)
+
+
+@pytest.mark.parametrize("args", [
+    ["stability", "--mu", "0:0.8:401", "--theta", "-8:8:401", "--out", "{d}/m.nc"],  # full-stab-nc
+    ["simulate", "--duration", "3", "--out", "{d}/s.nc", "--json"],  # full-sim-nc: streamed, block by block
+    ["simulate", "--duration", "3", "--out", "{d}/s.zarr", "--json"],  # full-sim-zarr: '.part/zarr.json' stayed
+    ["synth", "{d}/r.uff", "--duration", "5"],  # full-synth-uff: pyuff's raw traceback
+    ["synth", "{d}/camp", "--campaign", "30", "--duration", "1", "--json"],  # full-synth-campaign
+], ids=["stability-nc", "simulate-nc", "simulate-zarr", "synth-uff", "synth-campaign"])
+def test_a_full_disk_is_one_line_and_leaves_nothing(tiny_disk, args):
+    for p in tiny_disk.iterdir():
+        subprocess.run(["rm", "-rf", str(p)], check=True)
+    r = subprocess.run([*SQUEALKIT, *(a.format(d=tiny_disk) for a in args)], env=ENV, capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 2, (r.returncode, r.stderr[-2000:])
+    assert "no space left" in _one_line(r)
+    assert os.listdir(tiny_disk) == []

@@ -663,6 +663,7 @@ def save_dataset(ds: xr.Dataset, path: str | Path) -> Path:
         if engine == "zarr":
             ds.to_zarr(tmp, mode="w", consolidated=False)
         else:
+            _check_space(tmp, final, ds.nbytes)
             ds.to_netcdf(tmp, engine="h5netcdf")
     return final
 
@@ -700,6 +701,8 @@ def save_blocks(blocks: Iterable[xr.Dataset], path: str | Path, *, dim: str = "t
             along = block[[v for v in block.data_vars if dim in block[v].dims]]
             along = along.drop_vars([c for c in along.coords if dim not in along[c].dims])
             along.attrs = {}
+            if engine != "zarr":
+                _check_space(tmp, final, along.nbytes)
             with deferred_interrupts():
                 n = _append_block(along, tmp, engine, dim, n)
             last = block
@@ -735,6 +738,22 @@ def _hdf5_errors(tmp: Path, final: Path) -> Iterator[None]:
             code = int(found.group(1))
             raise OSError(code, os.strerror(code), str(final)) from None
         raise
+
+
+def _check_space(tmp: Path, final: Path, nbytes: int) -> None:
+    """ENOSPC now if the file system cannot take ``nbytes`` more (and HDF5's overhead).
+
+    HDF5 meets a full disk in its cache, often while freeing objects, where the error
+    cannot be raised (only printed) and the file is left broken; so a netCDF write is not
+    started without the room for it.
+    """
+    try:
+        st = os.statvfs(_where(tmp))
+    except (OSError, AttributeError):  # pragma: no cover - not POSIX
+        return
+    free = st.f_bavail * st.f_frsize
+    if free < 1.05 * nbytes + (1 << 20):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(final))
 
 
 def _close_failed_hdf5(tmp: Path) -> None:
