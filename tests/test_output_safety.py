@@ -413,3 +413,74 @@ def test_a_full_disk_is_one_line_and_leaves_nothing(tiny_disk, args):
     assert r.returncode == 2, (r.returncode, r.stderr[-2000:])
     assert "no space left" in _one_line(r)
     assert os.listdir(tiny_disk) == []
+
+
+# ---------------------------------------------------------------------------------------------
+# Two runs writing one output: the second is refused in one line (or both succeed), never a traceback
+
+
+@pytest.mark.parametrize("args", [
+    ["stability", "--mu", "0:0.8:3", "--theta", "0", "--out", "same.zarr"],  # race-stab-zarr
+    ["campaign", "{camp}/matrix.csv", "--out", "same.zarr", *CAMPAIGN_OPTS, "--no-report"],  # race-campaign
+], ids=["stability", "campaign"])
+def test_an_output_being_written_is_refused_to_a_second_run(tmp_path, small_campaign, args):
+    # the first run holds same.zarr (staged, as a run holds it from its check to its end)
+    with contextlib.ExitStack() as stack:
+        stack.enter_context(atomic_path(tmp_path / "same.zarr", directory=True)).mkdir()
+        r = subprocess.run([*SQUEALKIT, *(a.format(camp=small_campaign) for a in args)], cwd=tmp_path, env=ENV,
+                           capture_output=True, text=True, timeout=300)
+        assert r.returncode == 2, r.stderr
+        assert "another squealkit run" in _one_line(r)
+    assert sorted(os.listdir(tmp_path)) == ["same.zarr"]  # the first one's output, no lock file left
+
+
+def test_two_runs_at_once_onto_one_store(tmp_path):
+    # race-stab-zarr: one run read back the store after the other had replaced it (a reshape error)
+    runs = [subprocess.Popen([*SQUEALKIT, "stability", "--mu", "0:0.8:201", "--theta", f"-8:8:{n}", "--out",
+                              "same.zarr", "--json"], cwd=tmp_path, env=ENV, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.PIPE, text=True) for n in (201, 101)]
+    results = [(p.wait(timeout=600), p.stderr.read()) for p in runs]
+    for code, err in results:
+        assert code in (0, 2) and "Traceback" not in err, err
+        assert code == 0 or "another squealkit run" in err
+    assert any(code == 0 for code, _ in results)
+    ds = xr.open_zarr(tmp_path / "same.zarr", consolidated=False)
+    assert ds.sizes["mu"] == 201 and ds.sizes["theta"] in (201, 101)
+    assert sorted(os.listdir(tmp_path)) == ["same.zarr"]
+
+
+# ---------------------------------------------------------------------------------------------
+# What libraries leave in the temporary folder
+
+
+def test_a_local_dask_cluster_leaves_no_scratch_space(tmp_path, monkeypatch):
+    # dask-local-mc, dask-local-stab: $TMPDIR/dask-scratch-space/{global.lock,purge.lock} stayed
+    import tempfile
+
+    from squealkit.scale import cluster_client
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    with cluster_client("local", n_workers=1) as client:
+        assert client.submit(abs, -3).result() == 3
+        assert any(tmp_path.rglob("dask-scratch-space"))  # it was used, in the temporary folder given
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_bad_mf4_file_leaves_no_temporary_copy(tmp_path, monkeypatch):
+    # rd-mf4-id-garbage-mf4: asammdf copies a file flagged unfinalised to $TMPDIR and left the copy there
+    # when the file then failed to read. An MDF4 identification block (ASAM MDF 4.1, 64 bytes) whose
+    # unfinalised flags (bytes 60-61) are set, followed by garbage where the header block belongs.
+    import tempfile
+
+    from squealkit.measurement import open_recording
+
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    ident = b"MDF     4.10    squealki" + bytes(4) + (410).to_bytes(2, "little") + bytes(30) + b"\x01\x00\x00\x00"
+    assert len(ident) == 64
+    bad = tmp_path / "id_garbage.mf4"
+    bad.write_bytes(ident + b"\xff" * 4096)
+    with pytest.raises(InputError, match=r"id_garbage\.mf4"):
+        open_recording(bad)
+    assert os.listdir(scratch) == []
