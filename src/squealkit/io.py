@@ -188,8 +188,7 @@ def _read_manifest(folder: Path) -> list[str]:
             doc = json.loads((folder / name).read_text(encoding="utf-8"))
             if name == ZARR_MANIFEST:
                 doc = doc["attributes"]
-            if str(doc.get("written_by", "")).startswith("squealkit"):
-                return [str(x) for x in doc.get("files", [])]
+            return [str(x) for x in doc["files"]]
         except (OSError, ValueError, AttributeError, KeyError, TypeError):
             continue
     return []
@@ -440,6 +439,12 @@ def outputs_together() -> Iterator[None]:
     SIGTERM, SIGHUP, SIGQUIT). Each output is locked from its check (:func:`check_output`)
     or first write to the end: a second squealkit run writing it is refused in one line.
     Inside, :func:`written_path` tells where an output written so far can be read.
+
+    Yields
+    ------
+    None
+        Write outputs inside (:func:`save_dataset`, :func:`save_figure`, :func:`write_text`,
+        :func:`output_folder`...); nested uses commit with the outermost.
     """
     if _run["pending"] is not None:  # the outer one commits
         yield
@@ -464,8 +469,19 @@ def outputs_together() -> Iterator[None]:
 
 
 def written_path(path: str | Path) -> Path:
-    """Where the output ``path`` can be read now: its staged copy while a run's outputs wait
-    to be moved into place together (:func:`outputs_together`), else ``path`` itself."""
+    """Where the output ``path`` can be read now.
+
+    Parameters
+    ----------
+    path : path-like
+        An output written in this run.
+
+    Returns
+    -------
+    pathlib.Path
+        Its staged copy while the run's outputs wait to be moved into place together
+        (:func:`outputs_together`), else ``path`` itself.
+    """
     final = _resolve(path)
     for item in reversed(_run["pending"] or []):
         if isinstance(item, _Staged) and item.final.absolute() == final.absolute():
