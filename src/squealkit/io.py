@@ -147,6 +147,13 @@ def _kind(path: Path) -> str | None:
             stat.S_IFSOCK: "a socket"}.get(stat.S_IFMT(mode), "not a regular file")
 
 
+def final_name(path: str) -> str:
+    """``path`` with squealkit's staging names replaced by the outputs they stand for (for
+    messages: an error while writing a staged file names the output the user asked for)."""
+    path = re.sub(r"(^|/)\.([^/]+)\.[a-z0-9_]{8}\.part(?=/|$)", r"\1\2", path)
+    return re.sub(r"/" + re.escape(_STAGE_PREFIX) + r"[a-z0-9_]{8}(?=/|$)", "", path)
+
+
 def _transient(name: str) -> bool:
     """A name squealkit gives its staged outputs and locks (left only by a killed run)."""
     base = name.rsplit("/", 1)[-1]

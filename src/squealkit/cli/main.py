@@ -85,7 +85,9 @@ def _os_error(e: OSError) -> str:
     what = e.strerror or str(e)
     if e.errno == errno.ENOSPC and what == os.strerror(errno.ENOSPC):
         what = "no space left on the device"
-    name = e.filename if e.filename is not None else None
+    from ..io import final_name
+
+    name = final_name(os.fsdecode(e.filename)) if isinstance(e.filename, str | bytes) else None
     return f"{what}: {name!r}" if name else what
 
 
