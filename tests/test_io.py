@@ -19,9 +19,9 @@ def test_failed_write_keeps_the_old_file(tmp_path):
 
 def test_failed_directory_write_keeps_the_old_store(tmp_path):
     target = tmp_path / "store.zarr"
-    target.mkdir()
-    (target / "zarr.json").write_text("{}")  # a zarr store: squealkit may replace it
-    (target / "old").write_text("x")
+    with atomic_path(target, directory=True) as tmp:  # a store squealkit wrote (its manifest says so)
+        tmp.mkdir()
+        (tmp / "old").write_text("x")
     with pytest.raises(KeyboardInterrupt):
         with atomic_path(target, directory=True) as tmp:
             tmp.mkdir()

@@ -19,7 +19,10 @@ import contextlib
 import json
 import logging
 import os
+import shutil
+import tempfile
 import threading
+import weakref
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
@@ -28,7 +31,7 @@ import numpy as np
 import xarray as xr
 
 from ._validation import InputError
-from .io import atomic_path, deferred_interrupts
+from .io import atomic_path, deferred_interrupts, written_path
 
 __all__ = ["LOCAL_WORKER_CONFIG", "cluster_client", "get_client", "lazy_template", "map_tasks", "stream_to_zarr"]
 
@@ -56,6 +59,8 @@ def _distributed():
 #: memory as this process does (glibc's defaults: at most a few tens of MB kept for reuse).
 #: A value set in this process's environment is still passed on (the workers inherit it).
 LOCAL_WORKER_CONFIG = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
+#: Local cluster -> removal of its scratch folder (see :func:`get_client`).
+_SCRATCH: dict[int, weakref.finalize] = {}
 
 
 def get_client(scheduler: str, *, n_workers: int | None = None):
@@ -84,10 +89,19 @@ def get_client(scheduler: str, *, n_workers: int | None = None):
         import dask
 
         n = n_workers or os.cpu_count() or 1
+        # the cluster's scratch space (dask-scratch-space/ with its lock files) in a folder of its own, removed
+        # when the cluster is closed (cluster_client) or collected, never left in the temporary folder
+        scratch = tempfile.mkdtemp(prefix="squealkit-dask-")
         # a failing task reaches the caller as its exception; the workers need not log it too
-        with dask.config.set(LOCAL_WORKER_CONFIG):
-            cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                               dashboard_address=None, silence_logs=logging.CRITICAL)
+        try:
+            with dask.config.set({**LOCAL_WORKER_CONFIG, "temporary-directory": scratch}):
+                cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                                   dashboard_address=None, silence_logs=logging.CRITICAL,
+                                                   local_directory=scratch)
+        except BaseException:
+            shutil.rmtree(scratch, ignore_errors=True)
+            raise
+        _SCRATCH[id(cluster)] = weakref.finalize(cluster, shutil.rmtree, scratch, ignore_errors=True)
         client = distributed.Client(cluster)
         return client
     if scheduler.endswith(".json"):
@@ -166,6 +180,9 @@ def cluster_client(scheduler: str | None, *, n_workers: int | None = None) -> It
         client.close()
         if cluster is not None:
             cluster.close()
+            remove_scratch = _SCRATCH.pop(id(cluster), None)
+            if remove_scratch is not None:
+                remove_scratch()
 
 
 def _in_worker(fn: Callable[..., Any], item: Any) -> Any:
@@ -376,4 +393,4 @@ def stream_to_zarr(
         w = weights if weights is not None else [b - a for *_, a, b in pieces]
         for _ in map_tasks(_write_region, items, client=client, progress=progress, weights=w, name=name):
             pass
-    return xr.open_zarr(final, consolidated=False)
+    return xr.open_zarr(written_path(final), consolidated=False)

@@ -134,7 +134,9 @@ def run_campaign(
     matrix : path
         Test matrix CSV (:func:`squealkit.campaign.read_matrix`).
     out : path
-        Output folder (created).
+        Output folder (created). A folder holding files squealkit did not write is refused;
+        the database stays in it across runs, the summary, report and figures of a run
+        appear together when it ends (:func:`squealkit.io.output_folder`).
     mic, displacement, radius, tacho, rpm
         As for :func:`squealkit.measurement.analyze_recording`; a matrix column ``rpm``
         gives each application's speed where there is no tacho. Optional: without a speed the
@@ -159,21 +161,23 @@ def run_campaign(
         The summary written to ``summary.json``; ``failed`` lists the applications that
         could not be analysed (empty when all were).
     """
-    from ..io import atomic_path
+    from ..io import output_folder
 
     crit = squeal_criteria(setup, band=band, threshold_dba=threshold_dba, time_weighting=time_weighting,
                            min_duration=min_duration)
     _check_options(crit, radius, rpm, options)  # bad options: refused before anything is read or written
     apps = read_matrix(matrix)
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    out.parent.mkdir(parents=True, exist_ok=True)
     bands = third_octave_bands(crit.band)
     # J2521 occurrence needs no disc speed: without one (no rpm, or a tacho that gives none) an
     # application is analysed for squeal and its run-out link stored as unavailable, with the reason
     kw_base = dict(mic=mic, displacement=displacement, radius=radius, setup=crit.setup if crit.setup != "user"
                    else None, band=crit.band, threshold_dba=crit.threshold_dba, time_weighting=crit.time_weighting,
                    min_duration=crit.min_duration, require_runout=False, **options)
-    with CampaignStore(out / "campaign.duckdb") as store:
+    # the folder is squealkit's or new (refused if it holds other files); the database stays in it across runs
+    # (a killed run resumes), the summary, report and figures of this run are staged and appear together
+    with output_folder(out, keep=_STORE_FILES) as stage, CampaignStore(out / "campaign.duckdb") as store:
         done = store.done(crit.describe())
         items = []
         for a in apps:
@@ -217,13 +221,16 @@ def run_campaign(
         store.limit_to([a.application for a in apps])  # the summary and report: this matrix's applications
         summary = campaign_summary(store, crit.band, crit.describe())
         summary["analysed_now"] = len(items)
-        with atomic_path(out / "summary.json") as tmp:
-            tmp.write_text(json.dumps(_clean(summary), indent=2, allow_nan=False))
+        (stage / "summary.json").write_text(json.dumps(_clean(summary), indent=2, allow_nan=False))
         if report:
             from .report import write_campaign_report
 
-            write_campaign_report(store, summary, out, threshold_dba=crit.threshold_dba)
+            write_campaign_report(store, summary, stage, threshold_dba=crit.threshold_dba)
     return summary
+
+
+#: The campaign's database and its write-ahead log, kept in the output folder across runs.
+_STORE_FILES = ("campaign.duckdb", "campaign.duckdb.wal")
 
 
 def _clean(obj: Any) -> Any:

@@ -61,7 +61,8 @@ def synthetic_campaign(
     Parameters
     ----------
     out : path
-        Folder (created).
+        Folder (created; one squealkit wrote is replaced, one holding other files refused). The
+        whole campaign is staged and moved into place when complete (:func:`squealkit.io.output_folder`).
     n_applications : int
         Brake applications.
     duration, fs : float
@@ -84,10 +85,7 @@ def synthetic_campaign(
     dict
         The truth: per application its lines, and the occurrence per squeal line.
     """
-    from ..io import atomic_path
-    from ..measurement import synthetic_recording
-    from ..measurement.criteria import P_REF, a_weighting_db
-    from ..measurement.writers import write_recording
+    from ..io import output_folder
 
     if not isinstance(n_applications, int) or n_applications < 1:
         raise InputError(f"Parameter n_applications={n_applications!r} must be a whole number >= 1.")
@@ -98,7 +96,21 @@ def synthetic_campaign(
                                            * SECONDS_PER_SAMPLE + _SECONDS_PER_APPLICATION),
                  hint="Use fewer applications.")
     out = Path(out)
-    (out / "recordings").mkdir(parents=True, exist_ok=True)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with output_folder(out) as stage:  # recordings, matrix and truth appear together, or nothing
+        truth = _write_campaign(stage, n_applications, duration, fs, suffix, stop_share, seed, level_dba,
+                                condition_channels)
+    return truth
+
+
+def _write_campaign(out: Path, n_applications: int, duration: float, fs: float, suffix: str, stop_share: float,
+                    seed: int, level_dba: float, condition_channels: bool) -> dict[str, Any]:
+    """Write the campaign into the (staging) folder ``out``; the truth."""
+    from ..measurement import synthetic_recording
+    from ..measurement.criteria import P_REF, a_weighting_db
+    from ..measurement.writers import write_recording
+
+    (out / "recordings").mkdir()
     rng = np.random.default_rng(seed)
     rows, truth_apps = [], {}
     for i in range(n_applications):
@@ -142,7 +154,7 @@ def synthetic_campaign(
                      "pressure_bar": "" if condition_channels else pressure,
                      "temperature_c": "" if condition_channels else temperature,
                      "speed_kmh": round(rpm / 60 * 2 * math.pi * 0.33 * 3.6, 1)})
-    with atomic_path(out / "matrix.csv") as tmp, open(tmp, "w", newline="") as fh:
+    with open(out / "matrix.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
@@ -157,6 +169,5 @@ def synthetic_campaign(
         "distractor_hz": _DISTRACTOR_HZ,
         "by_application": truth_apps,
     }
-    with atomic_path(out / "truth.json") as tmp:
-        tmp.write_text(json.dumps(truth, indent=2))
+    (out / "truth.json").write_text(json.dumps(truth, indent=2))
     return truth

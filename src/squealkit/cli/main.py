@@ -3,8 +3,9 @@
 Each subcommand lives in its own module and is imported only when it runs, so
 ``squealkit --help`` is instant. User errors (bad options, bad values, bad files) end the
 run with one line on stderr and exit code 2, operating-system errors (permissions, a full
-disk, a read-only folder) too; Ctrl-C exits with 130 and SIGTERM with 143, both removing
-every staged output.
+disk, a read-only folder) too. A run's outputs are staged and moved into place together at
+its end (:func:`squealkit.io.outputs_together`); Ctrl-C exits with 130, SIGTERM with 143,
+SIGHUP (a closed terminal) with 129 and SIGQUIT with 131, each removing every staged output.
 """
 
 from __future__ import annotations
@@ -50,22 +51,34 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
 
 
 class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised like Ctrl-C so that every staged output is cleaned up on the way out."""
+    """SIGTERM, SIGHUP or SIGQUIT, raised like Ctrl-C so that every staged output is cleaned up
+    on the way out."""
+
+
+#: The signals that end a run cleanly (staged outputs removed), and exit with 128 + the signal.
+SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT") if hasattr(signal, name))
 
 
 def _on_signal(signum, frame) -> None:
-    from ..io import interrupts_deferred, note_interrupt
+    from ..io import interrupt_signal, interrupts_deferred, note_interrupt
 
-    note_interrupt(signum)  # even if a library swallows the exception, nothing staged is kept
+    first = interrupt_signal() is None
+    note_interrupt(signum if first else interrupt_signal())  # even if a library swallows the exception
+    if not first:  # the run is already stopping: a second signal must not break off its cleanup
+        return
     if interrupts_deferred():  # a library write is under way: it stops right after (io.deferred_interrupts)
         return
-    raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+    raise KeyboardInterrupt() if signum == signal.SIGINT else Terminated()
 
 
-def _by_sigterm(e: BaseException | None) -> bool:
+def _ending_signal(e: BaseException | None) -> int:
+    """The signal that ended the run (SIGINT for Ctrl-C without a handler)."""
     from ..io import interrupt_signal
 
-    return isinstance(e, Terminated) or interrupt_signal() == signal.SIGTERM
+    signum = interrupt_signal()
+    if signum is not None:
+        return int(signum)
+    return int(signal.SIGTERM) if isinstance(e, Terminated) else int(signal.SIGINT)
 
 
 def _os_error(e: OSError) -> str:
@@ -73,7 +86,9 @@ def _os_error(e: OSError) -> str:
     what = e.strerror or str(e)
     if e.errno == errno.ENOSPC and what == os.strerror(errno.ENOSPC):
         what = "no space left on the device"
-    name = e.filename if e.filename is not None else None
+    from ..io import final_name
+
+    name = final_name(os.fsdecode(e.filename)) if isinstance(e.filename, str | bytes) else None
     return f"{what}: {name!r}" if name else what
 
 
@@ -102,17 +117,20 @@ class SquealkitGroup(click.Group):
 
         shown = warnings.showwarning
         warnings.showwarning = _one_line_warning
+        from ..io import outputs_together
+
         handlers = {}
         if standalone_mode:  # the real command line, not an in-process call
-            for sig in (signal.SIGINT, signal.SIGTERM):
+            for sig in SIGNALS:
                 handlers[sig] = signal.signal(sig, _on_signal)
         PENDING_NOTES.clear()
         if sys.stdout is None:  # fd 1 closed ('>&-'): output fails as one line, like a full stdout
             sys.stdout = _ClosedStdout()
         try:
-            rv = super().main(
-                args, prog_name or "squealkit", complete_var, standalone_mode=False, **extra
-            )
+            with outputs_together():  # the run's outputs appear together at its end, or none
+                rv = super().main(
+                    args, prog_name or "squealkit", complete_var, standalone_mode=False, **extra
+                )
             code = rv if isinstance(rv, int) and not isinstance(rv, bool) else 0
             try:
                 sys.stdout.flush()  # a full or closed stdout fails here, inside the handlers
@@ -133,9 +151,11 @@ class SquealkitGroup(click.Group):
             click.echo(f"squealkit: error: {e}", err=True)
             code = 2
         except (click.Abort, KeyboardInterrupt) as e:
-            term = _by_sigterm(e.__cause__ if isinstance(e, click.Abort) else e)
-            click.echo("squealkit: terminated" if term else "squealkit: interrupted", err=True)
-            code = 143 if term else 130
+            signum = _ending_signal(e.__cause__ if isinstance(e, click.Abort) else e)
+            said = {signal.SIGINT: "interrupted", signal.SIGTERM: "terminated"}.get(
+                signum, f"terminated by {signal.Signals(signum).name}")
+            click.echo(f"squealkit: {said}", err=True)
+            code = 128 + signum
         except BrokenPipeError:
             # the reader went away (e.g. '| head'): quietly, as other tools do
             _silence_stdout()

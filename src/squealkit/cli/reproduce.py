@@ -16,8 +16,10 @@ def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = F
 
     from ..io import check_output
     from ..report import reproduce
+    from ..report.reproduce import REPORT_FILES
 
-    check_output(out_dir, directory=True, force=force)  # before the progress bar: the error stays one line
+    # before the progress bar: the error stays one line
+    check_output(out_dir, directory=True, force=force, names=REPORT_FILES)
     progress = Progress(TextColumn("{task.description:<28}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
                         TimeElapsedColumn(), console=Console(stderr=True), disable=as_json)
     with progress:
@@ -40,7 +42,8 @@ def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = F
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=Path("squealkit-report"),
               show_default=True, help="Output folder (replaced as a whole when the run succeeds; a folder "
               "holding files squealkit did not write is refused).")
-@click.option("--force", is_flag=True, help="Write into a folder that holds other files, leaving them alone.")
+@click.option("--force", is_flag=True, help="Write into a folder that holds other files, leaving them alone (a file of "
+              "the same name as one the report writes is refused, never replaced).")
 @click.option("--quick", is_flag=True, help="Coarser grids and shorter runs: a preview in seconds.")
 @click.option("--json", "as_json", is_flag=True, help="Print the computed numbers as JSON on stdout.")
 def reproduce(out_dir: Path, force: bool, quick: bool, as_json: bool) -> None:
@@ -71,7 +74,8 @@ def reproduce(out_dir: Path, force: bool, quick: bool, as_json: bool) -> None:
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=Path("squealkit-report"),
               show_default=True, help="Output folder (replaced as a whole when the run succeeds; a folder "
               "holding files squealkit did not write is refused).")
-@click.option("--force", is_flag=True, help="Write into a folder that holds other files, leaving them alone.")
+@click.option("--force", is_flag=True, help="Write into a folder that holds other files, leaving them alone (a file of "
+              "the same name as one the report writes is refused, never replaced).")
 @click.option("--recording", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Your rig recording (CSV, WAV, netCDF, TDMS), analysed for §5 instead of a synthetic one.")
 @recording_options(required=False)

@@ -132,7 +132,9 @@ def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, 
 
             save_blocks(simulate_blocks(model, progress=progress, **kw), out_path)
     if out_path is not None:
-        ds = _open_lazily(out_path)
+        from ..io import written_path
+
+        ds = _open_lazily(written_path(out_path))  # staged until the run ends
     if plot_path is not None:
         from .._validation import check_memory
         from ..io import save_figure

@@ -470,7 +470,7 @@ class RecordingSource:
         # asammdf yields each channel in the chunks of its data blocks; cut them into equal blocks.
         # The time stamps come with the first requested channel's samples.
         where = self._extra["where"]
-        with MDF(self.path) as mdf:
+        with _mdf_scratch() as scratch, MDF(self.path, temporary_folder=scratch) as mdf:
             its: dict[str, Iterator[NDArray]] = {
                 n: (s[0] for s in mdf.iter_get(n, group=where[n][0], index=where[n][1], samples_only=True))
                 for n in names}
@@ -1087,20 +1087,38 @@ def _mdf(p: Path):
             return
         hook(u)
 
-    sys.unraisablehook = quiet
-    try:
+    with _mdf_scratch() as scratch:
+        sys.unraisablehook = quiet
         try:
-            mdf = MDF(p)
-        except Exception as e:
-            msg = f"could not be read as MDF4 (a damaged or truncated file?): {_library_error(e)}"
-            e.__traceback__ = None  # frees the half-built object now, while its noise is filtered
-            del e
-            gc.collect()
-            raise _fail(p, msg) from None
+            try:
+                mdf = MDF(p, temporary_folder=scratch)
+            except Exception as e:
+                msg = f"could not be read as MDF4 (a damaged or truncated file?): {_library_error(e)}"
+                e.__traceback__ = None  # frees the half-built object now, while its noise is filtered
+                del e
+                gc.collect()
+                raise _fail(p, msg) from None
+        finally:
+            sys.unraisablehook = hook
+        with mdf:
+            yield mdf
+
+
+@contextlib.contextmanager
+def _mdf_scratch() -> Iterator[str]:
+    """A private folder for asammdf's temporary files, removed after use.
+
+    asammdf copies a file flagged unfinalised into the temporary folder before reading it,
+    and leaves the copy there when the file then fails to read.
+    """
+    import shutil
+    import tempfile
+
+    scratch = tempfile.mkdtemp(prefix="squealkit-mdf4-")
+    try:
+        yield scratch
     finally:
-        sys.unraisablehook = hook
-    with mdf:
-        yield mdf
+        shutil.rmtree(scratch, ignore_errors=True)
 
 
 def _open_mdf4(p: Path, fs: float | None) -> RecordingSource:

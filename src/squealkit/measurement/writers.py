@@ -222,5 +222,10 @@ def _write_uff(tmp: Path, blocks: Iterable[Block], fs: float, n_samples: int, na
     try:
         uff.write_sets(sets, mode="overwrite")
         os.replace(inner, tmp)
+    except Exception as e:
+        # pyuff wraps the OS's error (a full disk) in a bare Exception: report the OS's error
+        if isinstance(e.__context__, OSError) and not isinstance(e, OSError):
+            raise e.__context__ from None
+        raise
     finally:
         inner.unlink(missing_ok=True)

@@ -22,6 +22,9 @@ from .settings import ReportSettings, load_report_settings
 
 __all__ = ["RecordingSpec", "ReportSettings", "ReproduceResult", "reproduce"]
 
+#: What a report writes in its folder: with ``force``, a file of the user's among them is refused up front.
+REPORT_FILES = ("report.html", "figures", "data")
+
 Step = Callable[[Path, Path], Section]
 
 #: The compiled kernels a step needs beyond the stability ones (see :mod:`squealkit._warmup`).
@@ -180,7 +183,7 @@ def reproduce(
     ReproduceResult
     """
     out = Path(out_dir)
-    check_output(out, directory=True, force=force)  # before the work, not after
+    check_output(out, directory=True, force=force, names=REPORT_FILES)  # before the work, not after
     default = model is None
     model = get_preset("lv2013") if model is None else model
     if rig is None and default:
