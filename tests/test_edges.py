@@ -188,14 +188,14 @@ def test_damped_rigid_body_model_keeps_its_frequencies():
 
 
 def _exact_unstable(K, n):
-    """Whether det(s^2 I + K) has a root with Re s > 0, for the doubles of K taken exactly (Fractions:
-    Faddeev-LeVerrier on the state matrix, exact), exact zero roots divided out, the rest by mpmath."""
-    A = [[Fraction(0)] * (2 * n) for _ in range(2 * n)]
+    """Whether det(s^2 I + K) has a root with Re s > 0, K given as exact Fractions (Faddeev-LeVerrier on
+    the state matrix, exact), exact zero roots divided out, the rest by mpmath in 60 digits."""
+    m = 2 * n
+    A = [[Fraction(0)] * m for _ in range(m)]
     for i in range(n):
         A[i][n + i] = Fraction(1)
         for j in range(n):
-            A[n + i][j] = -Fraction(float(K[i][j]))
-    m = 2 * n
+            A[n + i][j] = -K[i][j]
     coef = [Fraction(1)]
     Mk = [[Fraction(0)] * m for _ in range(m)]
     for k in range(1, m + 1):
@@ -212,22 +212,37 @@ def _exact_unstable(K, n):
         return max(mpmath.re(r) for r in roots) > mpmath.mpf(10) ** -20 * scale
 
 
-def test_exactly_singular_stiffness_is_no_divergence():
-    # K(mu) = K0 + mu Kf with integer K0 and Kf whose rows sum to zero: (1, 1, 1) is an exact rigid-body
-    # mode for every mu, and K0 + mu Kf in doubles is singular only to rounding. Exact arithmetic
-    # (Fractions + 60-digit roots) is the reference; main called rounding divergence here
-    K0 = 1e6 * np.array([[2.0, -1, -1], [-1, 3, -2], [-1, -2, 3]])
-    Kf = 1e5 * np.array([[1.0, 2, -3], [-2, 1, 1], [3, -1, -2]])
+K0_FREE = [["2", "-1", "-1"], ["-1", "3", "-2"], ["-1", "-2", "3"]]  # x 1e6: a free-free stiffness
+KF_FREE = [["0.1", "0.7", "-0.8"], ["-0.3", "0.1", "0.2"], ["0.6", "-0.2", "-0.4"]]  # x 1e5: rows sum to 0
+
+
+def test_rigid_body_mode_singular_to_rounding_is_no_divergence():
+    # K(mu) = K0 + mu Kf with rows summing to zero in decimal: (1, 1, 1) is an exact rigid-body mode for
+    # every mu, while K0 + mu Kf in doubles is singular only to rounding. The reference is exact rational
+    # arithmetic on the decimal model (Fractions, Faddeev-LeVerrier) with 60-digit roots
+    K0 = 1e6 * np.array(K0_FREE, dtype=float)
+    Kf = 1e5 * np.array(KF_FREE, dtype=float)
     model = MatrixModel(M=np.eye(3), K0=K0, Kf=Kf)
-    mus = np.linspace(0.0, 2.0, 41)[1:]
-    ours = stability_verdict(model, mus).tolist()
-    for mu, v in zip(mus, ours, strict=True):
-        unstable = _exact_unstable(K0 + mu * Kf, 3)
-        if unstable:
-            assert v in ("flutter", "divergence", "indeterminate"), mu
+
+    def exact(mu):
+        K = [[Fraction(K0_FREE[i][j]) * 10**6 + Fraction(mu) * Fraction(KF_FREE[i][j]) * 10**5 for j in range(3)]
+             for i in range(3)]
+        return _exact_unstable(K, 3)
+
+    ks = range(1, 41)
+    ours = stability_verdict(model, [k / 20 for k in ks]).tolist()
+    for k, v in zip(ks, ours, strict=True):
+        if exact(Fraction(k, 20)):
+            assert v in ("flutter", "divergence", "indeterminate"), (k, v)
         else:
-            assert v in ("stable", "indeterminate"), (mu, v)
+            assert v in ("stable", "indeterminate"), (k, v)
     assert ours.count("indeterminate") <= 2
+    # every window reported is unstable in exact arithmetic at its middle (main: 5 rounding windows)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        c = critical_friction(model)
+    for a, b in c.unstable_intervals:
+        assert exact(0.5 * (a + b)), (a, b)
 
 
 @pytest.mark.parametrize("damped", [False, True])
@@ -246,3 +261,45 @@ def test_rigid_body_rounding_is_no_divergence(damped):
                 assert v in ("stable", "indeterminate"), (seed, mu, v)
             elif gr > 1e-6 * mg:
                 assert v in ("flutter", "divergence"), (seed, mu, v)
+
+
+# -- 6. event onsets, 7. harmonics --------------------------------------------------------------------------
+
+def _burst_recording(t0, level_dba, freq=3000.0, length=0.3, duration=1.0, harmonics=(), noise=0.0, fs=FS):
+    t = np.arange(int(duration * fs)) / fs
+    on = (t >= t0) & (t < t0 + length)
+    mic = np.zeros(t.size)
+    for f, dba in [(freq, level_dba), *harmonics]:
+        mic += on * np.sqrt(2) * P_REF * 10 ** ((dba - float(a_weighting_db(f))) / 20) * np.sin(2 * np.pi * f * t)
+    mic += noise * np.random.default_rng(0).standard_normal(t.size)
+    disp = 1e-6 * np.sin(2 * np.pi * 15.0 * t)
+    return xr.Dataset({"mic": ("time", mic), "displacement": ("time", disp)}, attrs={"fs": fs})
+
+
+@pytest.mark.parametrize("t0", [0.3, 0.3021, 0.3043])
+@pytest.mark.parametrize("level_dba", [75.0, 85.0, 95.0])
+def test_event_starts_where_the_fast_level_reaches_the_threshold(t0, level_dba):
+    # IEC 61672-1 Fast meter from silence: L(t) = L + 10 lg(1 - exp(-t / tau)), so it reaches 70 dB(A)
+    # tau ln(1 / (1 - 10^(-(L - 70) / 10))) after the onset (closed form); main started events on the
+    # frame grid (up to 9.6 ms off)
+    rise = 0.125 * np.log(1.0 / (1.0 - 10 ** (-(level_dba - 70.0) / 10)))
+    res = _analyze(_burst_recording(t0, level_dba))
+    assert len(res.events) == 1
+    assert abs(res.events[0].start_s - (t0 + rise)) < 0.5e-3
+
+
+def test_absent_harmonics_are_not_listed():
+    # a pure 2388 Hz tone in faint noise has no harmonics (main listed orders 2-5 at the noise floor,
+    # up to 210 Hz off h f0)
+    res = _analyze(_burst_recording(0.0, 85.0, freq=2388.0, length=1.0, duration=0.6, noise=0.01))
+    assert abs(res.squeal_frequency_hz - 2388.0) < 0.1
+    assert res.harmonics == ()
+
+
+def test_present_harmonics_are_listed_at_their_frequencies():
+    # 2nd and 3rd harmonics at 65 and 60 dB(A), none above: exactly those, at 2 f0 and 3 f0
+    res = _analyze(_burst_recording(0.0, 85.0, freq=2388.0, length=1.0, duration=0.6, noise=0.01,
+                                    harmonics=((4776.0, 65.0), (7164.0, 60.0))))
+    assert [h["order"] for h in res.harmonics] == [2, 3]
+    for h in res.harmonics:
+        assert abs(h["frequency_hz"] - h["order"] * 2388.0) < 0.1

@@ -41,6 +41,11 @@ _LOBE = 2
 #: How far [Hz] outside a band edge a component's refined frequency may lie and still count as
 #: in the band: the phase-advance refinement's accuracy on a steady tone (a few mHz).
 _EDGE_TOL_HZ = 0.01
+#: A harmonic is reported only where the loud frames' summed spectrum has a peak within a bin of
+#: h f0 whose bin stands this many dB above the median of the _HARMONIC_FLANK bins either side of
+#: its main lobe (a Hann line in noise: its bin holds half its power).
+_HARMONIC_SNR_DB = 10.0
+_HARMONIC_FLANK = 8
 
 
 @dataclass(frozen=True)
@@ -174,8 +179,9 @@ class MeasurementResult:
         (:func:`~squealkit.measurement.spectral.phase_advance_freq`): to a few mHz on synthetic
         bursts, where the bin interpolation was off by up to 6 Hz (bins of 78 Hz).
     harmonics : tuple of dict
-        ``order``, ``frequency_hz``, ``level_db`` of harmonics 2-5 of the squeal (frequencies
-        refined the same way).
+        ``order``, ``frequency_hz``, ``level_db`` of the harmonics 2-5 of the squeal that are
+        there: a peak within a bin of ``h f0`` standing 10 dB above the spectrum around it
+        (frequencies refined the same way); an absent harmonic is not listed.
     events : tuple of SquealEvent
         Their ``frequency_hz`` is the mean of the components' phase-advance frequencies, weighted
         by the cross power of each frame pair.
@@ -666,6 +672,8 @@ class _Accumulators:
     per-angle sums, and the time-weighting states carried from one window to the next."""
 
     level: NDArray[np.float64]  # Fast (time-weighted) band mean square: max over each frame's interval
+    rise_s: NDArray[np.float64]  # when the Fast level first reaches the threshold in each frame's interval [s]
+    fall_s: NDArray[np.float64]  # when it last is at or above it there (end of that grid step) [s]
     leq: NDArray[np.float64]  # the frame's own A-weighted band level [dB(A)] (Hann window)
     ridge_f: NDArray[np.float64]
     e_tot: NDArray[np.float64]
@@ -696,7 +704,8 @@ class _Accumulators:
         """Accumulators for ``plan``, before the first window."""
         nf, nb = plan.n_frames, plan.nb
         return cls(
-            level=np.full(nf, -np.inf), leq=np.empty(nf), ridge_f=np.empty(nf), e_tot=np.empty(nf),
+            level=np.full(nf, -np.inf), rise_s=np.full(nf, np.nan), fall_s=np.full(nf, np.nan),
+            leq=np.empty(nf), ridge_f=np.empty(nf), e_tot=np.empty(nf),
             e_rise=np.empty(nf), slope_f=np.empty(nf), frame_turns=np.zeros(nf),
             spec_state=np.zeros(plan.hi - plan.lo), mic_spec_sum=np.zeros(plan.freq.size),
             mic_cross_sum=np.zeros(plan.freq.size, np.complex128),
@@ -771,6 +780,16 @@ def _band_level(plan: _Plan, s: AnalysisSettings, win: _Window, p: NDArray, acc:
         acc.laf_max = max(acc.laf_max, float(laf[:ci.stop - ci.start].max()))
     if win.f1 > win.f0:
         acc.level[win.f0:win.f1] = np.maximum.reduceat(laf[:win.b[-1] - ci.start], win.a - ci.start)
+        # where in each frame's interval the level crosses the threshold (to one grid step, dec / fs)
+        loud = laf[:win.b[-1] - ci.start] >= plan.thr_power
+        j = np.arange(loud.size)
+        a, b = win.a - ci.start, win.b - ci.start
+        first = np.minimum.reduceat(np.where(loud, j, loud.size), a)
+        last = np.maximum.reduceat(np.where(loud, j, -1), a)
+        t_grid = (win.g0 + (np.arange(loud.size) + ci.start) * dec) / plan.fs
+        ok = (first < b) & (last >= 0)
+        acc.rise_s[win.f0:win.f1] = np.where(ok, t_grid[np.minimum(first, loud.size - 1)], np.nan)
+        acc.fall_s[win.f0:win.f1] = np.where(ok, t_grid[np.maximum(last, 0)] + dec / plan.fs, np.nan)
     return ms
 
 
@@ -1044,11 +1063,19 @@ def _squeal_events(
         As :func:`~squealkit.measurement.events.link_components`.
     """
     frame_start = np.arange(plan.n_frames) * plan.hop / plan.fs
-    return link_components(
+    events, frames, weights = link_components(
         np.concatenate(acc.comp_frame), np.concatenate(acc.comp_freq), np.concatenate(acc.comp_level),
         np.concatenate(acc.comp_pow), frame_start + plan.half / plan.fs, plan.hop / plan.fs,
         freq_tol=s.freq_tol, min_duration=s.min_duration,
     )
+    # within its first and last frame, an event starts where the Fast level reaches the threshold
+    # and ends where it last is at or above it (to dec / fs, not the hop)
+    for i, (ev, fr) in enumerate(zip(events, frames, strict=True)):
+        rise, fall = acc.rise_s[fr[0]], acc.fall_s[fr[-1]]
+        start = float(rise) if np.isfinite(rise) else ev.start_s
+        end = float(fall) if np.isfinite(fall) and fall > start else ev.end_s
+        events[i] = replace(ev, start_s=start, end_s=end)
+    return events, frames, weights
 
 
 def _squeal_lines(plan: _Plan, acc: _Accumulators, in_ev: NDArray[np.bool_]) -> tuple[float, list[dict[str, float]]]:
@@ -1086,12 +1113,19 @@ def _squeal_lines(plan: _Plan, acc: _Accumulators, in_ev: NDArray[np.bool_]) -> 
     harmonics: list[dict[str, float]] = []
     for h in range(2, 6):
         kh = round(h * squeal_f * n / fs)
-        if kh + 3 >= hi:
+        if kh + 3 + _HARMONIC_FLANK >= hi:
             break
         kk = kh - 2 + int(np.argmax(spec_sum[kh - 2:kh + 3]))
+        # a harmonic is there only as a peak standing _HARMONIC_SNR_DB above the floor around it
+        flanks = np.concatenate([spec_sum[kk - 2 - _HARMONIC_FLANK:kk - 2], spec_sum[kk + 3:kk + 3 + _HARMONIC_FLANK]])
+        if not (spec_sum[kk] >= spec_sum[kk - 1] and spec_sum[kk] >= spec_sum[kk + 1]
+                and spec_sum[kk] > 10 ** (_HARMONIC_SNR_DB / 10) * np.median(flanks)):
+            continue
         p_h = spec_sum[kk - 2:kk + 3].sum() / n_loud_ev
         f_h = float(refine_peak(mag, kk)) * fs / n  # then its phase advance over all loud frames
         f_h = float(phase_advance_freq(acc.mic_cross_sum[kk - _LOBE:kk + _LOBE + 1].sum(), f_h, fs, hop))
+        if abs(f_h - h * squeal_f) > fs / n:  # not at h f0: no harmonic of this line
+            continue
         harmonics.append({"order": h, "frequency_hz": f_h,
                           "level_db": float(10 * np.log10(max(p_h, 1e-300) / P_REF**2))})
     return squeal_f, harmonics
