@@ -303,3 +303,30 @@ def test_present_harmonics_are_listed_at_their_frequencies():
     assert [h["order"] for h in res.harmonics] == [2, 3]
     for h in res.harmonics:
         assert abs(h["frequency_hz"] - h["order"] * 2388.0) < 0.1
+
+
+# -- 5. contact event times ----------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("method", ["dopri5", "rosenbrock"])
+def test_every_contact_event_is_located_to_1e_9_s(method):
+    # undamped, frictionless, the pin lifted 0.3 um: the contact opens and closes ~200 times in 10 ms.
+    # Reference: SciPy DOP853 (rtol 1e-12) with the gap as event function. Main logged 75 of 196 events
+    # at the end of the step after the crossing (up to 1.0e-6 s late); now at most 1.8e-10 s off.
+    from scipy.integrate import solve_ivp
+
+    from _reference import nonlinear_rhs
+    from squealkit.models import get_preset
+    from squealkit.transient import Contact, simulate
+
+    model = get_preset("lv2013").undamped()
+    x0 = model.static_equilibrium(0.0) + np.array([0.0, 3e-7, 0.0])
+    ds = simulate(model, mu=0.0, duration=0.01, fs=40_000, x0=x0, contact=Contact(separation=True), method=method)
+
+    def gap(t, z):
+        return z[1] - z[2]
+
+    ref = solve_ivp(nonlinear_rhs(model, 0.0, 1.0), (0, 0.01), np.concatenate([x0, np.zeros(3)]), method="DOP853",
+                    rtol=1e-12, atol=1e-18, events=gap)
+    t_ref, t_ours = ref.t_events[0], ds.event_time.values
+    assert t_ours.size == t_ref.size > 150
+    assert np.max(np.abs(t_ours - t_ref)) < 1e-9
