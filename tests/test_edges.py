@@ -48,6 +48,7 @@ def test_tone_just_outside_the_band_does_not_count(setup, freq):
     # edges), also at the recording's ends, so the in-band level stays far below 70 dB(A)
     res = _analyze(_tone_recording([(freq, 95.0)]), setup=setup)
     assert res.peak_dba < 50.0 and res.events == ()
+    assert res.attrs["band_rolloff_hz"] == 5.0  # the filter's transition, stated with the result
 
 
 def test_in_band_tone_keeps_its_level_beside_a_loud_tone_outside():

@@ -1293,7 +1293,9 @@ def _assemble(
     )
     out_attrs = {"source": str(attrs.get("source", src.path)), "synthetic": bool(attrs.get("synthetic", False)),
                  "max_tan_theta": acc.max_tan, "surface_speed": surface_speed(s.rpm, s.radius),
-                 "min_tnr_db": s.min_tnr_db}
+                 "min_tnr_db": s.min_tnr_db,
+                 # the level's band filter: full level up to the band's edges, zero EDGE_HZ outside them
+                 "band_rolloff_hz": EDGE_HZ}
     return MeasurementResult(
         squeal_frequency_hz=squeal_f, harmonics=tuple(harmonics), events=tuple(events), rising_fraction=rising,
         growth_slope_correlation=corr, peak_dba=peak, runout_phase_deg=phase, duration_s=plan.total / fs, fs=fs,
