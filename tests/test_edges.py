@@ -150,6 +150,19 @@ def test_one_way_coupled_doublet_eigenvalues_are_the_closed_form():
     assert set(stability_verdict(ONE_WAY, mus).tolist()) == {"stable"}
 
 
+def test_one_way_coupled_doublet_in_a_larger_model_keeps_its_frequency():
+    # 5 DOFs (LAPACK's path, one Bauer-Fike radius for all roots): the same closed form
+    # (main: 0 Hz for both doublet modes at 161 of 200 points)
+    K0 = np.diag([K_D, K_D, K_3, 1.5 * K_D, 2.0 * K_D])
+    Kf = np.zeros((5, 5))
+    Kf[0, 0] = Kf[1, 1] = D_F
+    Kf[0, 1] = 0.3 * D_F
+    mus = np.linspace(0.0, 2.0, 200)
+    freq = np.sort(eigenvalues(MatrixModel(M=np.eye(5), K0=K0, Kf=Kf), mus).imag, axis=1) / (2 * np.pi)
+    f_d = np.sqrt(K_D + mus * D_F) / (2 * np.pi)
+    assert np.allclose(freq[:, :2], f_d[:, None], rtol=1e-6)
+
+
 def _rigid_body_model(seed, damped):
     """4 DOFs, K0 with one eigenvalue set to zero (singular to rounding), friction and damping acting
     on the other modes only: a rigid-body mode, lambda = 0 twice."""

@@ -691,12 +691,18 @@ def classify_points(roots, radii, even, rtol, verdict, thr):
         verdict[i], thr[i] = _classify_row(roots[i], radii[i], even[i], rtol)
 
 
+#: How far [relative to |lambda|_max] rounding can move a double real root off the axis (about
+#: sqrt(eps)) with a margin: a root farther off is a mode with a frequency, whatever its radius.
+_REAL_SPLIT = 1e-6
+
+
 @nb.njit(cache=True, parallel=True)
 def select_modes(roots, radii, out, out_err):
     """Pick n of the 2n roots per point, one per conjugate pair, in ascending frequency.
 
     Of each complex pair the root with Im > 0 is kept. Roots within their error radius of
-    the real axis are real (overdamped or divergent modes, rigid-body modes): they are
+    the real axis, and within :data:`_REAL_SPLIT` of it, are real (overdamped or divergent
+    modes, rigid-body modes): they are
     written with Im = 0 (frequency 0, so first) and the largest of them are kept, so the
     most unstable root is never dropped, whatever the rounding of their imaginary parts.
     ``out_err`` receives the error radius of each kept root.
@@ -711,9 +717,14 @@ def select_modes(roots, radii, out, out_err):
         for i in range(c * 1024, min(npts, (c + 1) * 1024)):
             n_up = 0
             n_re = 0
+            mag = 0.0
+            for k in range(deg):
+                mag = max(mag, abs(roots[i, k]))
             for k in range(deg):
                 z = roots[i, k]
-                if abs(z.imag) <= radii[i, k]:
+                # real: within its radius of the axis, and no farther than a rounding-split real pair
+                # (a radius covering everything, at a near-defective cluster, makes no mode real)
+                if abs(z.imag) <= min(radii[i, k], _REAL_SPLIT * mag):
                     val[k] = complex(z.real, 0.0)
                     # insertion by real part, largest first
                     j = n_re
