@@ -25,7 +25,7 @@ from scipy import signal
 from .. import __version__
 from .._threads import thread_limit
 from .._validation import PLAUSIBLE, InputError, validate_fs, validate_plausible, validate_positive
-from .criteria import SquealCriteria, band_weighted_signal, exponential_average, squeal_criteria
+from .criteria import EDGE_HZ, SquealCriteria, band_weighted_signal, exponential_average, squeal_criteria
 from .events import DEFAULT_MIN_TNR_DB, SquealEvent, link_components, tonal_components, tone_to_noise_ratio
 from .filters import lowpass, lowpass_decimated
 from .readers import DEFAULT_BLOCK, RecordingSource, _to_si, open_recording
@@ -38,6 +38,14 @@ __all__ = ["AnalysisSettings", "MeasurementResult", "analyze_recording"]
 #: Bins either side of a line's peak bin summed in the phase-advance estimate: the Hann main
 #: lobe's core, which holds nearly all of a tone's energy (see phase_advance_freq).
 _LOBE = 2
+#: How far [Hz] outside a band edge a component's refined frequency may lie and still count as
+#: in the band: the phase-advance refinement's accuracy on a steady tone (a few mHz).
+_EDGE_TOL_HZ = 0.01
+#: A harmonic is reported only where the loud frames' summed spectrum has a peak within a bin of
+#: h f0 whose bin stands this many dB above the median of the _HARMONIC_FLANK bins either side of
+#: its main lobe (a Hann line in noise: its bin holds half its power).
+_HARMONIC_SNR_DB = 10.0
+_HARMONIC_FLANK = 8
 
 
 @dataclass(frozen=True)
@@ -191,8 +199,9 @@ class MeasurementResult:
         (:func:`~squealkit.measurement.spectral.phase_advance_freq`): to a few mHz on synthetic
         bursts, where the bin interpolation was off by up to 6 Hz (bins of 78 Hz).
     harmonics : tuple of dict
-        ``order``, ``frequency_hz``, ``level_db`` of harmonics 2-5 of the squeal (frequencies
-        refined the same way).
+        ``order``, ``frequency_hz``, ``level_db`` of the harmonics 2-5 of the squeal that are
+        there: a peak within a bin of ``h f0`` standing 10 dB above the spectrum around it
+        (frequencies refined the same way); an absent harmonic is not listed.
     events : tuple of SquealEvent
         Their ``frequency_hz`` is the mean of the components' phase-advance frequencies, weighted
         by the cross power of each frame pair.
@@ -607,7 +616,10 @@ class _Plan:
     """The framing of one recording's analysis: frames, band bins, run-out grid and windows.
 
     Frame ``m`` covers samples ``[m hop, m hop + n)``; its "interval" (for energy sums and the
-    level) is ``[m hop + half, m hop + half + hop)``. The run-out is analysed on every ``dec``-th
+    level) is ``[m hop + half, m hop + half + hop)``. Bins ``[lo, hi)`` of the frames are analysed:
+    those of the band (``band_bins`` of them, relative to ``lo``) and a guard of a component's
+    width either side, so a tone at a band edge is a peak with both its flanks (whether it lies
+    in the band is decided by its refined frequency). The run-out is analysed on every ``dec``-th
     sample (``fs_d = fs / dec``). Windows have a core of ``core`` samples and ``margin`` samples
     either side.
     """
@@ -621,6 +633,7 @@ class _Plan:
     freq: NDArray[np.float64]
     lo: int
     hi: int
+    band_bins: slice
     w_a: NDArray[np.float64]
     w_a32: NDArray[np.float32]
     win32: NDArray[np.float32]
@@ -665,9 +678,11 @@ def _plan(s: AnalysisSettings, fs: float, total: int, rotation: Any) -> _Plan:
     f_rev = math.nan if rotation is None else revolution_frequency(s.rpm)
     n, hop = s.nperseg, s.hop
     freq = np.fft.rfftfreq(n, 1 / fs)
-    lo, hi = int(np.searchsorted(freq, s.band[0])), int(np.searchsorted(freq, s.band[1], side="right"))
-    if hi - lo < 5:
+    blo, bhi = int(np.searchsorted(freq, s.band[0])), int(np.searchsorted(freq, s.band[1], side="right"))
+    if bhi - blo < 5:
         raise InputError(f"Band {s.band} Hz holds fewer than 5 bins of {fs / n:g} Hz; widen it or raise nperseg.")
+    half_width = max(2, int(0.5 * s.freq_tol * n / fs))  # bins of a tonal component either side
+    lo, hi = max(1, blo - half_width - 1), min(freq.size, bhi + half_width + 1)
     w_a = 10 ** (a_weighting_db(freq[lo:hi]) / 10)
     win = signal.windows.hann(n, sym=False)
     # run-out is analysed at fs / dec, dec a divisor of hop with fs / dec >= 4 lowpass_freq
@@ -688,12 +703,14 @@ def _plan(s: AnalysisSettings, fs: float, total: int, rotation: Any) -> _Plan:
         macro_margin = int(4 * fs / ((s.macro_orders + 0.5) * f_rev))
     return _Plan(
         fs=fs, total=total, n=n, hop=hop, n_frames=(total - n) // hop + 1, half=(n - hop) // 2, freq=freq,
-        lo=lo, hi=hi, w_a=w_a, w_a32=w_a.astype(np.float32), win32=win.astype(np.float32),
+        lo=lo, hi=hi, band_bins=slice(blo - lo, bhi - lo), w_a=w_a, w_a32=w_a.astype(np.float32),
+        win32=win.astype(np.float32),
         pscale=2.0 / (n * float(np.sum(win**2))), thr_power=P_REF**2 * 10 ** (s.threshold_dba / 10),
-        half_width=max(2, int(0.5 * s.freq_tol * n / fs)),  # bins of a tonal component either side
+        half_width=half_width,
         n_threads=thread_limit(),  # FFT threads: this process's share (one on a one-thread Dask worker)
         core=max(hop, round(s.chunk_s * fs / hop) * hop),
-        margin=max(n, int(0.25 * fs), macro_margin, int(lag * fs) + n),
+        margin=max(n, int(0.25 * fs), int(2.5 / EDGE_HZ * fs),  # the band filter rings 2 / EDGE_HZ
+                   macro_margin, int(lag * fs) + n),
         dec=dec, fs_d=fs / dec, f_rev=f_rev, f_macro=f_macro, off_turns=s.probe_offset_deg / 360.0,
         a_frames=math.exp(-hop / fs / s.criteria.time_constant_s), rev0=rev0, n_rev=n_rev, nb=s.n_angle_bins,
     )
@@ -705,6 +722,8 @@ class _Accumulators:
     per-angle sums, and the time-weighting states carried from one window to the next."""
 
     level: NDArray[np.float64]  # Fast (time-weighted) band mean square: max over each frame's interval
+    rise_s: NDArray[np.float64]  # when the Fast level first reaches the threshold in each frame's interval [s]
+    fall_s: NDArray[np.float64]  # when it last is at or above it there (end of that grid step) [s]
     leq: NDArray[np.float64]  # the frame's own A-weighted band level [dB(A)] (Hann window)
     ridge_f: NDArray[np.float64]
     e_tot: NDArray[np.float64]
@@ -735,7 +754,8 @@ class _Accumulators:
         """Accumulators for ``plan``, before the first window."""
         nf, nb = plan.n_frames, plan.nb
         return cls(
-            level=np.full(nf, -np.inf), leq=np.empty(nf), ridge_f=np.empty(nf), e_tot=np.empty(nf),
+            level=np.full(nf, -np.inf), rise_s=np.full(nf, np.nan), fall_s=np.full(nf, np.nan),
+            leq=np.empty(nf), ridge_f=np.empty(nf), e_tot=np.empty(nf),
             e_rise=np.full(nf, np.nan), slope_f=np.full(nf, np.nan), frame_turns=np.zeros(nf),
             spec_state=np.zeros(plan.hi - plan.lo), mic_spec_sum=np.zeros(plan.freq.size),
             mic_cross_sum=np.zeros(plan.freq.size, np.complex128),
@@ -799,7 +819,8 @@ def _band_level(plan: _Plan, s: AnalysisSettings, win: _Window, p: NDArray, acc:
         A-weighted band mean square [Pa^2] on the window's run-out grid.
     """
     dec, ci = plan.dec, win.ci
-    pw = band_weighted_signal(p[win.o:], plan.fs, s.band, workers=plan.n_threads)
+    ends = (win.w0 + win.o == 0, win.w0 + p.size == plan.total)  # the recording's own ends: continued
+    pw = band_weighted_signal(p[win.o:], plan.fs, s.band, recording_ends=ends, workers=plan.n_threads)
     m_full = pw.size // dec
     ms = np.zeros(-(-(p.size - win.o) // dec))
     ms[:m_full] = _mean_squares(pw, dec)
@@ -809,6 +830,16 @@ def _band_level(plan: _Plan, s: AnalysisSettings, win: _Window, p: NDArray, acc:
         acc.laf_max = max(acc.laf_max, float(laf[:ci.stop - ci.start].max()))
     if win.f1 > win.f0:
         acc.level[win.f0:win.f1] = np.maximum.reduceat(laf[:win.b[-1] - ci.start], win.a - ci.start)
+        # where in each frame's interval the level crosses the threshold (to one grid step, dec / fs)
+        loud = laf[:win.b[-1] - ci.start] >= plan.thr_power
+        j = np.arange(loud.size)
+        a, b = win.a - ci.start, win.b - ci.start
+        first = np.minimum.reduceat(np.where(loud, j, loud.size), a)
+        last = np.maximum.reduceat(np.where(loud, j, -1), a)
+        t_grid = (win.g0 + (np.arange(loud.size) + ci.start) * dec) / plan.fs
+        ok = (first < b) & (last >= 0)
+        acc.rise_s[win.f0:win.f1] = np.where(ok, t_grid[np.minimum(first, loud.size - 1)], np.nan)
+        acc.fall_s[win.f0:win.f1] = np.where(ok, t_grid[np.maximum(last, 0)] + dec / plan.fs, np.nan)
     return ms
 
 
@@ -859,14 +890,15 @@ def _frame_spectra(plan: _Plan, win: _Window, p: NDArray, acc: _Accumulators) ->
     spec_p = sp_fft.rfft(frames_ * plan.win32, axis=-1, workers=plan.n_threads)[:, plan.lo:plan.hi]
     spec = spec_p[f0 - fp:]  # frames [f0, f1)
     pb, pa = _bin_powers(spec, np.float32(plan.pscale), plan.w_a32)  # [Pa^2] per bin
-    lev = pa.sum(axis=1, dtype=np.float64)
+    bb = plan.band_bins
+    lev = pa[:, bb].sum(axis=1, dtype=np.float64)
     acc.leq[f0:f1] = 10 * np.log10(np.maximum(lev, 1e-300) / P_REF**2)
-    acc.ridge_f[f0:f1] = (_refine_rows(pb, np.argmax(pa, axis=1)) + plan.lo) * plan.fs / n
+    acc.ridge_f[f0:f1] = (_refine_rows(pb, np.argmax(pa[:, bb], axis=1) + bb.start) + plan.lo) * plan.fs / n
     # a component's level is the frame's Fast level times its share of the time-weighted spectrum,
     # so each tone's level is what the meter shows, split by what the meter has heard
     pa_tw, acc.spec_state = _time_weight_rows(pa, plan.a_frames, acc.spec_state)
     # band mean square per frame (Hann frames at 50 % overlap sum to the signal energy)
-    acc.e_tot[f0:f1] = pb.sum(axis=1, dtype=np.float64)
+    acc.e_tot[f0:f1] = pb[:, bb].sum(axis=1, dtype=np.float64)
     return _Spectra(fp, spec_p, spec, pb, pa, pa_tw)
 
 
@@ -906,7 +938,6 @@ def _frame_components(plan: _Plan, s: AnalysisSettings, win: _Window, sp: _Spect
         return
     pa, pa_tw, pb = sp.pa, sp.pa_tw, sp.pb
     rows = _rows(loud)
-    share_scale = acc.level[f0:f1][rows] / np.maximum(pa_tw[rows].sum(axis=1, dtype=np.float64), 1e-300)
     # phase advance of every band bin from the previous frame (zero for frame 0)
     prev = loud + (f0 - sp.fp - 1)
     before = np.conjugate(sp.spec_p[_rows(np.maximum(prev, 0))])
@@ -914,16 +945,36 @@ def _frame_components(plan: _Plan, s: AnalysisSettings, win: _Window, sp: _Spect
     cross[prev < 0] = 0
     acc.mic_cross_sum[lo:hi] += cross.sum(axis=0, dtype=np.complex128)
     ptw = pa_tw[rows]
-    fr, ff, fl = tonal_components(ptw, ptw, lo, fs, n, s.threshold_dba, scale=share_scale,
-                                  half_width=plan.half_width)
+    # every peak of the band and its guard bins (power ``own``), then its refined frequency
+    fr, ff, fl = tonal_components(ptw, ptw, lo, fs, n, -np.inf, half_width=plan.half_width)
+    own = P_REF**2 * 10 ** (fl / 10)
     kc = np.clip(np.rint(ff * (n / fs)).astype(np.intp) - lo, _LOBE, hi - lo - 1 - _LOBE)
-    if s.min_tnr_db is not None and fr.size:  # tonality: a peak in broadband noise is no squeal
-        tonal = tone_to_noise_ratio(ptw, fr, kc, ff, fs / n, half_width=_LOBE) >= s.min_tnr_db
-        fr, ff, fl, kc = fr[tonal], ff[tonal], fl[tonal], kc[tonal]
     lobe = kc[:, None] + np.arange(-_LOBE, _LOBE + 1)
     c = cross[fr[:, None], lobe].sum(axis=1, dtype=np.complex128)
     now = pa[loud[fr][:, None], lobe].sum(axis=1) >= 0.25 * pa_tw[loud[fr][:, None], lobe].sum(axis=1)
-    ff = np.where((prev[fr] >= 0) & now, phase_advance_freq(c, ff, fs, plan.hop), ff)
+    ff_bins, ff = ff, np.where((prev[fr] >= 0) & now, phase_advance_freq(c, ff, fs, plan.hop), ff)
+    # SAE J2521's band: a component counts where its frequency lies in it, edges included. The
+    # level the meter shows (band-limited to the same edges) is split among the components by
+    # their share of the frame's spectrum less the components outside the band (capped at 1:
+    # a tone at an edge has part of its lobe in the guard bins). Edges are taken to the refined
+    # frequency's accuracy on a steady tone (_EDGE_TOL_HZ).
+    inside = (ff >= s.band[0] - _EDGE_TOL_HZ) & (ff <= s.band[1] + _EDGE_TOL_HZ)
+    heard = ptw.sum(axis=1, dtype=np.float64) - np.bincount(fr[~inside], own[~inside], minlength=loud.size)
+    share = np.minimum(own / np.maximum(heard[fr], 1e-300), 1.0)
+    fl = 10 * np.log10(np.maximum(share * acc.level[f0:f1][loud[fr]], 1e-300) / P_REF**2)
+    keep = inside & (fl >= s.threshold_dba)
+    if s.min_tnr_db is not None and keep.any():  # tonality: a peak in broadband noise is no squeal
+        # over the band's bins where the lobe lies in them, else (at an edge) with the guard bins too
+        bb, sel = plan.band_bins, np.flatnonzero(keep)
+        kb = kc[sel] - bb.start
+        edge = (kb < _LOBE) | (kb > bb.stop - bb.start - 1 - _LOBE)
+        tnr = np.empty(sel.size)
+        tnr[~edge] = tone_to_noise_ratio(ptw[:, bb], fr[sel[~edge]], kb[~edge], ff_bins[sel[~edge]], fs / n,
+                                         half_width=_LOBE)
+        tnr[edge] = tone_to_noise_ratio(ptw, fr[sel[edge]], kc[sel[edge]], ff_bins[sel[edge]], fs / n,
+                                        half_width=_LOBE)
+        keep[sel] = tnr >= s.min_tnr_db
+    fr, ff, fl, kc, c, lobe = fr[keep], ff[keep], fl[keep], kc[keep], c[keep], lobe[keep]
     # weights of the event's mean frequency: |c| (the cross power of the frame pair), so
     # a pair whose earlier frame is still in the noise (squeal onset) counts little
     wc = np.where(prev[fr] >= 0, np.abs(c) * plan.pscale, pb[loud[fr][:, None], lobe].sum(axis=1))
@@ -1062,11 +1113,19 @@ def _squeal_events(
         As :func:`~squealkit.measurement.events.link_components`.
     """
     frame_start = np.arange(plan.n_frames) * plan.hop / plan.fs
-    return link_components(
+    events, frames, weights = link_components(
         np.concatenate(acc.comp_frame), np.concatenate(acc.comp_freq), np.concatenate(acc.comp_level),
         np.concatenate(acc.comp_pow), frame_start + plan.half / plan.fs, plan.hop / plan.fs,
         freq_tol=s.freq_tol, min_duration=s.min_duration,
     )
+    # within its first and last frame, an event starts where the Fast level reaches the threshold
+    # and ends where it last is at or above it (to dec / fs, not the hop)
+    for i, (ev, fr) in enumerate(zip(events, frames, strict=True)):
+        rise, fall = acc.rise_s[fr[0]], acc.fall_s[fr[-1]]
+        start = float(rise) if np.isfinite(rise) else ev.start_s
+        end = float(fall) if np.isfinite(fall) and fall > start else ev.end_s
+        events[i] = replace(ev, start_s=start, end_s=end)
+    return events, frames, weights
 
 
 def _squeal_lines(plan: _Plan, acc: _Accumulators, in_ev: NDArray[np.bool_]) -> tuple[float, list[dict[str, float]]]:
@@ -1104,12 +1163,19 @@ def _squeal_lines(plan: _Plan, acc: _Accumulators, in_ev: NDArray[np.bool_]) -> 
     harmonics: list[dict[str, float]] = []
     for h in range(2, 6):
         kh = round(h * squeal_f * n / fs)
-        if kh + 3 >= hi:
+        if kh + 3 + _HARMONIC_FLANK >= hi:
             break
         kk = kh - 2 + int(np.argmax(spec_sum[kh - 2:kh + 3]))
+        # a harmonic is there only as a peak standing _HARMONIC_SNR_DB above the floor around it
+        flanks = np.concatenate([spec_sum[kk - 2 - _HARMONIC_FLANK:kk - 2], spec_sum[kk + 3:kk + 3 + _HARMONIC_FLANK]])
+        if not (spec_sum[kk] >= spec_sum[kk - 1] and spec_sum[kk] >= spec_sum[kk + 1]
+                and spec_sum[kk] > 10 ** (_HARMONIC_SNR_DB / 10) * np.median(flanks)):
+            continue
         p_h = spec_sum[kk - 2:kk + 3].sum() / n_loud_ev
         f_h = float(refine_peak(mag, kk)) * fs / n  # then its phase advance over all loud frames
         f_h = float(phase_advance_freq(acc.mic_cross_sum[kk - _LOBE:kk + _LOBE + 1].sum(), f_h, fs, hop))
+        if abs(f_h - h * squeal_f) > fs / n:  # not at h f0: no harmonic of this line
+            continue
         harmonics.append({"order": h, "frequency_hz": f_h,
                           "level_db": float(10 * np.log10(max(p_h, 1e-300) / P_REF**2))})
     return squeal_f, harmonics
@@ -1281,7 +1347,9 @@ def _assemble(
     out_attrs = {"source": str(attrs.get("source", src.path)), "synthetic": bool(attrs.get("synthetic", False)),
                  "max_tan_theta": acc.max_tan if rotation is not None else math.nan,
                  "surface_speed": surface_speed(s.rpm, s.radius) if rotation is not None else math.nan,
-                 "min_tnr_db": s.min_tnr_db}
+                 "min_tnr_db": s.min_tnr_db,
+                 # the level's band filter: full level up to the band's edges, zero EDGE_HZ outside them
+                 "band_rolloff_hz": EDGE_HZ}
     return MeasurementResult(
         squeal_frequency_hz=squeal_f, harmonics=tuple(harmonics), events=tuple(events), rising_fraction=rising,
         growth_slope_correlation=corr, peak_dba=peak, runout_phase_deg=phase, duration_s=plan.total / fs, fs=fs,

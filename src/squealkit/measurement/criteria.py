@@ -48,10 +48,14 @@ _SETUP_NAMES = {
     "corner": "SAE J2521 corner (full suspension corner or axle, 1.25-16 kHz)",
     "component": "SAE J2521 component (brake not on a full corner, e.g. pin-on-disc, 2-16 kHz)",
 }
-#: Width [Hz] of the raised-cosine transition centred on each band edge of the level's band
-#: filter: short enough to keep 1.2 kHz out of a 1.25 kHz band, long enough that the filter
-#: rings for only a few tens of milliseconds.
-EDGE_HZ = 50.0
+#: Width [Hz] of the raised-cosine roll-off just outside each band edge of the level's band
+#: filter. The band itself passes at full A-weighted level up to its edges; a steady tone
+#: EDGE_HZ or more outside the band is stopped (more than 50 dB down on a 1 s tone, the rest is
+#: its own spectral leakage). The filter rings for about ``2 / EDGE_HZ`` = 0.4 s.
+EDGE_HZ = 5.0
+#: Order of the linear prediction that continues a recording past its ends before the band
+#: filter (see :func:`band_weighted_signal`), and how many samples at each end it is fitted on.
+_LP_ORDER, _LP_FIT = 32, 4096
 
 # IEC 61672-1:2013 Annex E constants: pole frequencies [Hz] and the 1 kHz normalisation.
 _F1, _F2, _F3, _F4 = 20.598997, 107.65265, 737.86223, 12194.217
@@ -207,27 +211,58 @@ def squeal_criteria(
 
 @lru_cache(maxsize=16)
 def _band_gain(nfft: int, fs: float, band: tuple[float, float]) -> NDArray[np.float32]:
-    """A-weighting amplitude times the band mask, on the ``rfft`` bins of ``nfft`` samples."""
+    """A-weighting amplitude times the band mask, on the ``rfft`` bins of ``nfft`` samples.
+
+    The mask is 1 on ``[band[0], band[1]]`` (edges included) and falls to 0 over
+    :data:`EDGE_HZ` outside each edge (raised cosine).
+    """
     f = sp_fft.rfftfreq(nfft, 1 / fs)
     gain = 10 ** (a_weighting_db(f) / 20)
     gain[0] = 0.0
-    mask = np.ones_like(f)
-    for edge, rising in ((band[0], True), (band[1], False)):
-        x = np.clip((f - edge) / EDGE_HZ + 0.5, 0.0, 1.0)  # 0 -> 1 across the transition
-        ramp = 0.5 - 0.5 * np.cos(np.pi * x)
-        mask *= ramp if rising else 1.0 - ramp
+    outside = np.maximum(band[0] - f, f - band[1])  # [Hz] beyond the nearer edge, <= 0 inside
+    mask = 0.5 + 0.5 * np.cos(np.pi * np.clip(outside / EDGE_HZ, 0.0, 1.0))
     out = (gain * mask).astype(np.float32)
     out.setflags(write=False)
     return out
 
 
-def band_weighted_signal(x: ArrayLike, fs: float, band: tuple[float, float], *, workers: int | None = None
+def _continued(x: NDArray[np.float32], n_ext: int) -> NDArray[np.float64]:
+    """``n_ext`` samples that continue ``x`` past its end by linear prediction, faded out.
+
+    An autoregressive model of order :data:`_LP_ORDER` fitted (least squares) on the last
+    :data:`_LP_FIT` samples is run on from them; its poles outside the unit circle are
+    reflected in (so the continuation cannot grow), and the continuation is faded out by a
+    half-Hann over its length. Tones continue with their phase, noise as noise of its
+    spectrum, so cutting the recording out of a longer sound leaves no splatter.
+    """
+    p = _LP_ORDER
+    seg = np.asarray(x[-_LP_FIT:], dtype=np.float64)
+    if seg.size < 4 * p or not np.any(seg):
+        return np.zeros(n_ext)
+    rows = np.lib.stride_tricks.sliding_window_view(seg, p + 1)
+    coef = np.linalg.lstsq(rows[:, :-1], rows[:, -1], rcond=None)[0]  # s[n] = coef @ s[n-p:n]
+    a = np.concatenate([[1.0], -coef[::-1]])  # s[n] - sum_k a_k s[n-k] = 0
+    z = np.roots(a)
+    if np.any(np.abs(z) > 1.0):
+        z = np.where(np.abs(z) > 1.0, 1.0 / np.conj(z), z)
+        a = np.real(np.poly(z))
+    zi = signal.lfiltic([1.0], a, seg[::-1][:p])
+    ext = signal.lfilter([1.0], a, np.zeros(n_ext), zi=zi)[0]
+    return ext * (0.5 + 0.5 * np.cos(np.pi * (np.arange(n_ext) + 0.5) / n_ext))
+
+
+def band_weighted_signal(x: ArrayLike, fs: float, band: tuple[float, float], *,
+                         recording_ends: tuple[bool, bool] = (True, True), workers: int | None = None
                          ) -> NDArray[np.float32]:
     """A-weighted signal limited to ``band`` (zero-phase, by FFT; single precision).
 
-    The gain is the IEC 61672-1 A-weighting times a band mask with raised-cosine edges
-    (:data:`EDGE_HZ` wide, centred on each edge, so the edge itself passes at -6 dB). The
-    signal is zero-padded, so nothing wraps around; it behaves as if silent beyond its ends.
+    The gain is the IEC 61672-1 A-weighting on the band, edges included (SAE J2521: a tone in
+    the band counts at its full level), falling to zero over :data:`EDGE_HZ` outside each edge
+    (raised cosine), so a steady tone 5 Hz or more outside the band does not count. Where ``x``
+    starts or ends where the recording does, it is continued past that end by linear
+    prediction (:func:`_continued`, faded out over ``2 / EDGE_HZ``): a recording cut out of a
+    tone just outside the band would otherwise splatter into it at its ends. Beyond that the
+    signal is zero-padded, so nothing wraps around.
 
     Parameters
     ----------
@@ -237,6 +272,9 @@ def band_weighted_signal(x: ArrayLike, fs: float, band: tuple[float, float], *, 
         Sample rate [Hz].
     band : (float, float)
         ``(freq_lower, freq_upper)`` [Hz], upper below ``fs / 2``.
+    recording_ends : (bool, bool)
+        Whether ``x`` starts and ends where the recording does (continue it there); a block
+        of a longer recording with margins either side needs no continuation.
     workers : int, optional
         FFT threads (default: squealkit's thread limit, see ``SQUEALKIT_THREADS``).
 
@@ -250,11 +288,16 @@ def band_weighted_signal(x: ArrayLike, fs: float, band: tuple[float, float], *, 
 
         workers = thread_limit()
     arr = np.asarray(x, dtype=np.float32)
-    pad = max(2048, int(0.05 * fs))
+    n_ext = int(2.0 / EDGE_HZ * fs)
+    before = _continued(arr[::-1], n_ext)[::-1] if recording_ends[0] else np.zeros(0)
+    after = _continued(arr, n_ext) if recording_ends[1] else np.zeros(0)
+    if before.size or after.size:
+        arr = np.concatenate([before.astype(np.float32), arr, after.astype(np.float32)])
+    pad = max(2048, n_ext)
     nfft = sp_fft.next_fast_len(arr.size + pad, real=True)
     spec = sp_fft.rfft(arr, nfft, workers=workers)
     spec *= _band_gain(nfft, float(fs), (float(band[0]), float(band[1])))
-    return sp_fft.irfft(spec, nfft, workers=workers)[: arr.size]
+    return sp_fft.irfft(spec, nfft, workers=workers)[before.size: arr.size - after.size]
 
 
 def exponential_average(

@@ -38,7 +38,13 @@ class SquealEvent:
     Attributes
     ----------
     start_s, end_s : float
-        Start and end [s] from the start of the recording.
+        Start and end [s] from the start of the recording. From
+        :func:`~squealkit.measurement.analyze_recording`: the start is where the Fast level
+        (IEC 61672-1, as the threshold is read) first reaches the threshold within the event's
+        first frame, to the run-out grid's step (``dec / fs``, well under a millisecond), so it
+        lags the burst's acoustic onset by the meter's rise,
+        ``tau ln(1 / (1 - 10^(-(L - L_thr) / 10)))`` (4.0 ms for 85 dB(A) against 70); the end
+        is where the level is last at or above the threshold within the event's last frame.
     frequency_hz : float
         Power-weighted mean refined frequency [Hz].
     peak_dba : float

@@ -38,6 +38,7 @@ from ._kernels import (
     INDETERMINATE,
     STABLE,
     UNDECIDED,
+    ZERO_ROOT_REACH,
     classify_points,
     inclusion_radii,
     select_modes,
@@ -236,8 +237,13 @@ def _refine(M, C, K0, Kn, Kf, which, g, e, roots, radii, even, rtol, verdict, th
         t = np.empty(idx.size)
         w = np.ascontiguousarray(w)
         classify_points(w, r, even[idx], rtol, v, t)
-        roots[idx] = w
-        radii[idx] = r
+        # LAPACK's roots replace the kernel's where they decide, or bound every root tighter:
+        # its Bauer-Fike radius is one for all roots, and at a near-defective cluster (a
+        # one-way coupled doublet, a rigid-body mode) it covers every root, where the
+        # kernel's per-root radii still tell the other modes' frequencies (issue 30)
+        take = (v != UNDECIDED) | (r.max(axis=1) < radii[idx].max(axis=1))
+        roots[idx[take]] = w[take]
+        radii[idx[take]] = r[take]
         verdict[idx] = v
         thr[idx] = t
     left = todo[verdict[todo] == UNDECIDED] if high_precision else todo[:0]
@@ -245,7 +251,9 @@ def _refine(M, C, K0, Kn, Kf, which, g, e, roots, radii, even, rtol, verdict, th
     hard = []
     for i in left:
         s_ = which[i]
-        v = exact_verdict(M[s_], C[s_], K0[s_] + g[i] * Kn[s_] + e[i] * Kf[s_], thr[i])
+        mag = float(np.nanmax(np.abs(roots[i]))) if np.isfinite(roots[i]).any() else 0.0
+        reach = ZERO_ROOT_REACH * math.sqrt(roots.shape[1] * np.finfo(float).eps) * mag
+        v = exact_verdict(M[s_], C[s_], K0[s_] + g[i] * Kn[s_] + e[i] * Kf[s_], thr[i], zero_reach=reach)
         if v is None:
             hard.append(i)
         else:
@@ -407,7 +415,7 @@ def _positive_real_roots(p: list[int]) -> int | None:
     return changes([q[0] for q in seq]) - changes([q[-1] for q in seq])
 
 
-def exact_verdict(M: NDArray, C: NDArray, K: NDArray, thr: float) -> int | None:
+def exact_verdict(M: NDArray, C: NDArray, K: NDArray, thr: float, *, zero_reach: float = 0.0) -> int | None:
     """The verdict in exact rational arithmetic, or None where it needs a special case.
 
     The matrices are taken exactly as the doubles they are; the characteristic polynomial
@@ -415,13 +423,28 @@ def exact_verdict(M: NDArray, C: NDArray, K: NDArray, thr: float) -> int | None:
     threshold, ``s = u + thr``; Routh's array then counts the roots with ``Re s > thr`` and
     Sturm's sequence the real ones among them. No rounding anywhere: a disc doublet split
     by 1e-10, or an exact one, is decided like any other point.
+
+    With ``zero_reach`` > ``thr`` (the reach of a zero root split by the rounding of the
+    matrices, see :data:`~squealkit.stability._kernels.ZERO_ROOT_REACH`), the roots beyond
+    ``zero_reach`` decide; where the only roots beyond ``thr`` lie within ``zero_reach``
+    they may be a rigid-body mode's rounding, and the point is indeterminate.
     """
-    p = _shifted_char_poly(M, C, K, thr)
-    if p[-1] < 0:
-        p = [-x for x in p]
-    unstable = _right_half_plane_roots(p)
+    def count(h: float) -> tuple[list[int], int | None]:
+        p = _shifted_char_poly(M, C, K, h)
+        if p[-1] < 0:
+            p = [-x for x in p]
+        return p, _right_half_plane_roots(p)
+
+    p, unstable = count(thr)
     if unstable is None:
         return None
+    if unstable and zero_reach > thr:
+        p_far, far = count(zero_reach)
+        if far is None:
+            return None
+        if far == 0:
+            return INDETERMINATE
+        p, unstable = p_far, far
     if unstable == 0:
         return STABLE
     real = _positive_real_roots(p)

@@ -11,10 +11,13 @@ batch are searched together, each step one vectorised eigenvalue call:
    close in frequency first (the gap between frequency-adjacent eigenvalues, or between a
    root and its conjugate for divergence, has a local minimum), and a damped mode that
    crosses the axis rises first (the largest growth rate has a local maximum). Every such
-   resolved local extremum of the scan is a candidate.
+   resolved local extremum of the scan is a candidate. Likewise a stable gap narrower than
+   the scan spacing between two windows (flutter and flutter, or flutter and divergence)
+   announces itself on the unstable points around it: the largest growth rate has a local
+   minimum there.
 3. **Golden-section search** of each candidate's indicator on the two scan intervals around
-   it, all candidates together; a point it visits that is not stable is a sample inside a
-   window.
+   it, all candidates together; a point it visits that is not stable (for a gap candidate:
+   that is stable) is a sample inside a window (a gap).
 4. **Bisection** of every change between stable and not stable among the sorted samples,
    all brackets together, to 1e-13 relative.
 
@@ -115,7 +118,8 @@ def _indicators(lam: NDArray, thr: NDArray) -> NDArray[np.float64]:
 
     Column 0: minus the growth margin ``max sigma - thr``; column 1: twice the lowest
     frequency (the gap to its own conjugate: divergence); then the gaps between
-    frequency-adjacent modes (lock-in). All relative to |lambda|_max.
+    frequency-adjacent modes (lock-in); the last column is the growth margin itself (its
+    local minimum among unstable points announces a stable gap). All relative to |lambda|_max.
     """
     scale = np.max(np.abs(lam), axis=-1)
     scale = np.where(scale > 0, scale, 1.0)
@@ -123,6 +127,7 @@ def _indicators(lam: NDArray, thr: NDArray) -> NDArray[np.float64]:
     s = np.take_along_axis(lam, order, axis=-1)
     cols = [-(np.max(lam.real, axis=-1) - thr), 2.0 * np.abs(s[:, 0].imag)]
     cols.extend(np.abs(s[:, 1:] - s[:, :-1]).T)
+    cols.append(-cols[0])
     return np.stack(cols, axis=-1) / scale[:, None]
 
 
@@ -185,7 +190,11 @@ def _find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, N: int, roundin
     mid, left, right = ind[:, 1:-1], ind[:, :-2], ind[:, 2:]
     depth = np.maximum(left, right) - mid
     stable3 = (verdict[:, :-2] == STABLE) & (verdict[:, 1:-1] == STABLE) & (verdict[:, 2:] == STABLE)
-    is_min = (mid <= left) & (mid <= right) & (depth > _DEPTH) & stable3[..., None]
+    uns = (verdict == FLUTTER) | (verdict == DIVERGENCE)
+    unstable3 = uns[:, :-2] & uns[:, 1:-1] & uns[:, 2:]
+    around = np.repeat(stable3[..., None], ind.shape[-1], axis=-1)
+    around[..., -1] = unstable3  # the growth margin's minimum among unstable points: a stable gap?
+    is_min = (mid <= left) & (mid <= right) & (depth > _DEPTH) & around
     # the most pronounced (relative depth) first, at most _MAX_CANDIDATES per row
     score = np.full(depth.shape, -1.0)
     np.divide(depth, np.abs(mid) + depth, out=score, where=is_min)  # depth > 0 where is_min
@@ -197,13 +206,24 @@ def _find_windows(evaluate: Evaluator, x0: NDArray, x1: NDArray, N: int, roundin
     pos = top[cb, cj]
     ci = pos // ind.shape[-1] + 1  # scan index of the candidate
     ck = pos % ind.shape[-1]  # indicator
+    # a stable gap between the last two (first two) scan points: the growth margin falls to the end
+    g = ind[..., -1]
+    end_b, end_i = [], []
+    for i, j in ((N - 1, N - 2), (0, 1)):
+        b_ = np.flatnonzero(uns[:, i] & uns[:, j] & (g[:, i] < g[:, j]))
+        end_b.append(b_)
+        end_i.append(np.full(b_.size, i))
+    cb = np.concatenate([cb, *end_b])
+    ci = np.concatenate([ci, *end_i])
+    ck = np.concatenate([ck, np.full(cb.size - ck.size, ind.shape[-1] - 1)])
     if first_only:
         # a window past the first non-stable scan point cannot come first
         not_stable = verdict != STABLE
         first_bad = np.where(not_stable.any(axis=1), np.argmax(not_stable, axis=1), N)
         before = ci + 1 < first_bad[cb]
         cb, ci, ck = cb[before], ci[before], ck[before]
-    found_x, found_v = _golden(evaluate, cb.astype(np.int64), ck, xs[cb, ci - 1], xs[cb, ci + 1])
+    found_x, found_v = _golden(evaluate, cb.astype(np.int64), ck, xs[cb, np.maximum(ci - 1, 0)],
+                               xs[cb, np.minimum(ci + 1, N - 1)])
 
     # 3. samples: the scan plus the non-stable points found by the golden search
     hit = np.isfinite(found_x)
@@ -266,7 +286,8 @@ def _golden(evaluate: Evaluator, rows: NDArray, kind: NDArray, a: NDArray, d: ND
     """Golden-section minimisation of indicator ``kind`` of each row on ``[a, d]``.
 
     Returns, per candidate, the first visited point that is not stable (NaN if none) and
-    its verdict code.
+    its verdict code; for a candidate of the last indicator (the growth margin, searched
+    among unstable points) the first visited point that is stable.
     """
     found = np.full(rows.shape[0], np.nan)
     found_v = np.full(rows.shape[0], STABLE, dtype=np.int8)
@@ -277,8 +298,9 @@ def _golden(evaluate: Evaluator, rows: NDArray, kind: NDArray, a: NDArray, d: ND
 
     def f(idx: NDArray, x: NDArray) -> NDArray:
         v, lam, thr = evaluate(rows[idx], x)
-        val = _indicators(lam, thr)[np.arange(idx.size), kind[idx]]
-        bad = v != STABLE
+        ind = _indicators(lam, thr)
+        val = ind[np.arange(idx.size), kind[idx]]
+        bad = np.where(kind[idx] == ind.shape[-1] - 1, v == STABLE, v != STABLE)
         new = bad & np.isnan(found[idx])
         found[idx[new]] = x[new]
         found_v[idx[new]] = v[new]

@@ -435,7 +435,12 @@ def integrate_adaptive(
                 counts[r, 3] = h
             # events: contact (located above) and stick/slip band crossings (located here)
             if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0):
-                _log_event(r, t_new, EVENT_CONTACT_OPENS if g_new <= 0.0 else EVENT_CONTACT_CLOSES, ev_t, ev_k, n_ev)
+                # the crossing on this step's dense output (the step was retaken to end near it, but its
+                # end can lie a whole step past where the retaken solution crosses)
+                hi = _locate(False, g_old > 0.0, 50, z, znew, K, P, h, False, t, tg0, hg, qg_r, tg_r, v_r,
+                             b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
+                _log_event(r, t + hi * h, EVENT_CONTACT_OPENS if g_new <= 0.0 else EVENT_CONTACT_CLOSES, ev_t, ev_k,
+                           n_ev)
             if opts[2] != 0.0 and (w_old < opts[4]) != (w_new < opts[4]):
                 hi = _locate(True, w_old < opts[4], 40, z, znew, K, P, h, False, t, tg0, hg, qg_r, tg_r, v_r,
                              b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
@@ -739,7 +744,10 @@ def integrate_rosenbrock(
             if h < counts[r, 3] or counts[r, 3] == 0.0:
                 counts[r, 3] = h
             if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0):
-                _log_event(r, t_new, EVENT_CONTACT_OPENS if g_new <= 0.0 else EVENT_CONTACT_CLOSES, ev_t, ev_k, n_ev)
+                hi = _locate(False, g_old > 0.0, 50, z, znew, U, RDD, h, True, t, tg0, hg, qg_r, tg_r, v_r,
+                             b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
+                _log_event(r, t + hi * h, EVENT_CONTACT_OPENS if g_new <= 0.0 else EVENT_CONTACT_CLOSES, ev_t, ev_k,
+                           n_ev)
             if opts[2] != 0.0 and (w_old < opts[4]) != (w_new < opts[4]):
                 hi = _locate(True, w_old < opts[4], 40, z, znew, U, RDD, h, True, t, tg0, hg, qg_r, tg_r, v_r,
                              b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
