@@ -103,7 +103,7 @@ def test_public_verdict_reaches_the_50_digit_stage(monkeypatch):
         calls.append(args)
         return real_mp_roots(*args, **kwargs)
 
-    monkeypatch.setattr(_solve, "exact_verdict", lambda *a: None)
+    monkeypatch.setattr(_solve, "exact_verdict", lambda *a, **kw: None)
     monkeypatch.setattr(_solve, "mp_roots", spy)
     k_d, d, c, k3 = 1e6, 0.8e6, 0.1e6, 1.1735e6
     k0 = np.diag([k_d, k_d * (1 + 1e-10), k3])

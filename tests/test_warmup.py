@@ -60,5 +60,5 @@ def test_child_compiles_its_groups_and_reports_each(monkeypatch, tmp_path):
         assert proc.wait(timeout=120) == 0
         _warmup.wait(["measurement"])  # nothing pending: returns at once
     finally:
-        _warmup._stop()
+        _warmup.stop()
     assert not (tmp_path / "cold.stamp").exists()  # only a child that compiled every group writes it

@@ -20,15 +20,16 @@ Private: used by :func:`squealkit.report.reproduce`.
 from __future__ import annotations
 
 import atexit
+import contextlib
 import hashlib
 import os
 import subprocess
 import sys
 import threading
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 
-__all__ = ["GROUPS", "start", "wait"]
+__all__ = ["GROUPS", "compiling", "start", "stop", "wait"]
 
 
 def _lapack_eigenvalues(model, mu, tan_theta=0.0, *, damped=False, **_ignored):
@@ -124,7 +125,10 @@ def _worth_starting() -> bool:
 def start(groups: Iterable[str]) -> bool:
     """Compile ``groups`` (names in :data:`GROUPS`) in a child process; True if one was started."""
     names = [g for g in groups if g in GROUPS]
-    if not names or _child["proc"] is not None or not _worth_starting():
+    if not names or not _worth_starting():
+        return False
+    proc = _child["proc"]
+    if proc is not None and proc.poll() is None:  # one child at a time
         return False
     try:
         proc = subprocess.Popen(
@@ -135,8 +139,17 @@ def start(groups: Iterable[str]) -> bool:
         return False
     _child["proc"] = proc
     _child["pending"] = set(names)
-    atexit.register(_stop)
     return True
+
+
+@contextlib.contextmanager
+def compiling(groups: Iterable[str]) -> Iterator[None]:
+    """:func:`start` on entry, :func:`stop` on the way out (done, failed or interrupted)."""
+    start(groups)
+    try:
+        yield
+    finally:
+        stop()
 
 
 def wait(groups: Iterable[str]) -> None:
@@ -156,12 +169,17 @@ def wait(groups: Iterable[str]) -> None:
             want.discard(done)
 
 
-def _stop() -> None:
+def stop() -> None:
+    """End the child, if one is still compiling (the run that started it is over)."""
     proc = _child["proc"]
     if proc is not None and proc.poll() is None:
         proc.kill()
         proc.wait()
     _child["proc"] = None
+    _child["pending"] = set()
+
+
+atexit.register(stop)
 
 
 def _main(names: list[str]) -> int:

@@ -45,7 +45,7 @@ def _analyze_application(item: dict[str, Any]) -> tuple[dict[str, Any], list[dic
     try:
         for col, channel in item.get("condition_channels", {}).items():
             if not math.isfinite(row[col]):  # the matrix does not say: the channel's mean over the application
-                row[col] = _channel_mean(app["file"], channel)
+                row[col] = _channel_mean(app["file"], channel, col)
         res = analyze_recording(app["file"], **kw)
     except Exception as e:  # one application's fault, whatever it is, is recorded, not raised
         row["error"] = _failure(e)
@@ -66,7 +66,16 @@ def _analyze_application(item: dict[str, Any]) -> tuple[dict[str, Any], list[dic
     return row, events
 
 
-def _channel_mean(path: str, channel: str) -> float:
+#: The unit each condition is stored in (the matrix's columns).
+_CONDITION_UNITS = {"pressure_bar": "bar", "temperature_c": "degC"}
+
+
+def _channel_mean(path: str, channel: str, condition: str) -> float:
+    """Mean of a condition channel over the application, in the condition's unit (``bar``, ``degC``).
+
+    A channel the reader converted to SI (its file said ``bar``: read in Pa) is converted back
+    to the condition's unit; any other channel is taken in the unit the file gives.
+    """
     from ..measurement import open_recording
 
     src = open_recording(path)
@@ -74,7 +83,17 @@ def _channel_mean(path: str, channel: str) -> float:
     total = 0.0
     for _, blk in src.iter_blocks([name]):
         total += float(blk[name].sum())
-    return total / src.n_samples
+    mean = total / src.n_samples
+    if name in src._extra.get("file_units", {}):
+        from .._units import _pint_unit, registry
+
+        have, want = src.units.get(name, ""), _CONDITION_UNITS[condition]
+        try:
+            mean = float(registry().Quantity(mean, _pint_unit(have)).to(_pint_unit(want)).magnitude)
+        except Exception as e:  # pint's dimensionality and parsing errors
+            raise InputError(f"Channel {channel!r} of {path}: its unit {have!r} is not one of {condition} "
+                             f"({want}).") from e
+    return mean
 
 
 def _check_options(crit: Any, radius: float, rpm: float | None, options: dict[str, Any]) -> None:

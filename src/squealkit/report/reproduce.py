@@ -196,9 +196,8 @@ def reproduce(
     steps = _paper_steps(model, rig, published=paper_model, quick=quick, recording=recording, settings=settings)
     start = time.perf_counter()
     # a first run compiles the later steps' kernels on the other core while the first steps run
-    _warmup.start(["transient", "nonlinear", "measurement"])
     # staged and moved into place only when complete; never deletes what squealkit did not write
-    with output_folder(out, force=force) as stage:
+    with _warmup.compiling(["transient", "nonlinear", "measurement"]), output_folder(out, force=force) as stage:
         figures, data = stage / "figures", stage / "data"
         figures.mkdir(parents=True)
         data.mkdir()
