@@ -115,8 +115,9 @@ def render_html(sections: Sequence[Section], figures_dir: Path, *, title: str, s
             uri = "data:image/png;base64," + base64.b64encode(png).decode("ascii")
             parts.append(
                 f"<figure id='fig-{f.stem}'><img alt='{html.escape(f.caption)}' src='{uri}'>"
-                f"<figcaption>{html.escape(f.caption)} (<code>figures/{f.stem}.png</code>, "
-                f"<code>.svg</code>)</figcaption></figure>"
+                f"<figcaption>{html.escape(f.caption)} (<code>figures/{f.stem}.png</code>"
+                + (", <code>.svg</code>" if (figures_dir / f"{f.stem}.svg").is_file() else "")
+                + ")</figcaption></figure>"
             )
         if s.data:
             files = ", ".join(f"<code>data/{html.escape(d)}</code>" for d in s.data)

@@ -197,7 +197,11 @@ def reproduce(
     start = time.perf_counter()
     # a first run compiles the later steps' kernels on the other core while the first steps run
     # staged and moved into place only when complete; never deletes what squealkit did not write
-    with _warmup.compiling(["transient", "nonlinear", "measurement"]), output_folder(out, force=force) as stage:
+    from .steps_stability import figure_formats
+
+    # a preview draws each figure once (PNG); the later steps' kernels compile on the other core meanwhile
+    with (_warmup.compiling(["transient", "nonlinear", "measurement"]),
+          figure_formats(("png",) if quick else ("png", "svg")), output_folder(out, force=force) as stage):
         figures, data = stage / "figures", stage / "data"
         figures.mkdir(parents=True)
         data.mkdir()
