@@ -375,9 +375,6 @@ def test_bad_store_cli_exit_2(run, tmp_path, good_store):
     out = tmp_path / "o"
     out.mkdir()
     _make_store("sqlite", out / "campaign.duckdb", good_store)
-    from squealkit.io import _write_manifest
-
-    _write_manifest(out, ["campaign.duckdb"])  # squealkit's folder: the store itself is what is checked
     before = _snapshot(out / "campaign.duckdb")
     m = tmp_path / "m.csv"
     (tmp_path / "r.nc").write_bytes(b"")
