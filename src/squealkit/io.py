@@ -608,6 +608,11 @@ def output_folder(path: str | Path, *, force: bool = False, keep: Iterable[str] 
     """
     keep = tuple(keep)
     final = check_output(path, directory=True, force=force)
+    for name in keep:  # a kept file of the wrong kind is refused before the folder is claimed
+        kind = _kind(final / name)
+        if kind not in (None, "file"):
+            raise InputError(f"{str(final / name)!r} is {'a ' if kind == 'folder' else ''}{kind}, not a regular file; "
+                             "squealkit never replaces it.")
     if not keep and not (final.is_dir() and not _owned_folder(final)[0]) and final.name not in ("", ".", ".."):
         with atomic_path(final, directory=True) as stage:
             stage.mkdir()

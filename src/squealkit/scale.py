@@ -127,7 +127,21 @@ CONNECT_TIMEOUT = 20.0
 
 def _connect(distributed, address: str):
     """A client of the scheduler at ``address``, or a one-line InputError within the timeout."""
+    import dask
+
     result: dict[str, Any] = {}
+    # a Client makes itself dask's scheduler and default client before it connects, and one that failed
+    # to connect never undoes it: later dask and xarray work in this process would go to the refused address
+    scheduler = dask.config.get("scheduler", None)
+    defaults = set(distributed.client._global_clients)
+
+    def forget_the_client() -> None:
+        if scheduler is None:
+            dask.config.config.pop("scheduler", None)
+        else:
+            dask.config.set(scheduler=scheduler)
+        for k in set(distributed.client._global_clients) - defaults:
+            distributed.client._global_clients.pop(k, None)
 
     def attempt() -> None:
         try:
@@ -139,10 +153,12 @@ def _connect(distributed, address: str):
     worker.start()
     worker.join(CONNECT_TIMEOUT)
     if worker.is_alive():
+        forget_the_client()
         raise InputError(f"No Dask scheduler answered at {address!r} within {CONNECT_TIMEOUT:g} s "
                          "(is a Dask scheduler listening there?).")
     error = result.get("error")
     if error is not None:
+        forget_the_client()
         if isinstance(error, OSError | TimeoutError | ValueError | TypeError):
             raise InputError(f"Cannot reach the Dask scheduler {address!r}: {error}") from error
         if isinstance(error, Exception):  # e.g. a frame length read from another service's bytes: MemoryError

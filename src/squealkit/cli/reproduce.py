@@ -21,7 +21,8 @@ def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = F
     # before the progress bar: the error stays one line
     check_output(out_dir, directory=True, force=force, names=REPORT_FILES)
     progress = Progress(TextColumn("{task.description:<28}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                        TimeElapsedColumn(), console=Console(stderr=True), disable=as_json)
+                        TimeElapsedColumn(), console=Console(stderr=True), disable=as_json,
+                        transient=True)  # gone when the run ends: an error stays one line
     with progress:
         task = progress.add_task("starting", total=None)
 
