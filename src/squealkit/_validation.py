@@ -63,11 +63,11 @@ def _short(value: object) -> str:
 def validate_model(model: object, name: str = "model", *, kind: str = "any") -> object:
     """Return ``model`` if it is a squealkit model, else one line naming the argument and its type.
 
-    ``kind``: ``"any"`` (a friction model or an :class:`~squealkit.models.fe.FEModel`), ``"friction"``
+    ``kind``: ``"any"`` (a friction model or an :class:`~squealkit.fe.model.FEModel`), ``"friction"``
     (a preset, a rig's model, a matrix model) or ``"fe"``.
     """
+    from .fe.model import FEModel
     from .models._base import FrictionModel
-    from .models.fe import FEModel
 
     kinds = {"any": ((FrictionModel, FEModel), "a squealkit model (get_preset, load_model, FEModel)"),
              "friction": ((FrictionModel,), "a squealkit model (get_preset, load_model; not an FE model here)"),

@@ -4,9 +4,9 @@ The model ships with squealkit so that the FE path (sparse matrices, band eigenv
 reduction) can be tried and benchmarked without a commercial FE code. It is exported in the
 matrix form of industrial complex eigenvalue analysis (Abaqus/ANSYS/Nastran)::
 
-    M u'' + C(omega, mu) u' + K(omega, mu) u = 0
-    C = D1 + (omega / omega_ref) DG
-    K = K1 + (mu / mu_ref) KR + (omega / omega_ref)**2 KGeo
+    M u'' + C(v, mu) u' + K(v, mu) u = 0      (v the disc speed [rad/s], v_ref = disc_speed_ref)
+    C = D1 + (v / v_ref) DG
+    K = K1 + (mu / mu_ref) KR + (v / v_ref)**2 KGeo
 
 What is in it
 -------------
@@ -26,11 +26,11 @@ What is in it
   on the pad node (disc turning about +z, ``e_theta`` at the node): the follower-friction
   coupling of mode-coupling squeal. ``KR`` is non-symmetric, its forces sum to zero (action
   equals reaction) and a common normal motion of a pair gives none.
-* Rotation (disc only), at ``omega_ref``: the transport (Eulerian) terms of the out-of-plane
+* Rotation (disc only), at ``disc_speed_ref``: the transport (Eulerian) terms of the out-of-plane
   displacement ``w`` of a disc seen from the non-rotating pads,
-  ``DG = omega_ref int rho (N_i d_theta N_j - d_theta N_i N_j) dV`` (skew, Coriolis of the
-  travelling waves) and the convective softening ``-omega_ref^2 int rho d_theta N_i d_theta N_j dV``;
-  plus the centrifugal stress stiffening ``omega_ref^2 int sigma : (grad N_i grad N_j) dV``
+  ``DG = disc_speed_ref int rho (N_i d_theta N_j - d_theta N_i N_j) dV`` (skew, Coriolis of the
+  travelling waves) and the convective softening ``-disc_speed_ref^2 int rho d_theta N_i d_theta N_j dV``;
+  plus the centrifugal stress stiffening ``disc_speed_ref^2 int sigma : (grad N_i grad N_j) dV``
   of all three components with the plane-stress stress of a spinning annulus clamped at
   ``r_inner`` and free at ``r_outer`` (Timoshenko & Goodier, Theory of Elasticity, §32).
   ``KGeo`` is the sum of the last two. Omitted: the in-plane Coriolis and spin-softening
@@ -39,7 +39,7 @@ What is in it
 
 Example
 -------
->>> from squealkit.models.fe_demo import build_fe_demo
+>>> from squealkit.fe.demo import build_fe_demo
 >>> demo = build_fe_demo(n_theta=16, n_r=2)
 >>> demo["M"].shape == demo["K1"].shape and demo["KR"].nnz > 0
 True
@@ -56,6 +56,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from .._deprecation import renamed_kwargs
 from .._validation import InputError, check_budget
 
 __all__ = ["FE_MATRIX_NAMES", "FEDemoGeometry", "build_fe_demo", "fe_demo_dofs", "write_fe_demo"]
@@ -272,6 +273,7 @@ def _spin_stress_constants(geom: FEDemoGeometry) -> dict[str, float]:
 # ----------------------------------------------------------------------------- assembly
 
 
+@renamed_kwargs(omega_ref="disc_speed_ref")
 def build_fe_demo(
     n_theta: int = 48,
     n_r: int | None = None,
@@ -279,7 +281,7 @@ def build_fe_demo(
     *,
     geometry: FEDemoGeometry | None = None,
     pads: bool = True,
-    omega_ref: float = 10.0,
+    disc_speed_ref: float = 10.0,
     mu_ref: float = 0.4,
     rayleigh: tuple[float, float] = (0.0, 2e-8),
 ) -> dict[str, Any]:
@@ -299,7 +301,7 @@ def build_fe_demo(
         Dimensions, materials and spring stiffnesses.
     pads : bool
         ``False`` gives the disc alone (no pads, contact or friction): its doublets.
-    omega_ref : float
+    disc_speed_ref : float
         Disc speed [rad/s] at which ``DG`` and ``KGeo`` are given.
     mu_ref : float
         Friction coefficient at which ``KR`` is given.
@@ -311,7 +313,7 @@ def build_fe_demo(
     -------
     dict
         ``M, D1, DG, DR, D4, K1, KR, KGeo`` (CSR, or ``None`` when absent; restrained
-        unknowns removed) and ``omega_ref``, ``mu_ref``, ``f_ref`` (1.0), ``dof_names``
+        unknowns removed) and ``disc_speed_ref``, ``mu_ref``, ``f_ref`` (1.0), ``dof_names``
         (``"node<k>.<x|y|z>"``), ``dof_node``/``dof_component`` (mesh node and component of
         each unknown, for shapes on the mesh), ``mesh`` (``points`` (n, 3), ``cells``
         {"hexahedron": (e, 8)} of the element vertices, ``disc`` element mask) and
@@ -328,8 +330,8 @@ def build_fe_demo(
         raise InputError(f"FE demo: n_r={n_r!r} must be an integer >= 2.")
     if int(n_z) != n_z or n_z < 1:
         raise InputError(f"FE demo: n_z={n_z!r} must be an integer >= 1.")
-    if not (math.isfinite(omega_ref) and omega_ref > 0 and math.isfinite(mu_ref) and mu_ref > 0):
-        raise InputError(f"FE demo: omega_ref={omega_ref!r} and mu_ref={mu_ref!r} must be positive.")
+    if not (math.isfinite(disc_speed_ref) and disc_speed_ref > 0 and math.isfinite(mu_ref) and mu_ref > 0):
+        raise InputError(f"FE demo: disc_speed_ref={disc_speed_ref!r} and mu_ref={mu_ref!r} must be positive.")
     alpha, beta = rayleigh
     if not (alpha >= 0 and beta >= 0):
         raise InputError(f"FE demo: rayleigh={rayleigh!r} must be two non-negative numbers.")
@@ -361,8 +363,8 @@ def build_fe_demo(
     }
     mats = _assemble(disc, n_nodes, is_rotating=True, material=steel, spin=_spin_stress_constants(geom))
     K, M = mats["K"], mats["M"]
-    DG = omega_ref * mats["DG"]
-    KGeo = omega_ref**2 * mats["KGeo"]
+    DG = disc_speed_ref * mats["DG"]
+    KGeo = disc_speed_ref**2 * mats["KGeo"]
     node_xyz = disc.doflocs.T  # (n_nodes, 3): location of each scalar node
     KR = None
     if pads:
@@ -421,7 +423,7 @@ def build_fe_demo(
         "K1": K1,
         "KR": restrict(KR) if KR is not None else None,
         "KGeo": restrict(KGeo, 1),
-        "omega_ref": float(omega_ref),
+        "disc_speed_ref": float(disc_speed_ref),
         "mu_ref": float(mu_ref),
         "f_ref": 1.0,
         "dof_names": names,
@@ -493,7 +495,7 @@ def write_fe_demo(model: Mapping[str, Any], out_dir: str | Path) -> Path:
     """Write the matrices as Matrix Market files, a ``brake.toml`` and the mesh (VTU).
 
     The folder is staged and moved into place only when complete (:func:`squealkit.io.atomic_path`).
-    The TOML reads ``model = "fe"`` with ``[fe] files = {M = "M.mtx", ...}``, ``omega_ref``,
+    The TOML reads ``model = "fe"`` with ``[fe] files = {M = "M.mtx", ...}``, ``disc_speed_ref``,
     ``mu_ref``, ``f_ref``, ``dof_names = "dof_names.txt"`` and (when meshio is installed)
     ``mesh = "mesh.vtu"``, the element vertices for viewing mode shapes (``modes --vtk``).
 
@@ -519,11 +521,11 @@ def write_fe_demo(model: Mapping[str, Any], out_dir: str | Path) -> Path:
         (stage / "dof_names.txt").write_text("\n".join(map(str, model.get("dof_names", []))) + "\n")
         file_table = ", ".join(f'{k} = "{v}"' for k, v in files.items())
         toml = (
-            "# built-in FE disc brake (squealkit.models.fe_demo), "
+            "# built-in FE disc brake (squealkit.fe.demo), "
             f"{model['M'].shape[0]} unknowns\n"
             'model = "fe"\n\n[fe]\n'
             f"files = {{ {file_table} }}\n"
-            f"omega_ref = {model['omega_ref']!r}  # rad/s: disc speed of DG and KGeo\n"
+            f"disc_speed_ref = {model['disc_speed_ref']!r}  # rad/s: disc speed of DG and KGeo\n"
             f"mu_ref = {model['mu_ref']!r}  # friction coefficient of KR\n"
             f"f_ref = {model.get('f_ref', 1.0)!r}  # Hz: reference of D4\n"
         )

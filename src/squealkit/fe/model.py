@@ -4,13 +4,15 @@ The matrices carry the names of the TU Berlin / NLEVP disc brake workflow (Graeb
 ZAMM 96(12), 2016): ``M`` mass, ``D1`` material damping, ``DR`` friction-induced damping,
 ``DG`` gyroscopic (skew), ``D4`` a damping scaled by ``1/f_ref``, ``K1`` structural stiffness
 (symmetric), ``KR`` friction stiffness (non-symmetric), ``KGeo`` centrifugal stiffening.
-At disc speed ``omega`` [rad/s] and friction ``mu``::
+At disc speed ``disc_speed`` [rad/s] and friction ``mu``::
 
-    C(omega, mu) = D1 + (mu/mu_ref) (omega_ref/omega) DR + (omega/omega_ref) DG + D4/f_ref
-    K(omega, mu) = K1 + (mu/mu_ref) KR + (omega/omega_ref)^2 KGeo
+    C(v, mu) = D1 + (mu/mu_ref) (v_ref/v) DR + (v/v_ref) DG + D4/f_ref
+    K(v, mu) = K1 + (mu/mu_ref) KR + (v/v_ref)^2 KGeo      (v = disc_speed, v_ref = disc_speed_ref)
 
 ``KR`` and ``DR`` are exported at friction ``mu_ref`` and scale linearly with ``mu``;
-``omega_ref`` is the speed at which ``DG`` and ``KGeo`` were exported. The run-out slope of the
+``disc_speed_ref`` is the speed at which ``DG`` and ``KGeo`` were exported. (``omega`` is an
+eigenfrequency everywhere else in squealkit; the older names ``omega=`` and ``omega_ref`` of the
+disc speed still work for one release, with a :class:`DeprecationWarning`.) The run-out slope of the
 disc acts like extra friction (Lv, Zhang & Yu 2013, eqs. 5-6): ``mu_e = mu + tan(theta)``
 replaces ``mu`` in the friction parts when ``tan_theta`` is given.
 """
@@ -20,6 +22,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import warnings
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -28,9 +31,10 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
+from .._deprecation import renamed_kwargs
 from .._validation import InputError, validate_finite, validate_positive
 
-__all__ = ["FE_MATRICES", "FEModel", "rpm_to_omega"]
+__all__ = ["FE_MATRICES", "FEModel", "rpm_to_disc_speed", "rpm_to_omega"]
 
 #: The matrix names of an FE brake model, in a fixed order.
 FE_MATRICES: tuple[str, ...] = ("M", "D1", "DG", "DR", "D4", "K1", "KR", "KGeo")
@@ -143,8 +147,9 @@ class FEModel:
     ----------
     M, D1, DG, DR, D4, K1, KR, KGeo : scipy.sparse.csr_matrix or None, shape (n, n)
         The matrices; absent ones are None. ``M`` and ``K1`` are required.
-    omega_ref : float
-        Disc speed [rad/s] at which ``DG``, ``KGeo`` (and ``DR``) were exported.
+    disc_speed_ref : float
+        Disc speed [rad/s] at which ``DG``, ``KGeo`` (and ``DR``) were exported (formerly
+        ``omega_ref``, still accepted with a DeprecationWarning).
     mu_ref : float
         Friction coefficient at which ``KR`` and ``DR`` were exported.
     f_ref : float
@@ -161,7 +166,7 @@ class FEModel:
     >>> m = FEModel.from_matrices(M=np.eye(2), K1=np.diag([4.0, 9.0]), KR=[[0, 1.0], [-1.0, 0]])
     >>> m.n_dof
     2
-    >>> m.stiffness_matrix(omega=1.0, mu=0.5).toarray().tolist()
+    >>> m.stiffness_matrix(disc_speed=1.0, mu=0.5).toarray().tolist()
     [[4.0, 0.5], [-0.5, 9.0]]
     """
 
@@ -175,7 +180,7 @@ class FEModel:
     K1: Any = None
     KR: Any = None
     KGeo: Any = None
-    omega_ref: float = 1.0
+    disc_speed_ref: float = 1.0
     mu_ref: float = 1.0
     f_ref: float = 1.0
     dof_names: tuple[str, ...] | None = None
@@ -203,22 +208,31 @@ class FEModel:
         n = self.M.shape[0]
         _check_mass(self.M)
         _check_scale(self.M, self.K1)
-        for name in ("omega_ref", "mu_ref", "f_ref"):
+        for name in ("disc_speed_ref", "mu_ref", "f_ref"):
             set_(self, name, validate_positive(name, getattr(self, name)))
         names = tuple(f"q{i}" for i in range(n)) if self.dof_names is None else tuple(map(str, self.dof_names))
         if len(names) != n:
             raise InputError(f"Parameter dof_names has {len(names)} entries for {n} DOFs.")
         set_(self, "dof_names", names)
 
+    @property
+    def omega_ref(self) -> float:
+        """Deprecated name of :attr:`disc_speed_ref` (``omega`` is an eigenfrequency elsewhere)."""
+        warnings.warn("FEModel.omega_ref is deprecated; use disc_speed_ref (same meaning).",
+                      DeprecationWarning, stacklevel=2)
+        return self.disc_speed_ref
+
     @classmethod
-    def from_matrices(cls, *, omega_ref: float = 1.0, mu_ref: float = 1.0, f_ref: float = 1.0,
+    @renamed_kwargs(omega_ref="disc_speed_ref")
+    def from_matrices(cls, *, disc_speed_ref: float = 1.0, mu_ref: float = 1.0, f_ref: float = 1.0,
                       dof_names: Any = None, mesh: Any = None, source: str | None = None, **mats: Any) -> FEModel:
         """The model of the matrices given by name (``M=..., K1=..., KR=...``), validated.
 
         Parameters
         ----------
-        omega_ref, mu_ref, f_ref : float, default 1.0
-            Reference values (see the class: disc speed [rad/s], friction coefficient, ``Fref``).
+        disc_speed_ref, mu_ref, f_ref : float, default 1.0
+            Reference values (see the class: disc speed [rad/s], friction coefficient, ``Fref``);
+            ``omega_ref=`` is the deprecated name of ``disc_speed_ref=``.
         dof_names : tuple of str, optional
             A name per DOF.
         mesh : object, optional
@@ -243,7 +257,7 @@ class FEModel:
         for name in mats:
             if name not in FE_MATRICES:
                 raise InputError(f"Unknown FE matrix {name!r}; known: {', '.join(FE_MATRICES)}.")
-        return cls(**mats, omega_ref=omega_ref, mu_ref=mu_ref, f_ref=f_ref, dof_names=dof_names, mesh=mesh,
+        return cls(**mats, disc_speed_ref=disc_speed_ref, mu_ref=mu_ref, f_ref=f_ref, dof_names=dof_names, mesh=mesh,
                    source=source)
 
     # -- size and parts ----------------------------------------------------------------
@@ -257,16 +271,17 @@ class FEModel:
         """Names of the matrices the model has."""
         return tuple(name for name in FE_MATRICES if getattr(self, name) is not None)
 
-    def factors(self, omega: float, mu: float, tan_theta: float = 0.0) -> dict[str, float]:
-        """The scalar multiplying each present damping and stiffness matrix at ``(omega, mu)``.
+    @renamed_kwargs(omega="disc_speed")
+    def factors(self, disc_speed: float, mu: float, tan_theta: float = 0.0) -> dict[str, float]:
+        """The scalar multiplying each present damping and stiffness matrix at ``(disc_speed, mu)``.
 
         ``C = sum f[D] D`` over the damping matrices and ``K = sum f[K] K`` over the stiffness
         matrices; ``mu_e = mu + tan_theta`` is the friction (run-out slope as extra friction).
 
         Parameters
         ----------
-        omega : float
-            Disc speed [rad/s] (> 0 when ``DR`` is present).
+        disc_speed : float
+            Disc speed [rad/s] (> 0 when ``DR`` is present); ``omega=`` is its deprecated keyword.
         mu : float
             Friction coefficient.
         tan_theta : float, default 0.0
@@ -277,18 +292,19 @@ class FEModel:
         dict of str to float
             Matrix name -> factor, for the matrices present.
         """
-        omega = validate_finite("omega", omega)
+        disc_speed = validate_finite("disc_speed", disc_speed)
         mu_e = validate_finite("mu", mu) + validate_finite("tan_theta", tan_theta)
-        if self.DR is not None and not omega > 0.0:
-            raise InputError(f"Parameter omega={omega!r} rad/s must be > 0: DR is scaled by omega_ref/omega.")
+        if self.DR is not None and not disc_speed > 0.0:
+            raise InputError(f"Parameter disc_speed={disc_speed!r} rad/s must be > 0: "
+                             "DR is scaled by disc_speed_ref/disc_speed.")
         f = {
             "D1": 1.0,
-            "DR": (mu_e / self.mu_ref) * (self.omega_ref / omega) if omega else 0.0,
-            "DG": omega / self.omega_ref,
+            "DR": (mu_e / self.mu_ref) * (self.disc_speed_ref / disc_speed) if disc_speed else 0.0,
+            "DG": disc_speed / self.disc_speed_ref,
             "D4": 1.0 / self.f_ref,
             "K1": 1.0,
             "KR": mu_e / self.mu_ref,
-            "KGeo": (omega / self.omega_ref) ** 2,
+            "KGeo": (disc_speed / self.disc_speed_ref) ** 2,
         }
         return {k: v for k, v in f.items() if getattr(self, k) is not None}
 
@@ -304,13 +320,14 @@ class FEModel:
         """Mass matrix M, shape (n, n), sparse."""
         return self.M
 
-    def damping_matrix(self, omega: float, mu: float, tan_theta: float = 0.0) -> sp.csr_matrix:
-        """``C(omega, mu) = D1 + (mu_e/mu_ref)(omega_ref/omega) DR + (omega/omega_ref) DG + D4/f_ref``.
+    @renamed_kwargs(omega="disc_speed")
+    def damping_matrix(self, disc_speed: float, mu: float, tan_theta: float = 0.0) -> sp.csr_matrix:
+        """``C = D1 + (mu_e/mu_ref)(v_ref/v) DR + (v/v_ref) DG + D4/f_ref``, v the disc speed, v_ref disc_speed_ref.
 
         Parameters
         ----------
-        omega : float
-            Disc speed [rad/s] (> 0 when ``DR`` is present).
+        disc_speed : float
+            Disc speed [rad/s] (> 0 when ``DR`` is present); ``omega=`` is its deprecated keyword.
         mu : float
             Friction coefficient.
         tan_theta : float, default 0.0
@@ -320,15 +337,16 @@ class FEModel:
         -------
         scipy.sparse.csr_matrix, shape (n, n)
         """
-        return self._combine(_DAMPING, self.factors(omega, mu, tan_theta))
+        return self._combine(_DAMPING, self.factors(disc_speed, mu, tan_theta))
 
-    def stiffness_matrix(self, omega: float, mu: float, tan_theta: float = 0.0) -> sp.csr_matrix:
-        """``K(omega, mu) = K1 + (mu_e/mu_ref) KR + (omega/omega_ref)^2 KGeo``.
+    @renamed_kwargs(omega="disc_speed")
+    def stiffness_matrix(self, disc_speed: float, mu: float, tan_theta: float = 0.0) -> sp.csr_matrix:
+        """``K(disc_speed, mu) = K1 + (mu_e/mu_ref) KR + (disc_speed/disc_speed_ref)^2 KGeo``.
 
         Parameters
         ----------
-        omega : float
-            Disc speed [rad/s] (> 0 when ``DR`` is present).
+        disc_speed : float
+            Disc speed [rad/s] (> 0 when ``DR`` is present); ``omega=`` is its deprecated keyword.
         mu : float
             Friction coefficient.
         tan_theta : float, default 0.0
@@ -338,15 +356,16 @@ class FEModel:
         -------
         scipy.sparse.csr_matrix, shape (n, n)
         """
-        return self._combine(_STIFFNESS, self.factors(omega, mu, tan_theta))
+        return self._combine(_STIFFNESS, self.factors(disc_speed, mu, tan_theta))
 
     # -- derived models ------------------------------------------------------------------
+    @renamed_kwargs(omega_ref="disc_speed_ref")
     def replace(self, **changes: Any) -> FEModel:
-        """A new model with reference values (``omega_ref``, ``mu_ref``, ``f_ref``) or matrices changed."""
-        allowed = {"omega_ref", "mu_ref", "f_ref", *FE_MATRICES}
+        """A new model with reference values (``disc_speed_ref``, ``mu_ref``, ``f_ref``) or matrices changed."""
+        allowed = {"disc_speed_ref", "mu_ref", "f_ref", *FE_MATRICES}
         for key in changes:
             if key not in allowed:
-                raise InputError(f"Unknown parameter {key!r} for model 'fe'; known: omega_ref, mu_ref, f_ref.")
+                raise InputError(f"Unknown parameter {key!r} for model 'fe'; known: disc_speed_ref, mu_ref, f_ref.")
         return dataclasses.replace(self, **changes)
 
     def project(self, V: Any) -> FEModel:
@@ -368,25 +387,27 @@ class FEModel:
         if V.ndim != 2 or V.shape[0] != self.n_dof or not np.all(np.isfinite(V)):
             raise InputError(f"Basis V must be a finite {self.n_dof} x k matrix, got shape {V.shape}.")
         mats = {name: V.T @ (getattr(self, name) @ V) for name in self.present}
-        return FEModel(**mats, omega_ref=self.omega_ref, mu_ref=self.mu_ref, f_ref=self.f_ref,
+        return FEModel(**mats, disc_speed_ref=self.disc_speed_ref, mu_ref=self.mu_ref, f_ref=self.f_ref,
                        dof_names=tuple(f"b{i}" for i in range(V.shape[1])), source=self.source)
 
     def to_dict(self) -> dict[str, Any]:
         """What the model is, for result attributes (not the matrices)."""
         return {"kind": self.kind, "n_dof": self.n_dof, "matrices": list(self.present),
-                "omega_ref": self.omega_ref, "mu_ref": self.mu_ref, "f_ref": self.f_ref, "source": self.source}
+                "disc_speed_ref": self.disc_speed_ref, "mu_ref": self.mu_ref, "f_ref": self.f_ref,
+                "source": self.source}
 
     def to_json(self) -> str:
         """:meth:`to_dict` as a JSON string."""
         return json.dumps(self.to_dict(), sort_keys=True)
 
-    def norms(self, omega: float, mu: float, tan_theta: float = 0.0) -> tuple[float, float, float]:
-        """Frobenius norms of M, C and K at ``(omega, mu)`` (for backward errors).
+    @renamed_kwargs(omega="disc_speed")
+    def norms(self, disc_speed: float, mu: float, tan_theta: float = 0.0) -> tuple[float, float, float]:
+        """Frobenius norms of M, C and K at ``(disc_speed, mu)`` (for backward errors).
 
         Parameters
         ----------
-        omega : float
-            Disc speed [rad/s] (> 0 when ``DR`` is present).
+        disc_speed : float
+            Disc speed [rad/s] (> 0 when ``DR`` is present); ``omega=`` is its deprecated keyword.
         mu : float
             Friction coefficient.
         tan_theta : float, default 0.0
@@ -396,11 +417,47 @@ class FEModel:
         -------
         (float, float, float)
         """
-        f = self.factors(omega, mu, tan_theta)
+        f = self.factors(disc_speed, mu, tan_theta)
         return (float(spla.norm(self.M)), float(spla.norm(self._combine(_DAMPING, f))),
                 float(spla.norm(self._combine(_STIFFNESS, f))))
 
 
-def rpm_to_omega(rpm: Any) -> NDArray[np.float64]:
-    """Disc speed [rad/s] of ``rpm`` revolutions per minute: ``omega = 2 pi rpm / 60``."""
+# ``FEModel(..., omega_ref=...)``: the dataclass' own constructor takes the old name for one release too
+FEModel.__init__ = renamed_kwargs(omega_ref="disc_speed_ref")(FEModel.__init__)  # type: ignore[method-assign]
+
+
+def rpm_to_disc_speed(rpm: Any) -> NDArray[np.float64]:
+    """Disc speed [rad/s] of ``rpm`` revolutions per minute: ``disc_speed = 2 pi rpm / 60``.
+
+    Parameters
+    ----------
+    rpm : array_like
+        Revolutions per minute.
+
+    Returns
+    -------
+    ndarray of float64, shape of ``rpm``
+
+    Examples
+    --------
+    >>> float(rpm_to_disc_speed(60.0))  # one revolution per second
+    6.283185307179586
+    """
     return np.asarray(rpm, dtype=np.float64) * (2.0 * math.pi / 60.0)
+
+
+def rpm_to_omega(rpm: Any) -> NDArray[np.float64]:
+    """Deprecated name of :func:`rpm_to_disc_speed` (``omega`` is an eigenfrequency elsewhere).
+
+    Parameters
+    ----------
+    rpm : array_like
+        Revolutions per minute.
+
+    Returns
+    -------
+    ndarray of float64, shape of ``rpm``
+    """
+    warnings.warn("rpm_to_omega is deprecated; use rpm_to_disc_speed (same meaning).", DeprecationWarning,
+                  stacklevel=2)
+    return rpm_to_disc_speed(rpm)

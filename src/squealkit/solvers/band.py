@@ -1,12 +1,12 @@
 """Complex eigenvalues of FE brake models: a dense full solve and a sparse band solve.
 
 The quadratic problem ``(lambda^2 M + lambda C + K) x = 0`` of an
-:class:`~squealkit.models.fe.FEModel` at disc speed ``omega`` and friction ``mu`` is solved
+:class:`~squealkit.fe.model.FEModel` at disc speed ``disc_speed`` and friction ``mu`` is solved
 
 - densely (:func:`dense_eigs`): all 2n eigenvalues, LAPACK on the 2n x 2n state matrix
   (``[[0, I], [-M^-1 K, -M^-1 C]]``; the generalised pencil where M is singular);
 - in a frequency band (:func:`band_eigs`): shift-invert block Krylov-Schur
-  (:class:`_ShiftInvert`) on the first companion linearisation, where applying
+  (:class:`ShiftInvert`) on the first companion linearisation, where applying
   ``(A - s B)^-1 B`` needs only one sparse LU of ``P(s) = s^2 M + s C + K`` per shift ``s``
   (never a 2n x 2n matrix); shifts ``s = j 2 pi f`` walk along the band from both ends, each
   placed where the previous one's trusted disc ends.
@@ -32,20 +32,25 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
+from .._deprecation import renamed_kwargs
 from .._threads import honour_thread_limit, thread_limit
 from .._validation import InputError, validate_finite, validate_int, validate_model, validate_positive
-from ..models.fe import FEModel
+from ..fe.model import FEModel
+from .lu import Backend, factorize, fill_reducing_order
 
 __all__ = [
     "BAND_HZ",
     "DENSE_MAX_DOF",
+    "RESIDUAL_TOL",
     "DenseParts",
     "EigenSolution",
+    "ShiftInvert",
     "backward_errors",
     "band_eigs",
     "dense_eigs",
     "dense_parts",
-    "fill_reducing_order",
+    "pencil_backward_errors",
+    "real_times",
     "validate_band",
 ]
 
@@ -99,11 +104,27 @@ def validate_band(band: object) -> tuple[float, float]:
     return lo, hi
 
 
-def _backward(M, C, K, lam: NDArray, X: NDArray) -> NDArray[np.float64]:
-    """Backward errors of the pairs ``(lam[k], X[:, k])`` for dense or sparse M, C, K."""
+@honour_thread_limit
+def pencil_backward_errors(M, C, K, lam: NDArray, X: NDArray) -> NDArray[np.float64]:
+    """Backward errors of the pairs ``(lam[k], X[:, k])`` of ``lambda^2 M + lambda C + K`` (module docstring).
+
+    Parameters
+    ----------
+    M, C, K : sparse or dense matrices, shape (n, n)
+        Real or complex.
+    lam : array_like, shape (k,)
+        Eigenvalues.
+    X : ndarray, shape (n, k)
+        Right eigenvectors, one column per eigenvalue.
+
+    Returns
+    -------
+    ndarray, shape (k,)
+        ``inf`` where the denominator vanishes.
+    """
     nM, nC, nK = (float(spla.norm(A) if sp.issparse(A) else np.linalg.norm(A)) for A in (M, C, K))
     lam = np.asarray(lam)
-    R = _real_times(M, X) * lam**2 + _real_times(C, X) * lam + _real_times(K, X)
+    R = real_times(M, X) * lam**2 + real_times(C, X) * lam + real_times(K, X)
     a = np.abs(lam)
     den = (a**2 * nM + a * nC + nK) * np.linalg.norm(X, axis=0)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -111,12 +132,32 @@ def _backward(M, C, K, lam: NDArray, X: NDArray) -> NDArray[np.float64]:
 
 
 @honour_thread_limit
-def backward_errors(model: FEModel, omega: float, mu: float, lam: NDArray, X: NDArray,
+@renamed_kwargs(omega="disc_speed")
+def backward_errors(model: FEModel, disc_speed: float, mu: float, lam: NDArray, X: NDArray,
                     tan_theta: float = 0.0) -> NDArray[np.float64]:
-    """Backward error ``eta`` of each eigenpair ``(lam[k], X[:, k])`` (module docstring)."""
+    """Backward error ``eta`` of each eigenpair ``(lam[k], X[:, k])`` of the model (module docstring).
+
+    Parameters
+    ----------
+    model : FEModel
+    disc_speed : float
+        Disc speed [rad/s] (keyword ``omega=`` deprecated).
+    mu : float
+        Friction coefficient.
+    lam : array_like, shape (k,)
+        Eigenvalues [1/s].
+    X : array_like, shape (n, k)
+        Right eigenvectors, one column per eigenvalue.
+    tan_theta : float, default 0.0
+        Run-out slope; ``mu + tan_theta`` enters the friction matrices.
+
+    Returns
+    -------
+    ndarray, shape (k,)
+    """
     validate_model(model, kind="fe")
-    return _backward(model.mass_matrix(), model.damping_matrix(omega, mu, tan_theta),
-                     model.stiffness_matrix(omega, mu, tan_theta), lam, X)
+    return pencil_backward_errors(model.mass_matrix(), model.damping_matrix(disc_speed, mu, tan_theta),
+                                  model.stiffness_matrix(disc_speed, mu, tan_theta), lam, X)
 
 
 def _one_per_mode(lam: NDArray, n: int) -> NDArray[np.intp]:
@@ -177,15 +218,16 @@ _K_NAMES = ("K1", "KR", "KGeo")
 
 
 @honour_thread_limit
-def dense_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *, vectors: bool = True,
+@renamed_kwargs(omega="disc_speed")
+def dense_eigs(model: FEModel, disc_speed: float, mu: float, tan_theta: float = 0.0, *, vectors: bool = True,
                parts: DenseParts | None = None) -> EigenSolution:
-    """All eigenvalues of the model at ``(omega, mu)`` by LAPACK on the 2n state matrix.
+    """All eigenvalues of the model at ``(disc_speed, mu)`` by LAPACK on the 2n state matrix.
 
     Parameters
     ----------
     model : FEModel
-    omega : float
-        Disc speed [rad/s].
+    disc_speed : float
+        Disc speed [rad/s] (keyword ``omega=`` deprecated).
     mu : float
         Friction coefficient; ``mu + tan_theta`` enters the friction matrices.
     tan_theta : float
@@ -209,7 +251,7 @@ def dense_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, 
     """
     validate_model(model, kind="fe")
     parts = dense_parts(model) if parts is None else parts
-    f = model.factors(omega, mu, tan_theta)
+    f = model.factors(disc_speed, mu, tan_theta)
     n = model.n_dof
     if parts.L is not False:
         A = np.zeros((2 * n, 2 * n))
@@ -241,75 +283,10 @@ def dense_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, 
     X = X / np.linalg.norm(X, axis=0)
     C = _weighted(parts.parts, f, _C_NAMES, n)
     K = _weighted(parts.parts, f, _K_NAMES, n)
-    return EigenSolution(lam, X, _backward(parts.parts["M"], C, K, lam, X))
+    return EigenSolution(lam, X, pencil_backward_errors(parts.parts["M"], C, K, lam, X))
 
 
-def fill_reducing_order(*mats) -> NDArray[np.intp]:
-    """A fill-reducing ordering of the union sparsity pattern of ``mats`` (square, one size).
-
-    METIS nested dissection (pymetis) of the graph of ``A + A^T``: on the built-in brake's
-    115 326 DOFs it leaves 6.8e7 entries in L + U against 8.3e7 for SuperLU's minimum degree,
-    and the factorisation takes 9 s CPU against 20 s. The pattern is the same at every shift,
-    so one ordering serves a whole band solve.
-
-    Parameters
-    ----------
-    *mats : sparse or dense matrices, shape (n, n)
-        The matrices whose combined pattern is factorised (e.g. M, C and K).
-
-    Returns
-    -------
-    ndarray of int, shape (n,)
-        ``perm``: factorise ``P[perm][:, perm]``.
-    """
-    import pymetis
-
-    pattern = sum(abs(sp.csr_matrix(m)) for m in mats)  # no cancellation: entries add in magnitude
-    graph = (pattern + pattern.T).tocsr()
-    graph.setdiag(0)
-    graph.eliminate_zeros()
-    perm, _ = pymetis.nested_dissection(pymetis.CSRAdjacency(graph.indptr, graph.indices))
-    return np.asarray(perm, dtype=np.intp)
-
-
-class _PermutedLU:
-    """Sparse LU of ``P[perm][:, perm]`` (real or complex) that solves ``P x = b`` for vectors
-    or blocks ``b``."""
-
-    def __init__(self, P, perm: NDArray[np.intp], *, diag_pivot_thresh: float = 0.1):
-        self.perm = perm
-        self.dtype = np.result_type(P.dtype, np.float64)
-        Pp = sp.csc_matrix(P, dtype=self.dtype)[perm][:, perm].tocsc()
-        # diagonal pivots (threshold 0.1) keep the ordering; partial pivoting would undo it
-        self.lu = spla.splu(Pp, permc_spec="NATURAL", diag_pivot_thresh=diag_pivot_thresh,
-                            options={"SymmetricMode": True})
-
-    @property
-    def nnz(self) -> int:
-        """Entries in L + U."""
-        return self.lu.L.nnz + self.lu.U.nnz
-
-    def solve(self, b: NDArray) -> NDArray:
-        b = np.asarray(b)
-        x = np.empty(b.shape, dtype=np.result_type(self.dtype, b.dtype))
-        x[self.perm] = self.lu.solve(b[self.perm].astype(x.dtype, copy=False))
-        return x
-
-
-def _factorize(P, perm: NDArray[np.intp] | None = None) -> _PermutedLU:
-    """Sparse LU of ``P(s)`` for a structurally symmetric FE matrix, in the fill-reducing
-    order ``perm`` (:func:`fill_reducing_order` of P when not given).
-
-    SuperLU's symmetric mode (diagonal pivots preferred, threshold 0.1) keeps the ordering
-    instead of letting row pivoting undo it: on the built-in brake at 33 966 DOFs, 3.3 s CPU
-    and 1.6e7 entries in L + U with minimum degree against 27 s and 6.3e7 with SuperLU's
-    default COLAMD and partial pivoting. Every eigenpair is checked by its backward error,
-    so a less stable pivot cannot go unnoticed.
-    """
-    return _PermutedLU(P, fill_reducing_order(P) if perm is None else perm)
-
-
-class _ShiftInvert:
+class ShiftInvert:
     """The eigenvalues of ``P(lambda) = lambda^2 M + lambda C + K`` nearest one shift ``s``, by
     block Krylov-Schur on the shift-inverted companion operator.
 
@@ -317,7 +294,7 @@ class _ShiftInvert:
     ``B = diag(I, M)``, balanced by ``D = diag(I, |s| I)`` (the state ``[x; lambda x / |s|]``,
     whose halves are of one size near the shift, so a small residual of the operator means a
     small backward error of x itself). Applying it to a block ``[V1; V2]`` needs one sparse LU of
-    ``P(s)`` (:func:`_factorize`) and products with the real M and C only:
+    ``P(s)`` (:func:`~squealkit.solvers.lu.factorize`, backend ``lu``) and products with the real M and C only:
     ``W1 = -P(s)^-1 (C V1 + M (|s| V2 + s V1))``, ``W2 = (V1 + s W1) / |s|``.
 
     The eigenvalues ``theta`` of the operator largest in modulus are those ``lambda = s + 1/theta``
@@ -330,14 +307,31 @@ class _ShiftInvert:
     half the time per vector on the built-in brake at 10^5 DOFs), and a block of two finds both
     members of an exact doublet from the start instead of by rounding errors. The state is kept,
     so asking for more eigenvalues at the same shift goes on from where it stopped.
+
+    Parameters
+    ----------
+    M, C, K : sparse matrices, shape (n, n)
+        The real mass, damping and stiffness matrices.
+    s : complex
+        The shift [1/s].
+    perm : ndarray of int, shape (n,), optional
+        Fill-reducing ordering for the LU (:func:`~squealkit.solvers.lu.fill_reducing_order`).
+    block : int, default 2
+        Vectors per Krylov block.
+    tol : float, default 1e-12
+        Convergence of a Ritz pair: ``||Op z - theta z|| <= tol |theta|``.
+    max_restarts : int, default 300
+        Restarts before giving up on the pairs not converged.
+    lu : str or callable, optional
+        LU backend of ``P(s)`` (:mod:`squealkit.solvers.lu`).
     """
 
     def __init__(self, M, C, K, s: complex, perm: NDArray[np.intp] | None = None, *,
-                 block: int = 2, tol: float = 1e-12, max_restarts: int = 300):
+                 block: int = 2, tol: float = 1e-12, max_restarts: int = 300, lu: str | Backend | None = None):
         self.s, self.n = complex(s), M.shape[0]
         self.block, self.tol, self.max_restarts = block, tol, max_restarts
         try:
-            self.lu = _factorize((s * s) * M + s * C + K, perm)
+            self.lu = factorize((s * s) * M + s * C + K, perm, lu=lu)
         except RuntimeError as e:  # exactly singular: an eigenvalue at the shift itself
             raise InputError(f"P(s) is singular at the shift s = {s:.6g} (an eigenvalue there): {e}") from e
         self.M, self.C = M.tocsr(), C.tocsr()
@@ -355,7 +349,7 @@ class _ShiftInvert:
         """The balanced shift-inverted operator applied to the columns of ``V`` (2n x b)."""
         n, s, a = self.n, self.s, self.scale
         V1, V2 = V[:n], V[n:]
-        W1 = -self.lu.solve(_real_times(self.C, V1) + _real_times(self.M, a * V2 + s * V1))
+        W1 = -self.lu.solve(real_times(self.C, V1) + real_times(self.M, a * V2 + s * V1))
         return np.concatenate([W1, (V1 + s * W1) / a])
 
     def nearest(self, k: int) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
@@ -458,10 +452,20 @@ class _ShiftInvert:
         self.j = p
 
 
-def _real_times(A, X: NDArray) -> NDArray[np.complex128]:
+def real_times(A, X: NDArray) -> NDArray[np.complex128]:
     """``A @ X`` for a real (sparse or dense) A and a complex X (vector or block), as one real
     product on X's interleaved real and imaginary parts (no complex copy of A, a quarter of
-    the work of a complex product)."""
+    the work of a complex product).
+
+    Parameters
+    ----------
+    A : sparse or dense matrix, shape (m, n)
+    X : ndarray, shape (n,) or (n, k)
+
+    Returns
+    -------
+    ndarray of complex128, shape (m,) or (m, k)
+    """
     X = np.ascontiguousarray(X, dtype=np.complex128)
     if np.iscomplexobj(A.data if sp.issparse(A) else A):
         return A @ X
@@ -471,13 +475,15 @@ def _real_times(A, X: NDArray) -> NDArray[np.complex128]:
 
 
 @honour_thread_limit
-def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *,
+@renamed_kwargs(omega="disc_speed")
+def band_eigs(model: FEModel, disc_speed: float, mu: float, tan_theta: float = 0.0, *,
               band: tuple[float, float] = BAND_HZ, k: int | None = None, sigma_reach: float = 0.0,
-              max_shifts: int = 400, workers: int | None = None, tol: float = 1e-12) -> EigenSolution:
+              max_shifts: int = 400, workers: int | None = None, tol: float = 1e-12,
+              lu: str | Backend | None = None) -> EigenSolution:
     """Eigenvalues with frequency in ``band`` [Hz], by shift-invert with one sparse LU per shift.
 
     Shifts ``s = j 2 pi f`` walk along the band from an end. At each, block Krylov-Schur
-    (:class:`_ShiftInvert`) finds the ``k`` eigenvalues nearest ``s``: every eigenvalue closer
+    (:class:`ShiftInvert`) finds the ``k`` eigenvalues nearest ``s``: every eigenvalue closer
     than the k-th is among them, so the disc of that radius r is complete. The next shift is
     placed ``r`` further on (half that where less than a disc is left); each shift keeps
     the eigenvalues of its own slice of the band (between the midpoints to its neighbours), so
@@ -496,8 +502,9 @@ def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *
     Parameters
     ----------
     model : FEModel
-    omega, mu, tan_theta : float
-        Disc speed [rad/s], friction and run-out slope, as for :func:`dense_eigs`.
+    disc_speed, mu, tan_theta : float
+        Disc speed [rad/s] (keyword ``omega=`` deprecated), friction and run-out slope, as for
+        :func:`dense_eigs`.
     band : (float, float)
         Frequency band [Hz] (default 1-16 kHz).
     k : int, optional
@@ -516,9 +523,12 @@ def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *
         :mod:`squealkit._threads`.
     tol : float
         Convergence of a Ritz pair at a shift: ``||Op z - theta z|| <= tol |theta|`` for the
-        shift-inverted operator (:class:`_ShiftInvert`). The default gives eigenvalues to about
-        machine precision; a reduction basis needs far less (:func:`~squealkit.stability.reduction.pod_basis`
+        shift-inverted operator (:class:`ShiftInvert`). The default gives eigenvalues to about
+        machine precision; a reduction basis needs far less (:func:`~squealkit.solvers.reduction.pod_basis`
         uses 1e-9: 12 % less time). Every pair's backward error is reported whatever it is.
+    lu : str or callable, optional
+        The sparse LU of each shift (:mod:`squealkit.solvers.lu`): a backend name (``"superlu"``,
+        ``"dense"``, or one registered) or a backend callable; default :func:`~squealkit.solvers.lu.lu_backend`.
 
     Returns
     -------
@@ -528,7 +538,7 @@ def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *
     """
     validate_model(model, kind="fe")
     lo, hi = validate_band(band)
-    omega = validate_finite("omega", omega)
+    disc_speed = validate_finite("disc_speed", disc_speed)
     if not (0 < tol < 1):
         raise InputError(f"Parameter tol={tol!r} must be in (0, 1).")
     workers = thread_limit() if workers is None else max(1, int(workers))
@@ -540,15 +550,15 @@ def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *
     if 2 * n <= k + 3:
         raise InputError(f"The model has {n} DOFs: too few for a band solve; use method='dense'.")
     M = model.mass_matrix().tocsr()
-    C = model.damping_matrix(omega, mu, tan_theta)
-    K = model.stiffness_matrix(omega, mu, tan_theta)
+    C = model.damping_matrix(disc_speed, mu, tan_theta)
+    K = model.stiffness_matrix(disc_speed, mu, tan_theta)
     perm = fill_reducing_order(M, C, K)
     edges = 2 * math.pi * np.linspace(lo, hi, (workers + 1) // 2 + 1)
     claims = [_Claims(a, b, top_closed=b == edges[-1]) for a, b in itertools.pairwise(edges)]
     walks = [(c, +1) for c in claims] + [(c, -1) for c in claims][: workers // 2]
 
     def walk(i):
-        return _band_walk(M, C, K, n, *walks[i], k, sigma_reach, max_shifts, perm, tol)
+        return _band_walk(M, C, K, n, *walks[i], k, sigma_reach, max_shifts, perm, tol, lu)
 
     # one BLAS thread per walk: the walks already use the cores
     with threadpool_limits(1, user_api="blas"):
@@ -562,7 +572,7 @@ def band_eigs(model: FEModel, omega: float, mu: float, tan_theta: float = 0.0, *
     order = np.lexsort((lam.real, lam.imag))
     lam, X = lam[order], X[:, order]
     X = X / np.linalg.norm(X, axis=0) if X.shape[1] else X
-    res = _backward(M, C, K, lam, X)
+    res = pencil_backward_errors(M, C, K, lam, X)
     return EigenSolution(lam, X, res, covered_growth=min(p[2] for p in parts))
 
 
@@ -597,7 +607,7 @@ class _Claims:
         return (f >= a) & ((f < b) | ((f == b) & (b == self.w_hi) & self.top_closed))
 
 
-def _band_walk(M, C, K, n, claims: _Claims, d: int, k, sigma_reach, max_shifts, perm, tol):
+def _band_walk(M, C, K, n, claims: _Claims, d: int, k, sigma_reach, max_shifts, perm, tol, lu):
     """The shift walk of :func:`band_eigs` from one end of ``claims``' sub-band (up from its
     bottom when ``d = +1``, down from its top when ``d = -1``) until it meets the other
     walk's claim: eigenvalues, right eigenvectors and the least covered growth rate."""
@@ -619,7 +629,7 @@ def _band_walk(M, C, K, n, claims: _Claims, d: int, k, sigma_reach, max_shifts, 
             claims.pending[d] = center
         kk = min(kk, 2 * n - 3)
         if op_center != center:  # one LU per shift, its Krylov basis kept when k grows
-            op, op_center = _ShiftInvert(M, C, K, 1j * center, perm, tol=tol), center
+            op, op_center = ShiftInvert(M, C, K, 1j * center, perm, tol=tol, lu=lu), center
         lam, X = op.nearest(kk)
         dist = np.abs(lam - 1j * center)
         r = float(np.max(dist)) * (1.0 - 1e-6)

@@ -3,13 +3,14 @@
 An FE brake model is given in the exported matrix form (Abaqus/ANSYS/Nastran names)::
 
     (lambda^2 M + lambda C(omega, mu) + K(omega, mu)) x = 0
-    C(omega, mu) = D1 + (mu/mu_ref) DR (omega_ref/omega) + (omega/omega_ref) DG + D4/f_ref
-    K(omega, mu) = K1 + (mu/mu_ref) KR + (omega/omega_ref)**2 KGeo
+    C(omega, mu) = D1 + (mu/mu_ref) DR (v_ref/omega) + (omega/v_ref) DG + D4/f_ref
+    K(omega, mu) = K1 + (mu/mu_ref) KR + (omega/v_ref)**2 KGeo
 
 with omega the disc speed [rad/s] and ``lambda = sigma + i 2 pi f`` (``sigma`` the growth rate
 [1/s], ``f`` the frequency [Hz]). The functions here take the matrices as a mapping (or any
 object with those attributes, e.g. an ``FEModel``): ``M`` and ``K1`` required, the others
-optional (``None``), plus ``omega_ref``, ``mu_ref``, ``f_ref`` (default 1).
+optional (``None``), plus ``disc_speed_ref`` (``v_ref``; formerly ``omega_ref``), ``mu_ref``, ``f_ref``
+(default 1). Here ``omega`` is the disc speed, as in the functions' arguments.
 
 Three steps, as industry does it (Graebner, Tiedemann, Schroeder & Mehrmann, ZAMM 96 (2016)):
 
@@ -35,6 +36,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import math
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -47,28 +49,22 @@ import scipy.sparse.linalg as spla
 
 from .._threads import honour_thread_limit, thread_limit
 from .._validation import InputError
-from ..models.fe import FEModel
-from .sparse import (
-    DENSE_MAX_DOF,
-    DenseParts,
-    _factorize,
-    _PermutedLU,
-    _real_times,
-    band_eigs,
-    dense_eigs,
-    dense_parts,
-    fill_reducing_order,
-)
-from .tracking import _MacTracker
+from ..fe.model import FEModel
+from .band import DENSE_MAX_DOF, DenseParts, band_eigs, dense_eigs, dense_parts, real_times
+from .lu import Backend, PermutedLU, factorize, fill_reducing_order
+from .mac import MacTracker
 
 __all__ = [
     "MATRIX_NAMES",
     "SNAPSHOT_TOL",
     "ReducedModel",
+    "as_fe_model",
+    "count_below",
     "modal_basis",
     "pod_basis",
     "reduce",
     "reduced_eigs",
+    "reduced_solve",
     "reduced_sweep",
 ]
 
@@ -80,11 +76,24 @@ _STIFFNESS = ("K1", "KR", "KGeo")
 # ----------------------------------------------------------------------------- model adapter
 
 
-def _as_model(matrices: Any, omega_ref: float | None = None, mu_ref: float | None = None,
-              f_ref: float | None = None) -> FEModel:
-    """An :class:`~squealkit.models.fe.FEModel` from one, or from a mapping of matrices (+ reference
-    scalars) or an object with those attributes (validated as every FE model is)."""
-    if isinstance(matrices, FEModel) and omega_ref is None and mu_ref is None and f_ref is None:
+def as_fe_model(matrices: Any, disc_speed_ref: float | None = None, mu_ref: float | None = None,
+                f_ref: float | None = None) -> FEModel:
+    """An :class:`~squealkit.fe.model.FEModel` from one, or from a mapping of matrices (+ reference
+    scalars) or an object with those attributes (validated as every FE model is).
+
+    Parameters
+    ----------
+    matrices : FEModel, mapping or object
+        ``M``, ``K1`` and any of the other FE matrices by name, with ``disc_speed_ref`` (or the
+        older ``omega_ref``), ``mu_ref``, ``f_ref`` where given (default 1).
+    disc_speed_ref, mu_ref, f_ref : float, optional
+        Reference values overriding those of ``matrices``.
+
+    Returns
+    -------
+    FEModel
+    """
+    if isinstance(matrices, FEModel) and disc_speed_ref is None and mu_ref is None and f_ref is None:
         return matrices
 
     def get(name: str, default: Any = None) -> Any:
@@ -95,14 +104,16 @@ def _as_model(matrices: Any, omega_ref: float | None = None, mu_ref: float | Non
     mats = {name: get(name) for name in MATRIX_NAMES if get(name) is not None}
     if "M" not in mats or "K1" not in mats:
         raise InputError("FE matrices: M and K1 are required.")
+    if disc_speed_ref is None and get("disc_speed_ref") is None:
+        disc_speed_ref = get("omega_ref")  # matrices exported before the rename
     refs = {key: float(given if given is not None else get(key, 1.0))
-            for key, given in (("omega_ref", omega_ref), ("mu_ref", mu_ref), ("f_ref", f_ref))}
+            for key, given in (("disc_speed_ref", disc_speed_ref), ("mu_ref", mu_ref), ("f_ref", f_ref))}
     return FEModel.from_matrices(**mats, **refs)
 
 
 def _coefficients(model: FEModel, omega: float, mu: float) -> dict[str, tuple[int, float]]:
     """name -> (power of lambda, scalar factor) of each present matrix at (omega, mu)
-    (:meth:`~squealkit.models.fe.FEModel.factors`, with M's power 2)."""
+    (:meth:`~squealkit.fe.model.FEModel.factors`, with M's power 2)."""
     f = model.factors(omega, mu)
     return {name: (2, 1.0) if name == "M" else (1 if name in _DAMPING else 0, f[name]) for name in model.present}
 
@@ -126,6 +137,7 @@ def modal_basis(
     freq_max: float | None = None,
     n_modes: int | None = None,
     return_freq: bool = False,
+    lu: str | Backend | None = None,
 ):
     """Real modes of ``(M, K1)``: the subspace projection basis.
 
@@ -140,6 +152,8 @@ def modal_basis(
         Number of modes (the lowest); with ``freq_max`` an upper limit.
     return_freq : bool
         Also return the natural frequencies [Hz].
+    lu : str or callable, optional
+        LU backend of ``K1`` for the shift-invert Lanczos (:mod:`squealkit.solvers.lu`).
 
     Returns
     -------
@@ -148,7 +162,7 @@ def modal_basis(
     freq : ndarray, shape (r,)
         Only with ``return_freq``.
     """
-    model = _as_model(matrices)
+    model = as_fe_model(matrices)
     if freq_max is None and n_modes is None:
         raise InputError("modal_basis: give freq_max (Hz) or n_modes.")
     if freq_max is not None and not (math.isfinite(freq_max) and freq_max > 0):
@@ -162,11 +176,11 @@ def modal_basis(
         freq = np.sqrt(np.maximum(w, 0.0)) / (2 * math.pi)
     else:
         perm = fill_reducing_order(K1, M)
-        lu = _factorize(K1, perm)  # nested dissection, diagonal pivots: SuperLU's default fills 4x more
-        op = spla.LinearOperator((n, n), matvec=lu.solve, dtype=float)
+        factor = factorize(K1, perm, lu=lu)  # nested dissection, diagonal pivots: SuperLU's default fills 4x more
+        op = spla.LinearOperator((n, n), matvec=factor.solve, dtype=float)
         k = n_modes if n_modes is not None else 40
         if freq_max is not None:  # as many modes as there are below the cut-off (+2: a doublet on it)
-            below = _count_below(K1, M, (2 * math.pi * freq_max) ** 2, perm)
+            below = count_below(K1, M, (2 * math.pi * freq_max) ** 2, perm)
             k = min(k, below + 2) if n_modes is not None else below + 2
         while True:
             k = min(k, n - 2)
@@ -190,16 +204,31 @@ def modal_basis(
     return (V, freq) if return_freq else V
 
 
-def _count_below(K: Any, M: Any, w2: float, perm: np.ndarray) -> int:
+@honour_thread_limit
+def count_below(K: Any, M: Any, w2: float, perm: np.ndarray) -> int:
     """Eigenvalues of ``(K, M)`` below ``w2`` (both symmetric, M positive definite), by
     Sylvester's law of inertia: the negative pivots of ``K - w2 M = L D L^T`` (a Sturm count, as
     FE eigensolvers check their modes with).
 
     SuperLU in the fill-reducing order ``perm`` with every pivot kept on the diagonal (then
     ``U = D L^T``). Without pivoting a tiny pivot can miscount, so the count is only used to size
-    the solve; the modes found are checked against the cut-off.
+    the solve; the modes found are checked against the cut-off. The inertia needs the pivots
+    themselves, so this is SuperLU whatever the LU backend (:mod:`squealkit.solvers.lu`).
+
+    Parameters
+    ----------
+    K, M : sparse matrices, shape (n, n)
+        Symmetric; M positive definite.
+    w2 : float
+        The bound [rad^2/s^2] (a circular frequency squared).
+    perm : ndarray of int, shape (n,)
+        Fill-reducing ordering (:func:`~squealkit.solvers.lu.fill_reducing_order`).
+
+    Returns
+    -------
+    int
     """
-    lu = _PermutedLU(K - w2 * M, perm, diag_pivot_thresh=0.0).lu
+    lu = PermutedLU(K - w2 * M, perm, diag_pivot_thresh=0.0).lu
     return int(np.count_nonzero(lu.U.diagonal() < 0))
 
 
@@ -222,7 +251,7 @@ SNAPSHOT_TOL = 1e-9
 def _snapshot(fe, omega: float, mu: float, band: tuple[float, float], parts: DenseParts | None,
               workers: int | None = None) -> np.ndarray:
     """Right eigenvectors with frequency in ``band`` [Hz]: all modes by LAPACK with the model's
-    prepared dense ``parts`` (up to :data:`~squealkit.stability.sparse.DENSE_MAX_DOF` DOFs),
+    prepared dense ``parts`` (up to :data:`~squealkit.solvers.band.DENSE_MAX_DOF` DOFs),
     else the sparse band solve (``workers`` walks)."""
     if parts is None:
         return band_eigs(fe, omega, mu, band=band, workers=workers, tol=SNAPSHOT_TOL).vectors
@@ -281,8 +310,8 @@ def pod_basis(
         into it).
     eig_solver : callable, optional
         ``eig_solver(matrices, omega, mu, band) -> (lam, X)``; default LAPACK (all modes) up to
-        :data:`~squealkit.stability.sparse.DENSE_MAX_DOF` DOFs, the sparse shift-invert band
-        solve :func:`~squealkit.stability.sparse.band_eigs` above (to :data:`SNAPSHOT_TOL`;
+        :data:`~squealkit.solvers.band.DENSE_MAX_DOF` DOFs, the sparse shift-invert band
+        solve :func:`~squealkit.solvers.band.band_eigs` above (to :data:`SNAPSHOT_TOL`;
         samples solved at once, one walk each, up to the thread limit of
         :mod:`squealkit._threads`).
     return_singular_values : bool
@@ -295,7 +324,7 @@ def pod_basis(
     s : ndarray
         Only with ``return_singular_values``.
     """
-    model = _as_model(matrices)
+    model = as_fe_model(matrices)
     omegas, mus = np.atleast_1d(np.asarray(omegas, dtype=float)), np.atleast_1d(np.asarray(mus, dtype=float))
     if omegas.size == 0 or mus.size == 0:
         raise InputError("pod_basis: give at least one sample speed and friction.")
@@ -336,7 +365,7 @@ def _left_corrections(model: FEModel, E: np.ndarray) -> list[np.ndarray]:
         return []
     K1 = sp.csc_matrix(model.K1)
     try:
-        lu = _factorize(K1)
+        lu = factorize(K1)
     except RuntimeError as e:  # SuperLU: exactly singular
         raise InputError(f"pod_basis: K1 is singular ({e}); a free model has no static corrections: "
                          "pass left=False.") from e
@@ -366,7 +395,8 @@ class ReducedModel:
         The basis.
     mats : dict
         Reduced dense matrices (r, r) by name (absent ones omitted).
-    omega_ref, mu_ref, f_ref : float
+    disc_speed_ref, mu_ref, f_ref : float
+        Reference values of the full model (disc speed [rad/s], friction, ``Fref``).
     gram : ndarray (q, q)
         Frobenius inner products ``<A_i, A_j>`` of the full matrices (names in ``order``):
         ``||sum_i c_i A_i||_F^2 = c^T gram c``.
@@ -379,7 +409,7 @@ class ReducedModel:
 
     V: np.ndarray
     mats: dict[str, np.ndarray]
-    omega_ref: float
+    disc_speed_ref: float
     mu_ref: float
     f_ref: float
     gram: np.ndarray
@@ -389,7 +419,15 @@ class ReducedModel:
     @functools.cached_property
     def projected(self) -> FEModel:
         """The reduced matrices as an FE model of ``n_reduced`` DOFs (same reference values)."""
-        return FEModel.from_matrices(**self.mats, omega_ref=self.omega_ref, mu_ref=self.mu_ref, f_ref=self.f_ref)
+        return FEModel.from_matrices(**self.mats, disc_speed_ref=self.disc_speed_ref, mu_ref=self.mu_ref,
+                                     f_ref=self.f_ref)
+
+    @property
+    def omega_ref(self) -> float:
+        """Deprecated name of :attr:`disc_speed_ref`."""
+        warnings.warn("ReducedModel.omega_ref is deprecated; use disc_speed_ref (same meaning).",
+                      DeprecationWarning, stacklevel=2)
+        return self.disc_speed_ref
 
     @property
     def n_reduced(self) -> int:
@@ -403,7 +441,7 @@ def reduce(matrices: Any, V: np.ndarray) -> ReducedModel:
     Cost: one sparse product per matrix and a QR of an ``n x (q r)`` matrix (q present
     matrices, r basis vectors), done once for a whole sweep.
     """
-    model = _as_model(matrices)
+    model = as_fe_model(matrices)
     V = np.asarray(V, dtype=float)
     if V.ndim != 2 or V.shape[0] != model.n_dof:
         raise InputError(f"reduce: V has shape {V.shape}, expected ({model.n_dof}, r).")
@@ -421,7 +459,7 @@ def reduce(matrices: Any, V: np.ndarray) -> ReducedModel:
         red[name] = Q.T @ block
     (raw, _), _ = sla.qr(AV, mode="raw", overwrite_a=True, check_finite=False)
     R = np.triu(raw[: raw.shape[1]])
-    return ReducedModel(Q, red, model.omega_ref, model.mu_ref, model.f_ref, _gram(model, order), R, order)
+    return ReducedModel(Q, red, model.disc_speed_ref, model.mu_ref, model.f_ref, _gram(model, order), R, order)
 
 
 def _gram(model: FEModel, order: Sequence[str]) -> np.ndarray:
@@ -468,7 +506,7 @@ def reduced_eigs(
         ``residual`` (backward error), ``trusted`` (bool), and ``vector`` on request.
     """
     lo, hi = _validate_band(band)
-    lam, Y, eta = _reduced_solve(reduced, omega, mu, lo, hi)
+    lam, Y, eta = reduced_solve(reduced, omega, mu, lo, hi)
     out = {
         "eigenvalue": lam,
         "growth_rate": lam.real,
@@ -481,8 +519,24 @@ def reduced_eigs(
     return out
 
 
-def _reduced_solve(reduced: ReducedModel, omega: float, mu: float, lo: float, hi: float):
-    """Eigenvalues in ``[lo, hi]`` Hz, their unit coordinates ``Y`` in the basis and full-model residuals."""
+def reduced_solve(reduced: ReducedModel, omega: float, mu: float, lo: float, hi: float):
+    """Eigenvalues in ``[lo, hi]`` Hz, their unit coordinates ``Y`` in the basis and full-model residuals.
+
+    Parameters
+    ----------
+    reduced : ReducedModel
+    omega : float
+        Disc speed [rad/s].
+    mu : float
+        Friction coefficient (with the run-out slope added, if any).
+    lo, hi : float
+        Frequency band [Hz].
+
+    Returns
+    -------
+    (ndarray, ndarray, ndarray)
+        Eigenvalues (k,), their coordinates ``Y`` (r, k) (unit columns) and backward errors (k,).
+    """
     coef = _coefficients(reduced.projected, omega, mu)
     r = reduced.n_reduced
     Mr = reduced.mats["M"]
@@ -522,7 +576,7 @@ def _reduced_backward_error(reduced: ReducedModel, coef, lam: np.ndarray, Y: np.
         stacked[i * r:(i + 1) * r] = Y * (c * lam**power)
         weights[power, i] = c
     nK, nC, nM = np.sqrt(np.maximum(np.einsum("pi,ij,pj->p", weights, reduced.gram, weights), 0.0))
-    res = np.linalg.norm(_real_times(reduced.R, stacked), axis=0)
+    res = np.linalg.norm(real_times(reduced.R, stacked), axis=0)
     return res / ((np.abs(lam) ** 2 * nM + np.abs(lam) * nC + nK) * np.linalg.norm(Y, axis=0))
 
 
@@ -569,14 +623,14 @@ def reduced_sweep(
     lo, hi = _validate_band(band)
     omegas = np.atleast_1d(np.asarray(omegas, dtype=float))
     mus = np.atleast_1d(np.asarray(mus, dtype=float))
-    tracker = _MacTracker()
+    tracker = MacTracker()
     results = {}
     with _one_blas_thread():  # many small dense solves: serial BLAS measured 5x faster on 2 shared cores
         column = None
         for i, om in enumerate(omegas):
             prev = column
             for j, mu in enumerate(mus):
-                lam, Y, eta = _reduced_solve(reduced, om, mu, lo, hi)
+                lam, Y, eta = reduced_solve(reduced, om, mu, lo, hi)
                 if not track:
                     slots = np.arange(lam.size)
                     tracker.n_slots = max(tracker.n_slots, lam.size)

@@ -1,203 +1,92 @@
-"""Readers for exported FE brake matrices: MATLAB ``.mat`` (v5 and v7.3/HDF5), Matrix Market, Nastran OP4.
+"""Readers for exported FE brake matrices, one module per format, behind one table of formats.
 
-Each reader returns ``{name in the file: scipy sparse matrix}`` (as read, not yet checked); :func:`load_fe_model`
-picks the FE matrices (``M, D1, DG, DR, D4, K1, KR, KGeo``) out of one file or one file per
-matrix, with the names they have in the files if those differ, and builds the
-:class:`~squealkit.models.fe.FEModel`. Every failure is one :class:`InputError` line naming the file.
+Each reader (``mat``: MATLAB v5 and v7.3/HDF5; ``mtx``: Matrix Market; ``op4``: Nastran OP4)
+returns ``{name in the file: scipy sparse matrix}`` (as read, not yet checked); :func:`read_matrices`
+picks the reader by the file's suffix from :data:`READERS`, and :func:`load_fe_model` picks the FE
+matrices (``M, D1, DG, DR, D4, K1, KR, KGeo``) out of one file or one file per matrix, with the
+names they have in the files if those differ, and builds the :class:`~squealkit.fe.model.FEModel`.
+Every failure is one :class:`InputError` line naming the file.
+
+A new format is one module here (``reader(path) -> {name: sparse matrix}``, raising
+:class:`InputError` naming the file) and one line in :data:`READERS` (or, from outside
+squealkit, :func:`register_reader`).
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-import scipy.sparse as sp
+from ..._deprecation import renamed_kwargs
+from ..._validation import InputError
+from ..model import FE_MATRICES, FEModel
+from .mat import read_mat
+from .mtx import read_mtx
+from .op4 import read_op4
 
-from .._validation import InputError
-from .fe import FE_MATRICES, FEModel
+__all__ = ["READERS", "load_fe_model", "read_mat", "read_matrices", "read_mtx", "read_op4", "register_reader"]
 
-__all__ = ["load_fe_model", "read_mat", "read_matrices", "read_mtx", "read_op4"]
+#: A reader: ``reader(path) -> {name in the file: sparse matrix}``.
+Reader = Callable[[Path], dict[str, Any]]
 
-_SUFFIXES = (".mat", ".mtx", ".op4")
+#: The readers by file suffix (lower case, with the dot).
+READERS: dict[str, Reader] = {
+    ".mat": read_mat,
+    ".mtx": read_mtx,
+    ".op4": read_op4,
+}
 
 
-def _sparse(name: str, value: Any, path: Path) -> Any:
-    """A matrix of a file as a sparse matrix, in the form it was read (no CSR of the declared size yet).
+def register_reader(suffix: str, reader: Reader) -> None:
+    """Read files ending in ``suffix`` with ``reader`` (:func:`read_matrices`, :func:`load_fe_model`).
 
-    Whether it is real, square and finite is :class:`FEModel`'s one check, for files and arrays alike.
+    Parameters
+    ----------
+    suffix : str
+        The file suffix, with its dot (``".full"``); matched ignoring case.
+    reader : callable
+        ``reader(path) -> {name in the file: sparse matrix}``, raising :class:`InputError` naming the
+        file for a file it cannot read.
+
+    Returns
+    -------
+    None
     """
-    if sp.issparse(value):
-        return value
-    arr = np.asarray(value)
-    if arr.dtype.kind not in "biufc":
-        raise InputError(f"{path.name}: matrix {name!r} is not numeric (dtype {arr.dtype}).")
-    if arr.ndim != 2:
-        raise InputError(f"{path.name}: {name!r} is not a matrix (shape {arr.shape}).")
-    return sp.coo_matrix(arr)
-
-
-def _h5_sparse(key: str, obj: Any, path: Path) -> sp.csc_matrix:
-    """A MATLAB v7.3 sparse matrix (group of ``data``, ``ir``, ``jc``; rows in ``MATLAB_sparse``), checked.
-
-    The declared rows, the column pointers and the row indices are checked against each other
-    before the matrix is built, so a damaged or hostile file is one line, not a huge allocation
-    or a silently empty matrix.
-    """
-    def bad(what: str) -> InputError:
-        return InputError(f"{path.name}: sparse matrix {key!r} is damaged: {what}.")
-
-    raw = obj.attrs["MATLAB_sparse"]
-    try:
-        n_rows = int(np.asarray(raw).reshape(-1)[0])
-    except (TypeError, ValueError, IndexError):
-        shown = raw.decode(errors="replace") if isinstance(raw, bytes) else raw
-        raise bad(f"its MATLAB_sparse attribute (the number of rows) is {shown!r}, not an integer") from None
-    if n_rows < 0:
-        raise bad(f"its MATLAB_sparse attribute (the number of rows) is {n_rows}")
-    if "jc" not in obj:
-        raise bad("it has no column pointers 'jc'")
-    jc = np.asarray(obj["jc"], dtype=np.int64).reshape(-1)
-    ir = np.asarray(obj["ir"], dtype=np.int64).reshape(-1) if "ir" in obj else np.zeros(0, np.int64)
-    data = np.asarray(obj["data"]) if "data" in obj else np.zeros(0)
-    if data.dtype.names:  # complex: a compound of real and imag
-        raise InputError(f"{path.name}: Matrix {key} is complex; FE matrices must be real.")
-    data = data.reshape(-1)
-    if jc.size < 1 or jc[0] != 0 or np.any(np.diff(jc) < 0) or jc[-1] != ir.size or ir.size != data.size:
-        raise bad(f"column pointers 'jc' ({jc.size} of them, last {jc[-1] if jc.size else None}) do not match "
-                  f"{ir.size} row indices and {data.size} values")
-    if ir.size and (ir.min() < 0 or ir.max() >= n_rows):
-        raise bad(f"row indices {int(ir.min())}..{int(ir.max())} outside its {n_rows} rows")
-    return sp.csc_matrix((data.astype(np.float64), ir, jc), shape=(n_rows, jc.size - 1))
-
-
-def _h5_matrices(path: Path) -> dict[str, Any]:
-    """MATLAB v7.3 (HDF5): dense arrays stored transposed; sparse ones as groups of data/ir/jc."""
-    import h5py
-
-    out: dict[str, Any] = {}
-    with h5py.File(path, "r") as f:
-        for key, obj in f.items():
-            if key.startswith("#"):  # MATLAB's internal references
-                continue
-            if isinstance(obj, h5py.Group) and "MATLAB_sparse" in obj.attrs:
-                out[key] = _h5_sparse(key, obj, path)
-            elif isinstance(obj, h5py.Dataset) and obj.ndim == 2:
-                arr = np.asarray(obj)
-                if arr.dtype.names:
-                    raise InputError(f"{path.name}: Matrix {key} is complex; FE matrices must be real.")
-                out[key] = _sparse(key, arr.T, path)
-    return out
-
-
-def read_mat(path: str | Path) -> dict[str, Any]:
-    """Matrices of a MATLAB ``.mat`` file: v4/v5/v7 through SciPy, v7.3 (HDF5) through h5py."""
-    import scipy.io
-    from scipy.io.matlab import MatReadError
-
-    p = Path(path)
-    try:
-        import h5py
-
-        if h5py.is_hdf5(p):
-            return _h5_matrices(p)
-    except InputError:
-        raise
-    except (OSError, KeyError, ValueError) as e:  # h5py: damaged or truncated file, a missing object
-        raise InputError(f"{p.name}: cannot be read: {e}") from e
-    try:
-        doc = scipy.io.loadmat(p)
-    except (MatReadError, ValueError, TypeError, OSError, NotImplementedError, IndexError, EOFError) as e:
-        raise InputError(f"{p.name}: not a readable MATLAB file: {e}") from e
-    return {k: _sparse(k, v, p) for k, v in doc.items()
-            if not k.startswith("__") and (sp.issparse(v) or getattr(v, "ndim", 0) == 2)
-            and (sp.issparse(v) or v.dtype.kind in "biufc")}
-
-
-def read_mtx(path: str | Path) -> dict[str, Any]:
-    """The one matrix of a Matrix Market file (as Abaqus and ANSYS export), keyed by the file's stem."""
-    import scipy.io
-
-    p = Path(path)
-    try:
-        rows, cols, entries, fmt, _, _ = scipy.io.mminfo(p)
-    except (ValueError, TypeError, OSError, IndexError) as e:
-        raise InputError(f"{p.name}: not a readable Matrix Market file: {e}") from e
-    # every declared value takes at least 2 bytes of the file ("1\n"): a header declaring more
-    # (a 1e5 x 1e5 dense array in a few bytes) is refused before anything of that size is allocated
-    values = rows * cols if fmt == "array" else entries
-    if values > p.stat().st_size // 2:
-        raise InputError(f"{p.name}: declares {values} values ({rows} x {cols}, {fmt}) but the file holds only "
-                         f"{p.stat().st_size} bytes: it is damaged or truncated.")
-    try:
-        mat = scipy.io.mmread(p)
-    except (ValueError, TypeError, OSError, IndexError) as e:
-        raise InputError(f"{p.name}: not a readable Matrix Market file: {e}") from e
-    return {p.stem: _sparse(p.stem, mat, p)}
-
-
-def read_op4(path: str | Path) -> dict[str, Any]:
-    """Matrices of a Nastran OP4 file (ASCII or binary), through pyNastran's reader.
-
-    Needs the optional ``pyNastran`` package (``pip install "squealkit[nastran]"``).
-    """
-    p = Path(path)
-    try:
-        from pyNastran.op4.op4 import read_op4 as _read
-    except ImportError:
-        raise InputError(f"{p.name}: reading Nastran OP4 needs pyNastran: pip install 'squealkit[nastran]'.") from None
-    try:
-        mats = _read(str(p), debug=False)
-    except Exception as e:  # pyNastran raises many kinds on a malformed file
-        raise InputError(f"{p.name}: not a readable OP4 file: {e}") from e
-    _check_op4_text(p)
-    out = {}
-    for name, m in mats.items():
-        data = m.data if hasattr(m, "data") else m
-        out[name.strip()] = _sparse(name, data, p)
-    return out
-
-
-def _check_op4_text(p: Path) -> None:
-    """An ASCII OP4 file's values all finite: pyNastran's reader drops a ``NAN`` entry without a word."""
-    with open(p, "rb") as f:
-        head = f.read(4096)
-    if b"\0" in head:  # binary OP4: its values are checked by FEModel once read
-        return
-    with open(p, encoding="ascii", errors="replace") as f:
-        for line_no, line in enumerate(f, start=1):
-            fields = line.split()
-            if fields and all(_is_float(x) for x in fields) and not all(math.isfinite(float(x)) for x in fields):
-                raise InputError(f"{p.name} line {line_no}: a non-finite value ({line.strip()}); "
-                                 "FE matrices must be finite.")
-
-
-def _is_float(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
+    if not isinstance(suffix, str) or not suffix.startswith(".") or len(suffix) < 2:
+        raise InputError(f"A reader's suffix must start with a dot, like '.mtx', got {suffix!r}.")
+    if not callable(reader):
+        raise InputError(f"The reader for {suffix!r} must be callable as reader(path), got {type(reader).__name__}.")
+    READERS[suffix.lower()] = reader
 
 
 def read_matrices(path: str | Path) -> dict[str, Any]:
-    """All matrices of a file, by its suffix (``.mat``, ``.mtx``, ``.op4``), as SciPy sparse matrices.
+    """All matrices of a file, by the reader of its suffix (:data:`READERS`), as SciPy sparse matrices.
 
     They keep the form they were read in (COO, CSC); :class:`FEModel` checks them and makes them CSR.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+
+    Returns
+    -------
+    dict of str to sparse matrix
+        The matrices by their names in the file.
+
+    Raises
+    ------
+    InputError
+        If the file does not exist, its suffix has no reader, or it cannot be read.
     """
     p = Path(path)
     if not p.is_file():
         raise InputError(f"Matrix file {str(p)!r} does not exist.")
     suffix = p.suffix.lower()
-    if suffix == ".mat":
-        return read_mat(p)
-    if suffix == ".mtx":
-        return read_mtx(p)
-    if suffix == ".op4":
-        return read_op4(p)
-    raise InputError(f"Matrix file {p.name!r}: unknown format {suffix!r}; known: {', '.join(_SUFFIXES)}.")
+    if suffix not in READERS:
+        raise InputError(f"Matrix file {p.name!r}: unknown format {suffix!r}; known: {', '.join(READERS)}.")
+    return READERS[suffix](p)
 
 
 def _pick(found: Mapping[str, Any], wanted: str, path: Path) -> Any:
@@ -210,12 +99,13 @@ def _pick(found: Mapping[str, Any], wanted: str, path: Path) -> Any:
     return found[hits[0]] if hits else None
 
 
+@renamed_kwargs(omega_ref="disc_speed_ref")
 def load_fe_model(
     file: str | Path | None = None,
     *,
     files: Mapping[str, str | Path] | None = None,
     names: Mapping[str, str] | None = None,
-    omega_ref: float = 1.0,
+    disc_speed_ref: float = 1.0,
     mu_ref: float = 1.0,
     f_ref: float = 1.0,
     base_dir: str | Path | None = None,
@@ -234,8 +124,9 @@ def load_fe_model(
         several matrices contributes the one of that name, or its only one).
     names : mapping, optional
         The name each FE matrix has in the file where it differs, ``{"M": "MAA", "K1": "KAA"}``.
-    omega_ref, mu_ref, f_ref : float
-        Reference values (see :class:`~squealkit.models.fe.FEModel`).
+    disc_speed_ref, mu_ref, f_ref : float
+        Reference values (see :class:`~squealkit.fe.model.FEModel`); ``omega_ref=`` is the
+        deprecated name of ``disc_speed_ref=``.
     base_dir : path, optional
         Folder relative paths start from (the model file's folder).
     mesh : path, optional
@@ -313,7 +204,7 @@ def load_fe_model(
     extra = {"mesh": _read_mesh(resolve(mesh)) if mesh is not None else None,
              "dof_names": _read_dof_names(resolve(dof_names)) if dof_names is not None else None}
     try:
-        return FEModel.from_matrices(**mats, omega_ref=omega_ref, mu_ref=mu_ref, f_ref=f_ref, source=source,
+        return FEModel.from_matrices(**mats, disc_speed_ref=disc_speed_ref, mu_ref=mu_ref, f_ref=f_ref, source=source,
                                      **extra)
     except InputError as e:
         raise InputError(f"{source}: {e}") from e
