@@ -32,7 +32,7 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
 from .._deprecation import renamed_kwargs
-from .._validation import InputError, validate_finite, validate_positive
+from .._validation import InputError, register_model_type, validate_finite, validate_positive
 
 __all__ = ["FE_MATRICES", "FEModel", "rpm_to_disc_speed", "rpm_to_omega"]
 
@@ -421,6 +421,8 @@ class FEModel:
         return (float(spla.norm(self.M)), float(spla.norm(self._combine(_DAMPING, f))),
                 float(spla.norm(self._combine(_STIFFNESS, f))))
 
+
+register_model_type("fe", FEModel)  # validate_model knows it without importing fe/
 
 # ``FEModel(..., omega_ref=...)``: the dataclass' own constructor takes the old name for one release too
 FEModel.__init__ = renamed_kwargs(omega_ref="disc_speed_ref")(FEModel.__init__)  # type: ignore[method-assign]

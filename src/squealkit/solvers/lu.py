@@ -27,6 +27,7 @@ from __future__ import annotations
 import contextlib
 import importlib.util
 import threading
+import warnings
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -163,7 +164,9 @@ class DenseLU:
     def __init__(self, P):
         A = P.toarray() if sp.issparse(P) else np.asarray(P)
         self.dtype = np.result_type(A.dtype, np.float64)
-        self.lu, self.piv = sla.lu_factor(A.astype(self.dtype), check_finite=False)
+        with warnings.catch_warnings():  # a zero pivot is the RuntimeError below, not a warning
+            warnings.simplefilter("ignore", sla.LinAlgWarning)
+            self.lu, self.piv = sla.lu_factor(A.astype(self.dtype), check_finite=False)
         if np.any(np.diag(self.lu) == 0):
             raise RuntimeError("Factor is exactly singular")
 
