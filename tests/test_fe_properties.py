@@ -22,7 +22,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from squealkit.models import FEModel, MatrixModel
-from squealkit.solvers import band, lu
+from squealkit.solvers import band as band_solver
+from squealkit.solvers import lu
 from squealkit.solvers.band import band_eigs, dense_eigs
 from squealkit.stability import eigenvalues
 
@@ -131,7 +132,7 @@ def test_band_walks_meet_whatever_their_pace(monkeypatch, slow):
     model = FEModel.from_matrices(M=sp.eye(n), K1=sp.diags(w**2), KR=KR, D1=sp.diags(1e-3 * w))
     band = (300.0, 2800.0)
     one = band_eigs(model, 10.0, 0.4, band=band, k=6, workers=1)
-    nearest = band.ShiftInvert.nearest
+    nearest = band_solver.ShiftInvert.nearest
     mid = np.pi * (band[0] + band[1])
 
     def paced(op, k):
@@ -139,7 +140,7 @@ def test_band_walks_meet_whatever_their_pace(monkeypatch, slow):
             time.sleep(0.3)
         return nearest(op, k)
 
-    monkeypatch.setattr(band.ShiftInvert, "nearest", paced)
+    monkeypatch.setattr(band_solver.ShiftInvert, "nearest", paced)
     two = band_eigs(model, 10.0, 0.4, band=band, k=6, workers=2)
     ref = upper(qz(model, 10.0, 0.4))
     f = ref.imag / (2 * np.pi)
@@ -162,13 +163,13 @@ def test_walks_do_not_solve_the_same_stretch_twice(monkeypatch):
 
     model = as_fe_model(build_fe_demo(n_theta=48))
     centers = []
-    init = band.ShiftInvert.__init__
+    init = band_solver.ShiftInvert.__init__
 
     def record(op, M, C, K, s, *args, **kw):
         centers.append(abs(s) / (2 * np.pi))
         init(op, M, C, K, s, *args, **kw)
 
-    monkeypatch.setattr(band.ShiftInvert, "__init__", record)
+    monkeypatch.setattr(band_solver.ShiftInvert, "__init__", record)
     sol = band_eigs(model, 2 * np.pi * 10.0, 0.45, k=32, workers=2)
     assert sol.eigenvalues.size == 44
     gaps = np.diff(np.sort(centers))
@@ -201,7 +202,7 @@ def test_shift_invert_finds_the_nearest_eigenvalues(seed, n, k, block):
     M, C, K = sp.eye(n).tocsr(), (sp.diags(2e-3 * w) + G - G.T).tocsr(), (sp.diags(w**2) + KR).tocsr()
     k = min(k, 2 * n - 3)
     s = 2j * np.pi * rng.uniform(100.0, 3000.0)
-    op = band.ShiftInvert(M, C, K, s, lu.fill_reducing_order(M, C, K), block=block)
+    op = band_solver.ShiftInvert(M, C, K, s, lu.fill_reducing_order(M, C, K), block=block)
     lam, X = op.nearest(k)
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-K.toarray(), -C.toarray()]])
     ref = sla.eigvals(A)
@@ -211,7 +212,7 @@ def test_shift_invert_finds_the_nearest_eigenvalues(seed, n, k, block):
     np.testing.assert_allclose(d, np.abs(ref[:k] - s), rtol=1e-9, atol=1e-9 * abs(s))
     for x in lam:
         assert np.min(np.abs(ref - x)) <= 1e-10 * np.abs(ref).max()
-    assert np.all(band.pencil_backward_errors(M, C, K, lam, X) < 1e-12)
+    assert np.all(band_solver.pencil_backward_errors(M, C, K, lam, X) < 1e-12)
 
 
 @settings(max_examples=12, deadline=None)
@@ -248,5 +249,5 @@ def test_real_times_is_the_complex_product(seed, rows, cols, block, sparse_a):
     rng = np.random.default_rng(seed)
     A = rng.normal(size=(rows, cols))
     X = rng.normal(size=(cols, block) if block else cols) + 1j * rng.normal(size=(cols, block) if block else cols)
-    got = band.real_times(sp.csr_matrix(A) if sparse_a else A, X)
+    got = band_solver.real_times(sp.csr_matrix(A) if sparse_a else A, X)
     np.testing.assert_allclose(got, A.astype(complex) @ X, rtol=1e-12, atol=1e-12)
