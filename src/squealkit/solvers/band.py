@@ -191,7 +191,16 @@ class DenseParts:
 
 @honour_thread_limit
 def dense_parts(model: FEModel) -> DenseParts:
-    """The model's matrices prepared for repeated dense solves (:class:`DenseParts`)."""
+    """The model's matrices prepared for repeated dense solves (:class:`DenseParts`).
+
+    Parameters
+    ----------
+    model : FEModel
+
+    Returns
+    -------
+    DenseParts
+    """
     validate_model(model, kind="fe")
     parts = {name: getattr(model, name).toarray() for name in model.present}
     try:

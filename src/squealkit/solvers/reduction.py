@@ -440,6 +440,17 @@ def reduce(matrices: Any, V: np.ndarray) -> ReducedModel:
 
     Cost: one sparse product per matrix and a QR of an ``n x (q r)`` matrix (q present
     matrices, r basis vectors), done once for a whole sweep.
+
+    Parameters
+    ----------
+    matrices : FEModel, mapping or object
+        The full model (see :func:`as_fe_model`).
+    V : ndarray, shape (n, r)
+        The basis.
+
+    Returns
+    -------
+    ReducedModel
     """
     model = as_fe_model(matrices)
     V = np.asarray(V, dtype=float)

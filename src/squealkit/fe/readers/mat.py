@@ -68,7 +68,18 @@ def _h5_matrices(path: Path) -> dict[str, Any]:
 
 
 def read_mat(path: str | Path) -> dict[str, Any]:
-    """Matrices of a MATLAB ``.mat`` file: v4/v5/v7 through SciPy, v7.3 (HDF5) through h5py."""
+    """Matrices of a MATLAB ``.mat`` file: v4/v5/v7 through SciPy, v7.3 (HDF5) through h5py.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+
+    Returns
+    -------
+    dict of str to sparse matrix
+        The matrices by their names in the file, as read (not yet checked).
+    """
     import scipy.io
     from scipy.io.matlab import MatReadError
 

@@ -12,7 +12,18 @@ __all__ = ["read_mtx"]
 
 
 def read_mtx(path: str | Path) -> dict[str, Any]:
-    """The one matrix of a Matrix Market file (as Abaqus and ANSYS export), keyed by the file's stem."""
+    """The one matrix of a Matrix Market file (as Abaqus and ANSYS export), keyed by the file's stem.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+
+    Returns
+    -------
+    dict of str to sparse matrix
+        The matrices by their names in the file, as read (not yet checked).
+    """
     import scipy.io
 
     p = Path(path)

@@ -16,6 +16,16 @@ def read_op4(path: str | Path) -> dict[str, Any]:
     """Matrices of a Nastran OP4 file (ASCII or binary), through pyNastran's reader.
 
     Needs the optional ``pyNastran`` package (``pip install "squealkit[nastran]"``).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+
+    Returns
+    -------
+    dict of str to sparse matrix
+        The matrices by their names in the file, as read (not yet checked).
     """
     p = Path(path)
     try:
