@@ -38,6 +38,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
+from .._threads import honour_thread_limit
 from .._validation import InputError
 
 __all__ = [
@@ -328,6 +329,7 @@ def use_lu_backend(name: str) -> Iterator[str]:
         set_lu_backend(previous)
 
 
+@honour_thread_limit
 def factorize(P, perm: NDArray[np.intp] | None = None, *, lu: str | Backend | None = None) -> Factor:
     """The factorisation of ``P`` by the backend ``lu`` (default: :func:`lu_backend`).
 
