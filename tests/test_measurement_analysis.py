@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from squealkit import InputError
 from squealkit.io import load_dataset, save_dataset
 from squealkit.measurement import a_weighting_db, analyze_recording, synthetic_recording, synthetic_source
-from squealkit.measurement.events import critical_bandwidth
+from squealkit.measurement.squeal.events import critical_bandwidth
 
 KW = dict(mic="mic", displacement="displacement", rpm=900.0, radius=0.05)
 

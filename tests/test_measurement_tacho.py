@@ -11,8 +11,8 @@ import pytest
 
 from squealkit import InputError
 from squealkit.measurement import analyze_recording, synthetic_recording, synthetic_source
-from squealkit.measurement.readers import recording_dataset
-from squealkit.measurement.tacho import (
+from squealkit.measurement.formats.readers import recording_dataset
+from squealkit.measurement.signal.tacho import (
     angular_resample,
     pulse_times,
     read_tacho,
@@ -186,7 +186,7 @@ def test_each_event_has_its_own_runout_phase():
 def test_rising_edges_kernel_matches_pulse_times_of_the_joined_block():
     # read_tacho finds the edges of a block and the sample before it in one compiled pass; the times
     # must be those pulse_times gives for the two joined, to the last bit
-    from squealkit.measurement.tacho import _rising_edges
+    from squealkit.measurement.signal.tacho import _rising_edges
 
     rng = np.random.default_rng(7)
     for trial in range(100):
@@ -206,7 +206,7 @@ def test_tacho_blocks_are_the_sources_blocks(stop, block):
     # read_tacho reads several blocks at a time, then takes them one by one: the same blocks (starts
     # and samples) as the source yields them one by one, so the edges and the level are the same
     from squealkit.measurement.analysis import _DatasetSource
-    from squealkit.measurement.tacho import _tacho_blocks
+    from squealkit.measurement.signal.tacho import _tacho_blocks
 
     src, data = stop
     source = _DatasetSource(recording_dataset(data, FS, src.units, {}), FS)

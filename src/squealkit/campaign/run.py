@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from .._validation import InputError
-from ..measurement.criteria import squeal_criteria
+from ..measurement.squeal.criteria import squeal_criteria
 from .matrix import read_matrix
 from .store import CampaignStore
 from .summary import band_of, campaign_summary, third_octave_bands

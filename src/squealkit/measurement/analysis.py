@@ -25,13 +25,14 @@ from scipy import signal
 from .. import __version__
 from .._threads import thread_limit
 from .._validation import PLAUSIBLE, InputError, validate_fs, validate_plausible, validate_positive
-from .criteria import EDGE_HZ, SquealCriteria, band_weighted_signal, exponential_average, squeal_criteria
-from .events import DEFAULT_MIN_TNR_DB, SquealEvent, link_components, tonal_components, tone_to_noise_ratio
-from .filters import lowpass, lowpass_decimated
-from .readers import DEFAULT_BLOCK, RecordingSource, _to_si, open_recording
-from .runout import revolution_frequency, surface_speed
-from .spectral import P_REF, a_weighting_db, phase_advance_freq, refine_peak
-from .tacho import ConstantSpeed, read_tacho
+from .formats import DEFAULT_BLOCK, RecordingSource, open_recording
+from .formats._common import _to_si
+from .signal.filters import lowpass, lowpass_decimated
+from .signal.spectral import P_REF, a_weighting_db, phase_advance_freq, refine_peak
+from .signal.tacho import ConstantSpeed, read_tacho
+from .squeal.criteria import EDGE_HZ, SquealCriteria, band_weighted_signal, exponential_average, squeal_criteria
+from .squeal.events import DEFAULT_MIN_TNR_DB, SquealEvent, link_components, tonal_components, tone_to_noise_ratio
+from .squeal.runout import revolution_frequency, surface_speed
 
 __all__ = ["AnalysisSettings", "MeasurementResult", "analyze_recording"]
 
@@ -80,7 +81,7 @@ class AnalysisSettings:
     polarity : {1, -1}, default 1
         -1 when the probe reads the run-out reversed.
     tacho_kind : {"pulses", "angle"}, default "pulses"
-        What a tacho channel holds (see :func:`squealkit.measurement.tacho.read_tacho`).
+        What a tacho channel holds (see :func:`squealkit.measurement.signal.tacho.read_tacho`).
     pulses_per_rev : int, default 1
         Tacho pulses per revolution.
     tacho_level : float or None, default None
@@ -90,7 +91,7 @@ class AnalysisSettings:
     min_tnr_db : float or None, default 8.0
         The tonality a component needs to count as squeal: its tone-to-noise ratio [dB] over
         the masking noise in its critical band
-        (:func:`~squealkit.measurement.events.tone_to_noise_ratio`; 8 dB is the ECMA-418-1
+        (:func:`~squealkit.measurement.squeal.events.tone_to_noise_ratio`; 8 dB is the ECMA-418-1
         criterion for a prominent tone at or above 1 kHz). None: every peak above the
         threshold counts (then loud broadband noise reads as squeal).
     """
@@ -196,7 +197,7 @@ class MeasurementResult:
     squeal_frequency_hz : float or None
         Dominant squeal frequency [Hz]; None without squeal. The strongest A-weighted line of
         the squeal spectrum, refined from its phase advance between successive frames
-        (:func:`~squealkit.measurement.spectral.phase_advance_freq`): to a few mHz on synthetic
+        (:func:`~squealkit.measurement.signal.spectral.phase_advance_freq`): to a few mHz on synthetic
         bursts, where the bin interpolation was off by up to 6 Hz (bins of 78 Hz).
     harmonics : tuple of dict
         ``order``, ``frequency_hz``, ``level_db`` of the harmonics 2-5 of the squeal that are
@@ -914,12 +915,12 @@ def _frame_components(plan: _Plan, s: AnalysisSettings, win: _Window, sp: _Spect
     """Tonal components of the loud frames (level at or above the threshold), with their frequencies.
 
     Components (and their coarse frequency) come from the time-weighted spectrum
-    (:func:`~squealkit.measurement.events.tonal_components`). Each component's frequency is
+    (:func:`~squealkit.measurement.squeal.events.tonal_components`). Each component's frequency is
     then refined from its phase advance over the main lobe (unbiased for growing and decaying
     squeal, where the two-bin ratio is not), where the tone is in the frame itself (a quarter of
     its time-weighted power), not only remembered. A component counts only when it is tonal:
     its tone-to-noise ratio in the time-weighted spectrum reaches ``s.min_tnr_db``
-    (:func:`~squealkit.measurement.events.tone_to_noise_ratio`). Appends to ``acc.comp_*`` and sums the loud
+    (:func:`~squealkit.measurement.squeal.events.tone_to_noise_ratio`). Appends to ``acc.comp_*`` and sums the loud
     frames' spectra and cross spectra (``acc.mic_spec_sum``, ``acc.mic_cross_sum``).
 
     Parameters
@@ -1004,7 +1005,7 @@ def _runout_signals(plan: _Plan, s: AnalysisSettings, win: _Window, q: NDArray, 
     The zero-phase Butterworth low-pass at ``lowpass_freq`` (paper Fig. 12) runs at
     ``fs / dec`` after linear-phase anti-alias FIRs that pass up to 1.5 ``lowpass_freq`` and
     remove, 80 dB down, whatever would fold below it; so the corner keeps its meaning
-    (:func:`~squealkit.measurement.filters.lowpass_decimated`). The incline is
+    (:func:`~squealkit.measurement.signal.filters.lowpass_decimated`). The incline is
     ``dq / (r dphi)`` (paper eq. 11 with ``v = r dphi/dt`` at the actual speed).
 
     Parameters
@@ -1110,7 +1111,7 @@ def _squeal_events(
     Returns
     -------
     events, frames, weights
-        As :func:`~squealkit.measurement.events.link_components`.
+        As :func:`~squealkit.measurement.squeal.events.link_components`.
     """
     frame_start = np.arange(plan.n_frames) * plan.hop / plan.fs
     events, frames, weights = link_components(
@@ -1400,7 +1401,7 @@ def analyze_recording(
     radius : float
         Probe (and pin) radius on the disc [m].
     tacho : str or int, optional
-        Tacho channel: disc angle and speed from it (:mod:`squealkit.measurement.tacho`;
+        Tacho channel: disc angle and speed from it (:mod:`squealkit.measurement.signal.tacho`;
         options ``tacho_kind`` "pulses" or "angle", ``pulses_per_rev``, ``tacho_level``,
         ``angle_unit``), so a decelerating stop is analysed at its actual speed; revolutions
         and angles count from the first pulse.

@@ -126,7 +126,7 @@ def _summarize(rows: Sequence[dict[str, Any]], freq_tol: float) -> CampaignSumma
 def _analyze_one(arg: tuple) -> dict[str, Any]:
     """Read and analyse one recording (a task of a campaign); keep only its summary row."""
     from .analysis import analyze_recording
-    from .readers import open_recording
+    from .formats.readers import open_recording
 
     path, name, open_kw, analysis_kw = arg
     return _row(name, analyze_recording(open_recording(path, **open_kw), **analysis_kw))

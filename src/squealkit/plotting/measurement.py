@@ -89,7 +89,7 @@ def spectrogram_plot(rec: xr.Dataset, result: Any = None, *, mic: str = "mic", d
     -------
     matplotlib.figure.Figure
     """
-    from ..measurement.spectral import P_REF, spectrogram
+    from ..measurement.signal.spectral import P_REF, spectrogram
 
     fs = float(rec.attrs["fs"])
     fig = _figure(figsize=(8, 6))
@@ -135,7 +135,7 @@ def runout_plot(rec: xr.Dataset, *, displacement: str = "displacement", rpm: flo
     -------
     matplotlib.figure.Figure
     """
-    from ..measurement.runout import split_runout
+    from ..measurement.squeal.runout import split_runout
 
     fs = float(rec.attrs["fs"])
     sro, macro, micro = split_runout(rec[displacement].values, fs, rpm, lowpass_freq=lowpass_freq,
@@ -173,7 +173,7 @@ def band_vs_pressure_plot(rec: xr.Dataset, *, mic: str = "mic", displacement: st
     -------
     matplotlib.figure.Figure
     """
-    from ..measurement.filters import bandpass
+    from ..measurement.signal.filters import bandpass
 
     fs = float(rec.attrs["fs"])
     qb = bandpass(rec[displacement].values, band[0], band[1], fs)
