@@ -63,7 +63,7 @@ def test_pulse_times_interpolate_between_samples():
 def test_blockwise_tacho_equals_whole(stop):
     src, data = stop
     rec = recording_dataset(data, FS, src.units, {})
-    from squealkit.measurement.analysis import _DatasetSource
+    from squealkit.measurement.analysis.framing import _DatasetSource
 
     whole = tacho_angle(data["tacho"], FS)
     blocks = read_tacho(_DatasetSource(rec, FS), "tacho", block=7777)  # edges straddle block ends
@@ -205,7 +205,7 @@ def test_rising_edges_kernel_matches_pulse_times_of_the_joined_block():
 def test_tacho_blocks_are_the_sources_blocks(stop, block):
     # read_tacho reads several blocks at a time, then takes them one by one: the same blocks (starts
     # and samples) as the source yields them one by one, so the edges and the level are the same
-    from squealkit.measurement.analysis import _DatasetSource
+    from squealkit.measurement.analysis.framing import _DatasetSource
     from squealkit.measurement.signal.tacho import _tacho_blocks
 
     src, data = stop
