@@ -45,3 +45,159 @@ def test_figures_draw_bit_identical_data(golden_cases):
         got.update({f"{name}/{k}": digest(v) for k, v in figure_arrays(rec, res, kw).items()})
     assert sorted(got) == sorted(ref)
     assert [k for k in ref if got[k] != ref[k]] == []
+
+
+# -- the analysis returns what its figures draw; plotting only draws -------------------------------
+
+def test_keep_signals_returns_what_the_figures_draw(golden_cases, tmp_path):
+    # reference: measurement_signals on the recording in memory; the analysis' own numbers unchanged
+    from squealkit.measurement import analyze_recording, measurement_signals
+    from squealkit.measurement.formats import write_recording
+
+    rec, res, kw = golden_cases["const"]
+    with_sig = analyze_recording(rec, **kw, keep_signals=True)
+    assert res.signals is None
+    ref = measurement_signals(rec, res)
+    assert with_sig.signals.identical(ref)
+    a, b = analysis_arrays(res), analysis_arrays(with_sig)
+    assert all(np.array_equal(a[k], b[k], equal_nan=True) for k in a)
+    # from a file, block by block: the same arrays (the file holds float64 samples as the Dataset does)
+    f = write_recording(rec, tmp_path / "rec.nc")
+    from_file = analyze_recording(f, **kw, keep_signals=True).signals
+    for name in ("mic", "runout_macro", "displacement_band", "mic_level"):
+        np.testing.assert_array_equal(from_file[name].values, ref[name].values, err_msg=name)
+    assert {ref[v].attrs["units"] for v in ref.data_vars} >= {"m", "Pa", "dB re 20 uPa", "dB re 1 pm"}
+    assert ref.attrs["kind"] == "measurement_signals"
+
+
+def test_figures_compute_nothing(golden_cases, monkeypatch):
+    # every filter, spectrum and run-out split made to fail: the figures of a result still draw
+    import squealkit.measurement.analysis.views as views
+    from squealkit.measurement import measurement_signals
+    from squealkit.plotting.measurement import measurement_figures
+
+    rec, res, _ = golden_cases["const"]
+    sig = measurement_signals(rec, res)
+
+    def boom(*a, **k):
+        raise AssertionError("a figure recomputed the analysis")
+
+    for name in ("bandpass", "spectrogram", "split_runout"):
+        monkeypatch.setattr(views, name, boom)
+    figs = measurement_figures(res, sig)
+    assert sorted(figs) == ["band", "level", "polar", "runout", "spectrogram", "time", "zoom"]
+
+
+def _imports(tree):
+    """(enclosing function or None, absolute module, names) of every import in a plotting module's AST."""
+    import ast
+
+    out = []
+
+    def walk(node, func):
+        for child in ast.iter_child_nodes(node):
+            f = child.name if isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef) else func
+            if isinstance(child, ast.ImportFrom):
+                mod = child.module or ""
+                if child.level:  # relative to squealkit.plotting
+                    base = "squealkit.plotting".split(".")[: 3 - child.level]
+                    mod = ".".join([*base, mod] if mod else base)
+                out.append((func, mod, tuple(a.name for a in child.names)))
+            elif isinstance(child, ast.Import):
+                out.append((func, None, tuple(a.name for a in child.names)))
+            walk(child, f)
+
+    walk(tree, None)
+    return out
+
+
+def test_plotting_imports_nothing_computational_from_measurement():
+    # plotting/ draws what measurement/ returns: from measurement it may import nothing but the
+    # deprecated call forms' bridge to the one function that computes the signals (with a warning)
+    import ast
+
+    import squealkit.plotting as plotting
+
+    allowed = {("measurement.py", "_legacy_signals", "figure_signals"),
+               ("measurement.py", "measurement_figures", "measurement_signals"),
+               ("measurement.py", "__getattr__", "squeal_views")}
+    found = set()
+    for path in Path(plotting.__file__).parent.glob("*.py"):
+        for func, mod, names in _imports(ast.parse(path.read_text())):
+            if mod is not None and "measurement" in mod.split(".")[1:]:
+                found |= {(path.name, func, n) for n in names}
+            if path.name == "measurement.py":  # no signal processing library either
+                assert not any(n.startswith("scipy") for n in (mod or "", *names)), (func, mod, names)
+    assert found <= allowed, found - allowed
+
+
+@pytest.mark.parametrize("func, kw", [
+    ("runout_plot", dict(rpm=900.0, lowpass_freq=1000.0, macro_orders=10)),
+    ("band_vs_pressure_plot", dict(band=(1430.0, 2980.0))),
+    ("spectrogram_plot", dict(freq_max=8000.0)),
+])
+def test_old_call_with_a_recording_warns_and_draws_the_same(golden_cases, func, kw):
+    # reference: the same figure drawn from figure_signals, the new call form
+    from _cases import _artist_arrays
+
+    from squealkit.measurement import figure_signals
+    from squealkit.plotting import measurement as mp
+
+    rec = golden_cases["const"][0]
+    with pytest.warns(DeprecationWarning, match=f"{func}"):
+        old = getattr(mp, func)(rec, **kw)
+    sig_kw = {k: v for k, v in kw.items() if k != "rpm"}
+    new = getattr(mp, func)(figure_signals(rec, rpm=kw.get("rpm"), **sig_kw))
+    a, b = _artist_arrays(old), _artist_arrays(new)
+    assert sorted(a) == sorted(b)
+    assert [k for k in a if digest(a[k]) != digest(b[k])] == []
+
+
+def test_measurement_figures_without_signals_says_what_to_do(golden_cases):
+    from squealkit import InputError
+    from squealkit.plotting.measurement import measurement_figures
+
+    with pytest.raises(InputError, match="keep_signals=True"):
+        measurement_figures(golden_cases["const"][1])
+
+
+# -- layout: one concept per module, old paths still work ------------------------------------------
+
+MOVED = {"filters": "signal.filters", "spectral": "signal.spectral", "tacho": "signal.tacho",
+         "criteria": "squeal.criteria", "events": "squeal.events", "runout": "squeal.runout",
+         "readers": "formats.readers", "writers": "formats.writers"}
+
+
+@pytest.mark.parametrize("old", sorted(MOVED))
+def test_old_module_paths_are_deprecated_shims(old):
+    import importlib
+
+    new = importlib.import_module(f"squealkit.measurement.{MOVED[old]}")
+    sys.modules.pop(f"squealkit.measurement.{old}", None)
+    with pytest.warns(DeprecationWarning, match=f"squealkit.measurement.{MOVED[old]}"):
+        shim = importlib.import_module(f"squealkit.measurement.{old}")
+    assert shim.__all__ == new.__all__
+    assert all(getattr(shim, n) is getattr(new, n) for n in new.__all__)
+
+
+def test_public_measurement_names_unchanged():
+    # the names squealkit.measurement offered before the split (its __all__ then), plus the new ones
+    import squealkit.measurement as m
+
+    before = {"SETUPS", "AnalysisSettings", "DiscAngle", "MeasurementResult", "RecordingSource", "SquealCriteria",
+              "SquealEvent", "SyntheticSource", "a_weighting_db", "analyze_recording", "angular_resample",
+              "bandpass", "butter_sos", "highpass", "incline", "lowpass", "lowpass_decimated", "open_recording",
+              "phase_advance_freq", "read_recording", "recording_dataset", "refine_peak", "revolution_frequency",
+              "ridge", "spectrogram", "split_runout", "squeal_criteria", "surface_speed", "synchronous_average",
+              "synthetic_recording", "synthetic_source", "tacho_angle", "time_weighted_level"}
+    assert before <= set(m.__all__)
+    assert all(hasattr(m, n) for n in m.__all__)
+
+
+def test_no_measurement_module_over_800_lines():
+    # issue 28's bound: a module a reader can hold in mind (the old analysis.py had 1490, readers.py 1271)
+    import squealkit.measurement as m
+
+    root = Path(m.__file__).parent
+    sizes = {str(p.relative_to(root)): len(p.read_text().splitlines()) for p in root.rglob("*.py")}
+    assert {k: v for k, v in sizes.items() if v > 800} == {}

@@ -154,7 +154,7 @@ def test_tacho_errors_are_clear(stop):
 
 def test_figures_follow_the_squeal_found():
     # issue 14: the Figs. 10-13 views were fixed (0.1-0.3 s, 1000-2500 Hz); they follow the squeal now
-    from squealkit.plotting.measurement import squeal_views
+    from squealkit.measurement import squeal_views
 
     rec = synthetic_recording(duration=2.0, seed=1, rpm_end=300.0, freq=6100.0)
     res = analyze_recording(rec, tacho="tacho", **KW)

@@ -79,7 +79,9 @@ def figure_arrays(rec, res, kw) -> dict[str, np.ndarray]:
 
 
 def _figures(mp, rec, res):
-    figs = mp.measurement_figures(rec, res)
+    from squealkit.measurement import measurement_signals
+
+    figs = mp.measurement_figures(res, measurement_signals(rec, res))
     figs["event_phase"] = mp.event_phase_plot(res)
     return figs
 

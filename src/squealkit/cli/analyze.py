@@ -254,7 +254,7 @@ def _write_plots(src, res, mic: str, displacement: str, stem: Path, suffix: str 
     import numpy as np
 
     from ..io import save_figure
-    from ..measurement import recording_dataset
+    from ..measurement import measurement_signals, recording_dataset
     from ..plotting import measurement as mp
 
     names = [src.resolve(mic), src.resolve(displacement)]
@@ -270,7 +270,7 @@ def _write_plots(src, res, mic: str, displacement: str, stem: Path, suffix: str 
     rec = recording_dataset({n: np.concatenate(v) for n, v in parts.items()}, src.fs,
                             {n: src.units.get(n, "") for n in names},
                             {"synthetic": int(bool(res.attrs.get("synthetic")))})
-    figs = mp.measurement_figures(rec, res, mic=names[0], displacement=names[1])
+    figs = mp.measurement_figures(res, measurement_signals(rec, res, mic=names[0], displacement=names[1]))
     figs["event_phase"] = mp.event_phase_plot(res)  # every event's place on the disc
     for key, fig in figs.items():
         save_figure(fig, stem.parent / f"{stem.name}_{key}{suffix}")

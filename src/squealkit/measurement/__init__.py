@@ -4,7 +4,14 @@ Start with :func:`analyze_recording`; try it on :func:`synthetic_recording` when
 data (synthetic recordings are labelled so wherever they appear).
 """
 
-from .analysis import AnalysisSettings, MeasurementResult, analyze_recording
+from .analysis import (
+    AnalysisSettings,
+    MeasurementResult,
+    analyze_recording,
+    figure_signals,
+    measurement_signals,
+    squeal_views,
+)
 from .formats import RecordingSource, open_recording, read_recording, recording_dataset
 from .signal.filters import bandpass, butter_sos, highpass, lowpass, lowpass_decimated
 from .signal.spectral import a_weighting_db, phase_advance_freq, refine_peak, ridge, spectrogram
@@ -28,10 +35,12 @@ __all__ = [
     "angular_resample",
     "bandpass",
     "butter_sos",
+    "figure_signals",
     "highpass",
     "incline",
     "lowpass",
     "lowpass_decimated",
+    "measurement_signals",
     "open_recording",
     "phase_advance_freq",
     "read_recording",
@@ -42,6 +51,7 @@ __all__ = [
     "spectrogram",
     "split_runout",
     "squeal_criteria",
+    "squeal_views",
     "surface_speed",
     "synchronous_average",
     "synthetic_recording",

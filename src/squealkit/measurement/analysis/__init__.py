@@ -11,5 +11,7 @@ everything the figures draw (:func:`measurement_signals`), so plotting only draw
 from .recording import analyze_recording
 from .result import MeasurementResult
 from .settings import AnalysisSettings
+from .views import figure_signals, measurement_signals, squeal_views
 
-__all__ = ["AnalysisSettings", "MeasurementResult", "analyze_recording"]
+__all__ = ["AnalysisSettings", "MeasurementResult", "analyze_recording", "figure_signals", "measurement_signals",
+           "squeal_views"]

@@ -10,6 +10,7 @@ per-revolution and per-angle features.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +18,7 @@ import numpy as np
 import xarray as xr
 
 from ..._validation import InputError
-from ..formats import RecordingSource
+from ..formats import RecordingSource, recording_dataset
 from ..squeal.criteria import squeal_criteria
 from .assemble import _assemble
 from .components import _band_level, _frame_components, _frame_spectra
@@ -26,6 +27,7 @@ from .lines import _in_events, _squeal_events, _squeal_lines
 from .result import MeasurementResult
 from .runout_link import _accumulate_runout, _runout_link, _runout_signals, _runout_statistics
 from .settings import AnalysisSettings, _check_pressure
+from .views import measurement_signals
 
 __all__ = ["analyze_recording"]
 
@@ -57,6 +59,7 @@ def analyze_recording(
     fs: float | None = None,
     progress: Callable[[int, int], None] | None = None,
     require_runout: bool = True,
+    keep_signals: bool = False,
     **options: Any,
 ) -> MeasurementResult:
     """Analyse a microphone + displacement recording for squeal and its tie to run-out.
@@ -97,6 +100,11 @@ def analyze_recording(
         fewer than 3 marks in a short low-speed drag) raise; with False analyse the squeal alone
         (SAE J2521 occurrence needs no speed) and say why in the result's
         ``runout_unavailable`` (the run-out results are then None or NaN).
+    keep_signals : bool, default False
+        Also return what the figures draw in ``result.signals``
+        (:func:`~squealkit.measurement.analysis.views.measurement_signals`: spectrograms, run-out
+        split, band-passed displacement over the whole recording); the two channels are then
+        held in memory, so leave it off for recordings longer than memory allows.
     **options
         Further :class:`AnalysisSettings` fields (``lowpass_freq``, ``macro_orders``,
         ``nperseg``, ``hop``, ``freq_tol``, ``n_angle_bins``, ``chunk_s``), and the rig's
@@ -159,5 +167,23 @@ def analyze_recording(
         if rotation is not None:
             rising, corr = _runout_statistics(plan, s, acc, in_ev)
     phase, events = _runout_link(plan, acc, events, ev_frames, ev_weights)
-    return _assemble(plan, s, acc, rotation, src, attrs, events=events, squeal_f=squeal_f, harmonics=harmonics,
-                     rising=rising, corr=corr, phase=phase, unavailable=unavailable)
+    res = _assemble(plan, s, acc, rotation, src, attrs, events=events, squeal_f=squeal_f, harmonics=harmonics,
+                    rising=rising, corr=corr, phase=phase, unavailable=unavailable)
+    if keep_signals:
+        rec = _in_memory(recording, src, [mic_n, disp_n], attrs)
+        res = replace(res, signals=measurement_signals(rec, res, mic=mic_n, displacement=disp_n))
+    return res
+
+
+def _in_memory(recording: Any, src: Any, names: list[str], attrs: dict[str, Any]) -> xr.Dataset:
+    """The channels ``names`` of a recording as a Dataset with its ``time`` (the Dataset itself where
+    it was given as one with a time coordinate; else read block by block from ``src``)."""
+    if isinstance(recording, xr.Dataset) and "time" in recording.coords and "fs" in recording.attrs:
+        return recording
+    data: dict[str, list] = {n: [] for n in names}
+    for _, blk in src.iter_blocks(names):
+        for n in names:
+            data[n].append(blk[n])
+    units = getattr(src, "units", {})
+    return recording_dataset({n: np.concatenate(v) for n, v in data.items()}, src.fs,
+                             {n: units.get(n, "") for n in names}, {"synthetic": bool(attrs.get("synthetic"))})

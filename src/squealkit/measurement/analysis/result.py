@@ -62,6 +62,10 @@ class MeasurementResult:
         Why the run-out link could not be computed (no disc speed, a tacho that gives none),
         when the analysis was asked for the squeal alone in that case (``require_runout=False``);
         then the run-out results are None or NaN. None when it was computed.
+    signals : xarray.Dataset or None
+        What the figures draw (spectrograms, the run-out split, the band-passed displacement;
+        :func:`~squealkit.measurement.analysis.views.measurement_signals`), when the analysis was
+        asked for them (``keep_signals=True``); None otherwise.
     """
 
     squeal_frequency_hz: float | None
@@ -80,6 +84,7 @@ class MeasurementResult:
     spectrum: xr.Dataset = field(repr=False)
     attrs: dict[str, Any] = field(default_factory=dict, repr=False)
     runout_unavailable: str | None = None
+    signals: xr.Dataset | None = field(default=None, repr=False)
 
     @property
     def squeal(self) -> bool:
