@@ -205,7 +205,7 @@ def test_progress_callback_reaches_total():
 
 
 def test_campaign_summary_occurrence_and_frequencies(rising, falling):
-    from squealkit.measurement.campaign import summarize_campaign
+    from squealkit.campaign import summarize_campaign
 
     quiet = analyze_recording(synthetic_recording(duration=0.5, seed=9, squeal_on="none"), **KW)
     summ = summarize_campaign([rising[1], falling[1], quiet], ["a", "b", "c"])

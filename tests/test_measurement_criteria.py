@@ -144,7 +144,7 @@ def test_criteria_named_in_every_output(tmp_path):
     assert d["criteria"]["name"].startswith("SAE J2521") and d["criteria"]["time_weighting"] == "Fast"
     ds = res.to_dataset()
     assert "J2521" in ds.attrs["criteria"]
-    from squealkit.measurement.campaign import summarize_campaign
+    from squealkit.campaign import summarize_campaign
 
     assert "J2521" in summarize_campaign([res], ["a"]).to_csv().splitlines()[0]
 

@@ -94,9 +94,9 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float | N
     others: it is left out of the summary and listed on stderr at the end, and the
     exit code is 1 (2 when none could be analysed).
     """
+    from ..campaign.recordings import summarize_campaign
     from ..io import save_dataset, write_text
     from ..measurement import open_recording
-    from ..measurement.campaign import summarize_campaign
 
     crit_kw, scale_map, unit_map = recording_kwargs_from_options(
         rpm=rpm, tacho=tacho, tacho_kind=tacho_kind, pulses_per_rev=pulses_per_rev, probe_offset_deg=probe_offset_deg,
@@ -195,13 +195,14 @@ def _print_campaign(campaign) -> None:
 
 
 def _campaign_on_cluster(files, scheduler: str, as_json: bool, summary_path: Path | None, **kwargs) -> None:
+    from ..campaign.recordings import analyze_campaign
     from ..io import write_text
-    from ..measurement.campaign import analyze_campaign
     from ..scale import cluster_client
 
     with cluster_client(scheduler) as client, \
             progress_callback("recordings", enabled=not as_json and len(files) > 1) as cb:
-        campaign = analyze_campaign(list(files), client=client, progress=cb, **kwargs)
+        # as the local path: analyze needs a disc speed (the campaign command is the one without)
+        campaign = analyze_campaign(list(files), client=client, progress=cb, require_runout=True, **kwargs)
     if summary_path is not None:
         write_text(summary_path, campaign.to_csv())
     if as_json:
