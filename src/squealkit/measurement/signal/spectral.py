@@ -66,6 +66,13 @@ def frame_power(x: NDArray[np.float64], nperseg: int, hop: int) -> tuple[NDArray
     Frames start at ``0, hop, 2 hop, ...`` while they fit. The power is one-sided and
     scaled so that it sums over bins to the frame's (windowed) mean square.
 
+    Parameters
+    ----------
+    x : ndarray, shape (n,)
+        The signal, at least ``nperseg`` samples.
+    nperseg, hop : int
+        Frame length and hop [samples].
+
     Returns
     -------
     spec : ndarray, shape (n_frames, nperseg // 2 + 1)
