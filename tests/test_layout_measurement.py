@@ -7,6 +7,7 @@ before the refactor (commit "tests: golden measurement outputs"): they are the r
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -255,3 +256,26 @@ def test_old_campaign_module_is_a_deprecated_shim():
         old = importlib.import_module("squealkit.measurement.campaign")
     assert old.analyze_campaign is campaign.analyze_campaign
     assert old.summarize_campaign is campaign.summarize_campaign
+
+
+def test_result_plot_draws_its_signals(golden_cases):
+    # reference: the plotting function called on the same signals (plot() only delegates)
+    from _cases import _artist_arrays
+
+    from squealkit import InputError
+    from squealkit.measurement import measurement_signals
+    from squealkit.plotting.measurement import runout_plot
+
+    rec, res, _ = golden_cases["const"]
+    with pytest.raises(InputError, match="keep_signals=True"):
+        res.plot(kind="runout")
+    with pytest.raises(InputError, match="kind='nope'"):
+        res.plot(kind="nope")
+    sig = measurement_signals(rec, res)
+    full = dataclasses.replace(res, signals=sig)
+    a = _artist_arrays(full.plot(kind="runout", t_range=(0.1, 0.2)))
+    b = _artist_arrays(runout_plot(sig, t_range=(0.1, 0.2)))
+    assert [k for k in a if digest(a[k]) != digest(b[k])] == []
+    # an old call's keyword with the signals is refused, not ignored
+    with pytest.raises(InputError, match="rpm"):
+        runout_plot(sig, rpm=600.0)

@@ -44,6 +44,17 @@ def _is_signals(ds: Any) -> bool:
     return isinstance(ds, xr.Dataset) and ds.attrs.get("kind") == "measurement_signals"
 
 
+def _signals(func: str, ds: xr.Dataset, legacy: dict[str, Any], **defaults: Any) -> xr.Dataset:
+    """``ds`` if it holds the signals; a recording (deprecated call form) is filtered by
+    :func:`_legacy_signals`. The old call's keywords apply to a recording only."""
+    if _is_signals(ds):
+        if legacy:
+            raise InputError(f"{func}() takes {', '.join(sorted(legacy))} with a recording only; the signals "
+                             "already carry them (see figure_signals).")
+        return ds
+    return _legacy_signals(func, ds, **{**defaults, **legacy})
+
+
 def _legacy_signals(func: str, rec: xr.Dataset, **kw: Any) -> xr.Dataset:
     """The signals of a recording passed where the figure now takes them (deprecated call form):
     computed by :func:`squealkit.measurement.figure_signals`, the one place that filters them."""
@@ -113,8 +124,7 @@ def spectrogram_plot(signals: xr.Dataset, result: Any = None, **legacy: Any):
     -------
     matplotlib.figure.Figure
     """
-    if not _is_signals(signals):
-        signals = _legacy_signals("spectrogram_plot", signals, rpm=None, **legacy)
+    signals = _signals("spectrogram_plot", signals, legacy, rpm=None)
     fig = _figure(figsize=(8, 6))
     axes = fig.subplots(2, 1, sharex=True)
     names = (signals.attrs.get("mic_channel", "mic"), signals.attrs.get("displacement_channel", "displacement"))
@@ -154,8 +164,7 @@ def runout_plot(signals: xr.Dataset, *, t_range: tuple[float, float] | None = No
     -------
     matplotlib.figure.Figure
     """
-    if not _is_signals(signals):
-        signals = _legacy_signals("runout_plot", signals, **legacy)
+    signals = _signals("runout_plot", signals, legacy)
     a = signals.attrs
     t = signals["time"].values
     sel = _t_sel(t, t_range)
@@ -190,8 +199,7 @@ def band_vs_pressure_plot(signals: xr.Dataset, *, t_range: tuple[float, float] |
     -------
     matplotlib.figure.Figure
     """
-    if not _is_signals(signals):
-        signals = _legacy_signals("band_vs_pressure_plot", signals, rpm=None, **legacy)
+    signals = _signals("band_vs_pressure_plot", signals, legacy, rpm=None)
     band = (signals.attrs["freq_lower"], signals.attrs["freq_upper"])
     t = signals["time"].values
     sel = _t_sel(t, t_range)

@@ -97,13 +97,16 @@ class MeasurementResult:
         Parameters
         ----------
         ax : matplotlib Axes, optional
-            Where to draw (polar axes for ``kind="polar"``); a new figure if omitted.
-        kind : {"level", "polar"}, default "level"
+            Where to draw (polar axes for ``kind="polar"``); a new figure if omitted. The kinds
+            that draw ``signals`` make their own figure.
+        kind : {"level", "polar", "event_phase", "time", "spectrogram", "runout", "band"}, default "level"
             :func:`~squealkit.plotting.measurement.level_plot` (level against time with the
-            threshold and the events) or :func:`~squealkit.plotting.measurement.polar_plot`
-            (level and run-out against disc angle).
+            threshold and the events), :func:`~squealkit.plotting.measurement.polar_plot`
+            (level and run-out against disc angle),
+            :func:`~squealkit.plotting.measurement.event_phase_plot`; or, from ``signals``
+            (``keep_signals=True``), the paper's Figs. 6-7, 8-9, 12 and 13.
         **kwargs
-            Passed on to the plotting function.
+            Passed on to the plotting function (e.g. ``t_range`` for the signals' figures).
 
         Returns
         -------
@@ -111,10 +114,18 @@ class MeasurementResult:
         """
         from ...plotting import measurement as plots
 
-        funcs = {"level": plots.level_plot, "polar": plots.polar_plot}
-        if kind not in funcs:
-            raise InputError(f"Parameter kind={kind!r} must be 'level' or 'polar'.")
-        return funcs[kind](self, ax=ax, **kwargs)
+        funcs = {"level": plots.level_plot, "polar": plots.polar_plot, "event_phase": plots.event_phase_plot}
+        drawn = {"time": plots.time_history_plot, "runout": plots.runout_plot, "band": plots.band_vs_pressure_plot}
+        if kind in funcs:
+            return funcs[kind](self, ax=ax, **kwargs)
+        if kind not in (*drawn, "spectrogram"):
+            kinds = ", ".join(map(repr, (*funcs, *drawn, "spectrogram")))
+            raise InputError(f"Parameter kind={kind!r} must be one of {kinds}.")
+        if self.signals is None:
+            raise InputError(f"kind={kind!r} draws the result's signals: analyze with keep_signals=True.")
+        if kind == "spectrogram":
+            return plots.spectrogram_plot(self.signals, self, **kwargs)
+        return drawn[kind](self.signals, **kwargs)
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready summary (stable keys; see the CLI's ``--json``)."""
