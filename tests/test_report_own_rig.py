@@ -290,11 +290,11 @@ def test_fig13_labels_do_not_overlap():
     # issue 27: the band in the displacement's y label made it taller than its panel, over the pressure's label
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    from squealkit.measurement import synthetic_recording
+    from squealkit.measurement import figure_signals, synthetic_recording
     from squealkit.plotting.measurement import band_vs_pressure_plot
 
     rec = synthetic_recording(duration=0.2, fs=40_000.0, rpm=900.0, radius=0.05, freq=2388.0, seed=1)
-    fig = band_vs_pressure_plot(rec, band=(1430.87, 2980.98))
+    fig = band_vs_pressure_plot(figure_signals(rec, rpm=900.0, band=(1430.87, 2980.98)))
     FigureCanvasAgg(fig).draw()
     r = fig.canvas.get_renderer()
     a1, a2 = fig.axes[:2]

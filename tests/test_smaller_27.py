@@ -196,7 +196,7 @@ def test_opening_uff_reads_headers_only(tmp_path, monkeypatch):
 
     pyuff = pytest.importorskip("pyuff")
     from squealkit.measurement import open_recording, synthetic_recording
-    from squealkit.measurement.writers import write_recording
+    from squealkit.measurement.formats.writers import write_recording
 
     rec = synthetic_recording(duration=2.0, seed=1)  # 3 channels x 80000 samples: 1.9 MB of float64
     path = write_recording(rec, tmp_path / "rec.uff")  # ASCII, about 5 MB
@@ -234,7 +234,7 @@ def small_campaign(tmp_path_factory):
     has only 2 marks (300 rpm for 0.5 s), squealing at 2388 Hz (the generator's default line)."""
     from squealkit.campaign import synthetic_campaign
     from squealkit.measurement import synthetic_recording
-    from squealkit.measurement.writers import write_recording
+    from squealkit.measurement.formats.writers import write_recording
 
     d = tmp_path_factory.mktemp("camp27")
     truth = synthetic_campaign(d, n_applications=3, duration=0.5, seed=5, stop_share=0.0)
