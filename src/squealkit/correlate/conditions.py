@@ -398,7 +398,8 @@ def campaign_conditions(campaign_dir: str | Path) -> tuple[xr.Dataset, Any]:
             "file": ("application", np.asarray(apps["file"], dtype=str)),
         },
         coords={"application": np.asarray(apps["application"], dtype=str)},
-        attrs={"campaign": str(d), "criteria": str(apps["criteria"].iloc[0])},
+        attrs={"campaign": str(d), "criteria": str(apps["criteria"].iloc[0]),
+               "synthetic": int(bool(apps["synthetic"].fillna(False).astype(bool).all()))},
     )
     return ds, ev
 

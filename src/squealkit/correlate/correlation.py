@@ -155,8 +155,9 @@ def correlate(
                                                  "over_predictions", "quiet", "frequency_misfit", "matching")})
     ds.attrs.update({k: v for k, v in pred.attrs.items()})
     ds.attrs.update({k: v for k, v in points.attrs.items() if isinstance(v, str | int | float)})
-    ds.attrs.update(campaign=str(d), criteria=apps.attrs.get("criteria", ""), squeal_band_hz=list(squeal_band),
-                    kind="correlation", title="Predicted unstable modes against measured squeal")
+    ds.attrs.update(campaign=str(d), criteria=apps.attrs.get("criteria", ""), synthetic=apps.attrs["synthetic"],
+                    squeal_band_hz=list(squeal_band), kind="correlation",
+                    title="Predicted unstable modes against measured squeal")
     if law is not None:
         ds.attrs["friction_law"] = law.describe()
     if cal is not None:
