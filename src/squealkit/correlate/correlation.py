@@ -150,7 +150,8 @@ def correlate(
         values = cal.values
     points, pred, match = run(values)
     ds = xr.merge([points.drop_vars([v for v in ("mu",) if v in points]), pred, match], compat="override",
-                  combine_attrs="drop")
+                  combine_attrs="override")
+    ds.attrs = {}
     ds.attrs.update({k: match.attrs[k] for k in ("tolerance", "tolerance_percent", "applications", "hits", "misses",
                                                  "over_predictions", "quiet", "frequency_misfit", "matching")})
     ds.attrs.update({k: v for k, v in pred.attrs.items()})

@@ -99,15 +99,17 @@ def apply_quantities(model: Any, values: Mapping[str, float]) -> Any:
     return model.replace(**changes) if changes else model
 
 
-def _distinct(points: xr.Dataset, scale_names: list[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Distinct operating points: ``(keys (D, 2 + L), inverse (A,), model_of_point (D,))``.
+def _distinct(points: xr.Dataset, scale_names: list[str], *, speed: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Distinct operating points: ``(keys (D, 2 + L), inverse (A,))``.
 
-    Columns of a key: mu, disc speed (NaN-free: 0 where unknown), then one scale per law.
+    Columns of a key: mu, disc speed (``speed``: the model depends on it; else 0), then one
+    scale per parameter law.
     """
-    cols = [points["mu"].values, np.nan_to_num(points["disc_speed"].values, nan=-1.0)]
+    w = np.nan_to_num(points["disc_speed"].values, nan=-1.0) if speed else np.zeros(points.sizes["application"])
+    cols = [points["mu"].values, w]
     cols += [points[f"scale_{n}"].values for n in scale_names]
     keys, inverse = np.unique(np.column_stack(cols), axis=0, return_inverse=True)
-    return keys, inverse.ravel(), np.empty(0)
+    return keys, inverse.ravel()
 
 
 def _small_task(item: tuple) -> tuple[np.ndarray, ...]:
@@ -141,7 +143,7 @@ def _predict_small(model: FrictionModel, points: xr.Dataset, scale_names: list[s
     from ..stability._kernels import derived_quantities
     from ..stability.eigen import UNSTABLE_RTOL
 
-    keys, inverse, _ = _distinct(points, scale_names)
+    keys, inverse = _distinct(points, scale_names, speed=False)  # (no speed in a small model without a law)
     # one model per distinct set of parameter scales
     mkeys, which = np.unique(keys[:, 2:], axis=0, return_inverse=True) if scale_names else \
         (np.empty((1, 0)), np.zeros(keys.shape[0], dtype=np.int64))
@@ -197,7 +199,7 @@ def _predict_fe(model: FEModel, points: xr.Dataset, scale_names: list[str], *, t
     if not np.all(np.isfinite(w) & (w > 0)):
         raise InputError("An FE model needs every application's disc speed (> 0): an rpm in the campaign, or "
                          "[correlate] disc_speed = \"vehicle\" with rolling_radius.")
-    keys, inverse, _ = _distinct(points, scale_names)
+    keys, inverse = _distinct(points, scale_names, speed=True)
     t = math.tan(theta)
     mkeys, which = np.unique(keys[:, 2:], axis=0, return_inverse=True) if scale_names else \
         (np.empty((1, 0)), np.zeros(keys.shape[0], dtype=np.int64))

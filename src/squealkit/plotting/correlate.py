@@ -57,8 +57,8 @@ def noise_matrices_plot(ds, *, by: str = "temperature", synthetic: bool = False,
             if np.isfinite(v) and v > 0:
                 ax.text(j, i, f"{v:.0f}", ha="center", va="center", fontsize=7,
                         color="white" if v > 60 else "black")
-        ax.set_xticks(range(int(keep.sum())), [f"{b}\n(n={c})" for b, c in zip(bins[keep], counts[keep],
-                                                                                strict=True)], fontsize=7)
+        labels = [f"{b}\n(n={c})" for b, c in zip(bins[keep], counts[keep], strict=True)]
+        ax.set_xticks(range(int(keep.sum())), labels, fontsize=7, rotation=35, ha="right")
         ax.set_title(f"{which} occurrence [%]", fontsize=10)
         ax.set_xlabel(f"brake {by}")
     axes[0].set_yticks(range(ds.sizes["band"]), [f"{c / 1000:.3g}" for c in ds["band"].values])

@@ -1,0 +1,189 @@
+"""Test meets model (issue 24): a SYNTHETIC campaign made from a known model and friction law.
+
+Truth comes from :func:`squealkit.correlate.synthetic.synthetic_correlation_campaign`: the
+``lv2013`` preset (damped) at the measured mu plus a hidden offset of 0.05 decides which
+applications have an unstable mode (public :func:`squealkit.stability.eigenvalues`, one call);
+the recordings squeal at that mode's frequency (hit), stay quiet (over-prediction), or squeal at
+6.3 kHz, a line the model never predicts (miss), by a known design. The campaign is analysed
+by ``run_campaign`` as a user would; the correlation must recover every outcome exactly.
+"""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from squealkit._validation import InputError
+from squealkit.campaign import read_matrix, run_campaign
+from squealkit.cli.main import cli
+from squealkit.correlate import (
+    ConditionMap,
+    FrictionLaw,
+    ParameterLaw,
+    campaign_conditions,
+    correlate,
+    fit_friction_law,
+    operating_points,
+    predict_modes,
+)
+from squealkit.correlate.synthetic import synthetic_correlation_campaign
+from squealkit.models import get_preset
+from squealkit.stability import eigenvalues
+
+HIDDEN_OFFSET = 0.05
+
+
+@pytest.fixture(scope="module")
+def camp(tmp_path_factory):
+    d = tmp_path_factory.mktemp("corr")
+    truth = synthetic_correlation_campaign(d / "camp", n_applications=35, mu_offset=HIDDEN_OFFSET, duration=0.4,
+                                           fs=20000.0, seed=0)
+    summary = run_campaign(d / "camp" / "matrix.csv", d / "out", mic="mic", displacement="displacement", radius=0.05,
+                           band=(2000.0, 8000.0), report=False)
+    assert not summary["failed"]
+    (d / "model.toml").write_text('preset = "lv2013"\n[correlate]\nmu = "measured"\n')
+    return d, truth
+
+
+def test_outcomes_recovered_exactly(camp):
+    d, truth = camp
+    counts = truth["counts"]
+    assert all(counts[k] >= 1 for k in ("hit", "miss", "over_prediction", "quiet")), counts  # every kind is tested
+    ds = correlate(d / "out", get_preset("lv2013"), ConditionMap(mu_offset=HIDDEN_OFFSET))
+    got = dict(zip(ds["application"].values, ds["outcome"].values, strict=True))
+    want = {a: t["outcome"] for a, t in truth["by_application"].items()}
+    assert got == want
+    assert (ds.attrs["hits"], ds.attrs["misses"], ds.attrs["over_predictions"], ds.attrs["quiet"]) == \
+        (counts["hit"], counts["miss"], counts["over_prediction"], counts["quiet"])
+    assert ds.attrs["tolerance_percent"] == 3.0 and "3 %" in ds.attrs["matching"]
+    # the predicted frequency is the truth's (public eigenvalues, one application at a time)
+    for a, t in truth["by_application"].items():
+        f = ds["predicted_hz"].sel(application=a).values
+        f = f[np.isfinite(f)]
+        if t["predicted_hz"] is None:
+            assert f.size == 0
+        else:
+            assert f.size == 1 and f[0] == pytest.approx(t["predicted_hz"], rel=1e-9)
+    assert ds["frequency_hz"].attrs["units"] == "Hz" and ds["growth_rate"].attrs["units"] == "1/s"
+    assert set(ds["frequency_hz"].dims) == {"application", "mode"}
+    # occurrence matrices: measured and predicted in the 2.5 kHz band agree where the outcome does
+    b = int(np.argmin(np.abs(ds["band"].values - 2512)))
+    assert np.nansum(ds["measured_by_temperature"].values) > 0 and ds["band_predicted"].values[b] == \
+        counts["hit"] + counts["over_prediction"] + sum(
+            1 for t in truth["by_application"].values() if t["outcome"] == "miss" and t["predicted_hz"] is not None)
+
+
+def test_calibration_recovers_the_hidden_offset(camp):
+    d, truth = camp
+    ds = correlate(d / "out", get_preset("lv2013"), ConditionMap(), fit={"mu_offset": (-0.01, 0.11)})
+    cal = json.loads(ds.attrs["calibration"])
+    q = cal["quantities"]["mu_offset"]
+    lo, hi = q["interval"]
+    assert lo <= HIDDEN_OFFSET <= hi and lo <= q["value"] <= hi
+    assert hi - lo < 0.03 and q["identifiable"]  # the applications near the limit bracket it
+    # the bracket the data allow, by hand: the offset must lift the lowest hit above mu_c and
+    # keep the highest quiet application below it (critical friction of the damped preset)
+    mu_c = truth["mu_critical"]
+    apps = truth["by_application"].values()
+    assert lo == pytest.approx(mu_c - min(t["mu"] for t in apps if t["outcome"] == "hit"), abs=2e-4)
+    assert hi == pytest.approx(mu_c - max(t["mu"] for t in apps if t["outcome"] == "quiet"), abs=2e-4)
+    assert cal["after"]["hits"] == truth["counts"]["hit"] and cal["before"]["hits"] < cal["after"]["hits"]
+
+
+def test_damping_scale_is_reported_unidentifiable_when_the_data_cannot_see_it(camp):
+    d, _ = camp
+    # with mu given right, a small change of damping moves no application across the limit: the
+    # whole bounds fit equally well
+    ds = correlate(d / "out", get_preset("lv2013"), ConditionMap(mu_offset=HIDDEN_OFFSET),
+                   fit=["damping_scale=0.999:1.001"])
+    q = json.loads(ds.attrs["calibration"])["quantities"]["damping_scale"]
+    assert not q["identifiable"] and q["interval"] == [0.999, 1.001]
+
+
+def test_friction_law_fitted_from_the_campaign(camp):
+    d, truth = camp
+    apps, _ = campaign_conditions(d / "out")
+    law = fit_friction_law({k: apps[k].values for k in ("pressure_bar", "temperature_c")}, apps["mu_measured"].values)
+    t = truth["law"]
+    # least squares on 35 points with noise 0.003: coefficients within a few standard errors
+    assert law.coefficients["temperature_c"] == pytest.approx(t["temperature_c"], abs=3e-5)
+    assert law.coefficients["pressure_bar"] == pytest.approx(t["pressure_bar"], abs=3e-4)
+    assert law.residual_std == pytest.approx(t["noise_std"], rel=0.4)
+    assert law.mu({"pressure_bar": 20.0, "temperature_c": 200.0}) == pytest.approx(t["mu0"], abs=0.003)
+    ds = correlate(d / "out", get_preset("lv2013"), ConditionMap(mu="law", mu_offset=HIDDEN_OFFSET))
+    assert "fitted to 35 applications" in ds.attrs["friction_law"]
+
+
+def test_identical_conditions_solved_once_and_parameter_laws(camp):
+    d, _ = camp
+    apps, _ = campaign_conditions(d / "out")
+    model = get_preset("lv2013")
+    law = FrictionLaw(0.45, {"temperature_c": 5e-4}, {"temperature_c": 200.0})
+    # temperatures rounded to 100 C: few distinct operating points
+    apps = apps.assign(temperature_c=np.round(apps["temperature_c"] / 100) * 100)
+    cmap = ConditionMap(mu="law", mu_law=law, laws=(ParameterLaw("k1", "temperature_c", -1e-3, 200.0),))
+    pts = operating_points(apps, cmap)
+    pred = predict_modes(model, pts)
+    n_distinct = np.unique(apps["temperature_c"].values).size
+    assert pred.attrs["distinct_points"] == n_distinct < apps.sizes["application"]
+    # reference: the public eigenvalues of each application's own model, one by one
+    for a in apps["application"].values[:6]:
+        T = float(apps["temperature_c"].sel(application=a))
+        m = model.replace(k1=model.k1 * (1 - 1e-3 * (T - 200.0)))
+        lam = eigenvalues(m, law.mu({"temperature_c": T}), damped=True)
+        assert np.allclose(pred["frequency_hz"].sel(application=a).values, lam.imag / (2 * math.pi), rtol=1e-9)
+
+
+def test_cli_json_keys_and_report(camp):
+    d, _ = camp
+    out = d / "corr_out"
+    res = CliRunner().invoke(cli, ["correlate", str(d / "out"), "--config", str(d / "model.toml"), "--fit",
+                                   "mu_offset=-0.01:0.11", "--tolerance", "3", "--out", str(out), "--json"])
+    assert res.exit_code == 0, res.output
+    j = json.loads(res.stdout)
+    for k in ("applications", "hits", "misses", "over_predictions", "quiet", "per_application", "calibration",
+              "tolerance_percent"):
+        assert k in j
+    assert set(j["per_application"][0]) == {"application", "mu", "predicted_hz", "measured_hz", "outcome"}
+    assert set(j["calibration"]["mu_offset"]) >= {"value", "interval"}
+    assert (out / "report.html").is_file() and (out / "correlation.nc").is_file()
+    html = (out / "report.html").read_text()
+    assert "over-prediction" in html and "SYNTHETIC" in html and "mu_offset" in html
+    assert {p.name for p in (out / "figures").glob("*.png")} >= {"noise_matrices_temperature.png",
+                                                                "noise_map_temperature.png"}
+
+
+@pytest.mark.parametrize(("args", "match"), [
+    (["--fit", "mu_offset=0.2"], "NAME=LO:HI"),
+    (["--fit", "mu_offset=0.2:0.1"], "LO < HI"),
+    (["--fit", "stiffness=0:1"], "no quantity"),
+    (["--tolerance", "0"], "tolerance"),
+    (["--tolerance", "80"], "tolerance"),
+])
+def test_bad_inputs_exit_2(camp, args, match):
+    d, _ = camp
+    res = CliRunner().invoke(cli, ["correlate", str(d / "out"), "--config", str(d / "model.toml"), *args])
+    assert res.exit_code == 2, res.output
+    assert match in res.output and len(res.output.strip().splitlines()) == 1
+
+
+def test_bad_campaign_folder_and_table_exit_2(camp, tmp_path):
+    d, _ = camp
+    res = CliRunner().invoke(cli, ["correlate", str(tmp_path), "--config", str(d / "model.toml")])
+    assert res.exit_code == 2 and "campaign.duckdb" in res.output and len(res.output.strip().splitlines()) == 1
+    (tmp_path / "m.toml").write_text('preset = "lv2013"\n[correlate]\nmu = "measurd"\n')
+    res = CliRunner().invoke(cli, ["correlate", str(d / "out"), "--config", str(tmp_path / "m.toml")])
+    assert res.exit_code == 2 and "measured" in res.output and len(res.output.strip().splitlines()) == 1
+    with pytest.raises(InputError, match="mu_scale"):
+        ConditionMap(mu_scale=-1.0)
+
+
+def test_matrix_mu_column(tmp_path):
+    (tmp_path / "m.csv").write_text("application,file,mu\nA,a.nc,0.42\nB,b.nc,\n")
+    a, b = read_matrix(tmp_path / "m.csv")
+    assert a.mu == 0.42 and math.isnan(b.mu) and "mu" not in a.extra
+    (tmp_path / "m.csv").write_text("application,file,mu\nA,a.nc,-0.1\n")
+    with pytest.raises(InputError, match="mu"):
+        read_matrix(tmp_path / "m.csv")
