@@ -187,3 +187,49 @@ def test_matrix_mu_column(tmp_path):
     (tmp_path / "m.csv").write_text("application,file,mu\nA,a.nc,-0.1\n")
     with pytest.raises(InputError, match="mu"):
         read_matrix(tmp_path / "m.csv")
+
+
+def _write_store(out, rows):
+    """A campaign store as ``squealkit campaign`` leaves it: (application, mu, rpm, squeal frequency or None)."""
+    from squealkit.campaign.store import CampaignStore
+
+    out.mkdir(parents=True, exist_ok=True)
+    results = []
+    for app, mu, rpm, f in rows:
+        row = {"application": app, "file": f"{app}.nc", "pressure_bar": 20.0, "temperature_c": 100.0,
+               "speed_kmh": 50.0, "synthetic": True, "squeal": f is not None, "mean_rpm": rpm, "criteria": "test",
+               "mu": mu, "error": None}
+        ev = [] if f is None else [{"application": app, "event": 0, "frequency_hz": f, "peak_dba": 80.0}]
+        results.append((row, ev))
+    with CampaignStore(out / "campaign.duckdb") as store:
+        store.put_many(results)
+
+
+@pytest.mark.slow
+def test_fe_demo_with_one_reduced_basis(tmp_path):
+    """The built-in FE brake (small), one POD basis for the campaign; reference: a dense solve of the
+    full model (LAPACK) at each distinct operating point."""
+    from squealkit.models import FEModel
+    from squealkit.models.fe_demo import build_fe_demo
+    from squealkit.stability.fe_sweep import FESolver
+
+    demo = build_fe_demo(n_theta=8, n_r=2)
+    fe = FEModel.from_matrices(**{k: demo[k] for k in ("M", "D1", "DG", "K1", "KR", "KGeo")},
+                               omega_ref=demo["omega_ref"], mu_ref=demo["mu_ref"])
+    band = (4000.0, 5000.0)
+    dense = FESolver(fe, "dense", band)
+    ref = {}
+    for mu in (0.2, 0.4):
+        lam = dense.solve(2 * math.pi * 900 / 60, mu, vectors=False).eigenvalues
+        ref[mu] = lam.imag[lam.real > 1e-6 * np.abs(lam)] / (2 * math.pi)
+    assert ref[0.2].size == 0 and ref[0.4].size == 1  # one mode of the band goes unstable between them
+    f = float(ref[0.4][0])
+    _write_store(tmp_path, [("H", 0.4, 900.0, f * 1.01), ("O", 0.4, 900.0, None), ("M1", 0.2, 900.0, 4700.0),
+                            ("M2", 0.4, 900.0, f * 1.06), ("Q", 0.2, 900.0, None)])
+    ds = correlate(tmp_path, fe, method="pod", band=band)
+    assert dict(zip(ds["application"].values, ds["outcome"].values, strict=True)) == \
+        {"H": "hit", "O": "over_prediction", "M1": "miss", "M2": "miss", "Q": "quiet"}
+    assert ds.attrs["distinct_points"] == 2 and ds.attrs["basis_size"] > 0 and ds.attrs["method"] == "pod"
+    got = ds["predicted_hz"].sel(application="H").values
+    assert got[np.isfinite(got)] == pytest.approx([f], rel=1e-6)
+    assert np.nanmax(ds["residual"].values) < 1e-6  # the basis' backward error: trusted

@@ -210,7 +210,8 @@ def _predict_fe(model: FEModel, points: xr.Dataset, scale_names: list[str], *, t
         ml, mh = float(keys[:, 0].min()) + t, float(keys[:, 0].max()) + t
         ws = np.array([wl, wh, wl, wh, (wl + wh) / 2])
         ms = np.array([ml, ml, mh, mh, (ml + mh) / 2])
-        samples = (ws, ms)
+        pairs = np.unique(np.column_stack([ws, ms]), axis=0)  # (a campaign at one speed: fewer snapshots)
+        samples = (pairs[:, 0], pairs[:, 1])
     base = FESolver(model, method, band, n_modes, samples)
     solvers = []
     for mk in mkeys:
