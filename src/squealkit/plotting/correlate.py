@@ -100,7 +100,8 @@ def noise_map_plot(ds, *, by: str = "temperature_c", synthetic: bool = False, ax
     xm = np.broadcast_to(x[:, None], f_m.shape)
     okm = np.isfinite(f_m)
     if okm.any():
-        sc = ax.scatter(xm[okm], f_m[okm], c=lvl[okm], cmap="magma_r", s=22, label="measured squeal", zorder=3)
+        sc = ax.scatter(xm[okm], f_m[okm], c=lvl[okm], cmap="magma_r", s=24, edgecolors="k", linewidths=0.4,
+                        label="measured squeal", zorder=3)
         fig.colorbar(sc, ax=ax, label="peak level [dB(A)]")
     units = {"temperature_c": "brake temperature [C]", "pressure_bar": "brake pressure [bar]",
              "mu": "model friction coefficient [1]"}
