@@ -233,3 +233,23 @@ def test_fe_demo_with_one_reduced_basis(tmp_path):
     got = ds["predicted_hz"].sel(application="H").values
     assert got[np.isfinite(got)] == pytest.approx([f], rel=1e-6)
     assert np.nanmax(ds["residual"].values) < 1e-6  # the basis' backward error: trusted
+
+
+def test_mu_from_torque_and_pressure(tmp_path):
+    """mu = T / (n_faces p A r_eff): a recording whose torque channel is the brake torque of mu = 0.42
+    at 20 bar on a 40 mm piston with a 0.11 m effective radius (two friction faces)."""
+    from squealkit.measurement import synthetic_recording
+    from squealkit.measurement.writers import write_recording
+
+    area, r_eff, p_bar = math.pi * 0.02**2, 0.11, 20.0
+    torque = 0.42 * 2 * p_bar * 1e5 * area * r_eff  # [N m]
+    rec = synthetic_recording(duration=0.05, fs=20000.0, squeal_on="none", seed=1)
+    rec = rec.assign(torque=("time", np.full(rec.sizes["time"], torque), {"units": "N m"}))
+    write_recording(rec, tmp_path / "A.nc")
+    _write_store(tmp_path / "out", [("A", math.nan, 900.0, None)])
+    apps, _ = campaign_conditions(tmp_path / "out")
+    apps = apps.assign(file=("application", [str(tmp_path / "A.nc")]))
+    cmap = ConditionMap(mu="torque", torque_channel="torque", piston_area=area, effective_radius=r_eff)
+    assert float(operating_points(apps, cmap)["mu"][0]) == pytest.approx(0.42, rel=1e-9)
+    with pytest.raises(InputError, match="piston_area"):
+        ConditionMap(mu="torque", torque_channel="torque", effective_radius=r_eff)
