@@ -253,3 +253,16 @@ def test_mu_from_torque_and_pressure(tmp_path):
     assert float(operating_points(apps, cmap)["mu"][0]) == pytest.approx(0.42, rel=1e-9)
     with pytest.raises(InputError, match="piston_area"):
         ConditionMap(mu="torque", torque_channel="torque", effective_radius=r_eff)
+
+
+def test_rows_on_a_dask_client_give_the_same_numbers(camp, monkeypatch):
+    distributed = pytest.importorskip("distributed")
+    import squealkit.correlate.predict as predict
+
+    d, _ = camp
+    monkeypatch.setattr(predict, "_CHUNK_SMALL", 8)  # several tasks
+    here = correlate(d / "out", get_preset("lv2013"), ConditionMap(mu_offset=HIDDEN_OFFSET))
+    with distributed.Client(processes=False, n_workers=1, threads_per_worker=2, dashboard_address=":0") as client:
+        there = correlate(d / "out", get_preset("lv2013"), ConditionMap(mu_offset=HIDDEN_OFFSET), client=client)
+    np.testing.assert_array_equal(here["frequency_hz"].values, there["frequency_hz"].values)
+    assert list(here["outcome"].values) == list(there["outcome"].values)

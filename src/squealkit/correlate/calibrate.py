@@ -7,12 +7,15 @@ Objective (minimised)::
 the number of applications the model gets wrong, plus ``misfit`` = the mean squared frequency
 error of the matched components in units of the tolerance (below 1: it only breaks ties
 between values that get the same applications right). ``J`` is piecewise constant in its
-integer part, so the optimiser is :func:`scipy.optimize.differential_evolution` (derivative
-free, bounded, seeded by ``rng``); with one quantity, a scan of the bounds refined by
-bisection finds the same minimum exactly.
+integer part, so with several quantities the optimiser is
+:func:`scipy.optimize.differential_evolution` (derivative free, bounded, seeded by ``rng``),
+started from the best point of a grid; with one quantity, a scan of the bounds refined by
+bisection finds the minimum exactly (no optimiser needed).
 
 The interval the data allows for a quantity is its *profile*: the values at which the
-least number of wrong applications (the others re-fitted) equals the best fit's, contiguous
+least number of wrong applications (the others re-fitted on a grid: 33 values for one other
+quantity, 9 each for more, so a narrow valley of correlated quantities can make an interval
+too short) equals the best fit's, contiguous
 around the fit, its edges located by bisection. A quantity whose interval spans its whole
 bounds is reported *unidentifiable* by this campaign (the data do not constrain it).
 """
@@ -148,23 +151,43 @@ def _counts(m: Any, j: float) -> dict[str, float]:
     return {k: int(m.attrs[k]) for k in ("hits", "misses", "over_predictions", "quiet")} | {"objective": j}
 
 
-def _fit_others(evaluate, names, bounds, fixed: dict[str, float], rng, start: dict[str, float]):
-    """Best J over the quantities not in ``fixed`` (differential evolution), with them fixed."""
+#: Points per free quantity of the grid on which the others are re-fitted along a profile.
+_REFIT_POINTS = 9
+
+
+def _fit_others(evaluate, names, bounds, fixed: dict[str, float], rng, start: dict[str, float], *,
+                search: bool = False):
+    """Best J over the quantities not in ``fixed``, with them fixed: on a grid of
+    :data:`_REFIT_POINTS` per free quantity (a profile point), or with ``search`` by
+    differential evolution started from the best of that grid (the fit)."""
     free = [n for n in names if n not in fixed]
     if not free:
         j, w, _ = _score(evaluate, dict(fixed))
         return j, w, dict(fixed)
+    import itertools
+
+    best = (math.inf, 0, dict(fixed))
+    # one other quantity: a fine grid (correlated quantities leave a narrow valley); more: a coarse one
+    points = 4 * (_REFIT_POINTS - 1) + 1 if len(free) == 1 else _REFIT_POINTS
+    axes = [np.linspace(*bounds[n], points) for n in free]
+    for combo in itertools.product(*axes):
+        vals = {**fixed, **dict(zip(free, map(float, combo), strict=True))}
+        j, w, _ = _score(evaluate, vals)
+        if j < best[0]:
+            best = (j, w, vals)
+    if not search:
+        return best
     from scipy.optimize import differential_evolution
 
     def f(x):
         return _score(evaluate, {**fixed, **dict(zip(free, x, strict=True))})[0]
 
-    x0 = np.array([min(max(start[n], bounds[n][0]), bounds[n][1]) for n in free])
-    r = differential_evolution(f, [bounds[n] for n in free], seed=rng, polish=False, maxiter=30, popsize=8,
+    x0 = np.array([best[2][n] for n in free])
+    r = differential_evolution(f, [bounds[n] for n in free], seed=rng, polish=False, maxiter=12, popsize=6,
                                tol=0.0, x0=x0, init="sobol")
-    vals = {**fixed, **dict(zip(free, r.x, strict=True))}
+    vals = {**fixed, **dict(zip(free, map(float, r.x), strict=True))}
     j, w, _ = _score(evaluate, vals)
-    return j, w, vals
+    return (j, w, vals) if j <= best[0] else best
 
 
 def calibrate(evaluate: Callable[[dict[str, float]], Any], bounds: Mapping[str, tuple[float, float]],
@@ -198,7 +221,7 @@ def calibrate(evaluate: Callable[[dict[str, float]], Any], bounds: Mapping[str, 
     # profile scans first: with one quantity they are the fit
     for n in names:
         lo, hi = bounds[n]
-        grid = np.linspace(lo, hi, _PROFILE_POINTS if len(names) == 1 else 13)
+        grid = np.linspace(lo, hi, _PROFILE_POINTS if len(names) == 1 else 21)
         js, ws = np.empty(grid.size), np.empty(grid.size, dtype=int)
         for i, v in enumerate(grid):
             js[i], ws[i], _ = _fit_others(evaluate, names, bounds, {n: float(v)}, rng, start)
@@ -209,7 +232,7 @@ def calibrate(evaluate: Callable[[dict[str, float]], Any], bounds: Mapping[str, 
         i = int(np.argmin(js))
         best = {n: float(grid[i])}
     else:
-        _, _, best = _fit_others(evaluate, names, bounds, {}, rng, start)
+        _, _, best = _fit_others(evaluate, names, bounds, {}, rng, start, search=True)
         # a profile grid point may beat the optimiser: take the best seen
         for n in names:
             grid, js, ws = grids[n]
@@ -219,6 +242,7 @@ def calibrate(evaluate: Callable[[dict[str, float]], Any], bounds: Mapping[str, 
     j1, w1, m1 = _score(evaluate, best)
     intervals: dict[str, tuple[float, float]] = {}
     unident = []
+    bisect = _BISECT if len(names) == 1 else 6
     for n in names:
         grid, js, ws = grids[n]
         wmin = min(int(ws.min()), w1)
@@ -239,18 +263,19 @@ def calibrate(evaluate: Callable[[dict[str, float]], Any], bounds: Mapping[str, 
         lo_v = float(grid[a])
         if a > 0:  # bisection between the last bad and the first good grid point
             bad_v, good_v = float(grid[a - 1]), lo_v
-            for _ in range(_BISECT):
+            for _ in range(bisect):
                 mid = 0.5 * (bad_v + good_v)
                 bad_v, good_v = (bad_v, mid) if good(mid) else (mid, good_v)
             lo_v = good_v
         hi_v = float(grid[b])
         if b < grid.size - 1:
             good_v, bad_v = hi_v, float(grid[b + 1])
-            for _ in range(_BISECT):
+            for _ in range(bisect):
                 mid = 0.5 * (bad_v + good_v)
                 good_v, bad_v = (mid, bad_v) if good(mid) else (good_v, mid)
             hi_v = good_v
-        intervals[n] = (lo_v, hi_v)
+        # (the re-fit on a grid can miss a narrow valley: the fit itself is always allowed)
+        intervals[n] = (min(lo_v, best[n]), max(hi_v, best[n]))
         if a == 0 and b == grid.size - 1:
             unident.append(n)
         if len(names) == 1 and lo_v <= best[n] <= hi_v:
