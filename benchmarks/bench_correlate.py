@@ -82,6 +82,8 @@ def main() -> None:
     ap.add_argument("--applications", type=int, default=2000)
     ap.add_argument("--subset", type=int, default=100, help="applications of the critical_friction baseline")
     ap.add_argument("--fe", action="store_true", help="also the built-in FE brake with a reduced basis")
+    ap.add_argument("--fe-theta", type=int, default=16, help="sectors of the FE demo (16: 1,422 DOFs; 8: 738)")
+    ap.add_argument("--fe-subset", type=int, default=5, help="applications of the dense FE baseline")
     args = ap.parse_args()
 
     from squealkit.correlate import ConditionMap, correlate
@@ -131,7 +133,7 @@ def main() -> None:
             from squealkit.models.fe_demo import build_fe_demo
             from squealkit.stability.fe_sweep import FESolver
 
-            demo = build_fe_demo(n_theta=16, n_r=2)
+            demo = build_fe_demo(n_theta=args.fe_theta, n_r=2)
             fe = FEModel.from_matrices(**{k: v for k, v in demo.items() if k in ("M", "D1", "DG", "K1", "KR", "KGeo")},
                                        omega_ref=float(demo["omega_ref"]), mu_ref=float(demo["mu_ref"]))
             d2 = Path(tmp) / "camp_fe"
@@ -142,7 +144,7 @@ def main() -> None:
             print(f"correlate, {n} applications, FE demo ({fe.n_dof} DOFs, POD basis {ds.attrs['basis_size']}): "
                   f"{t_fe:.1f} s ({ds.attrs['distinct_points']} distinct points)")
             solver = FESolver(fe, "dense", (1000.0, 12000.0))
-            k = min(20, n)
+            k = min(args.fe_subset, n)
             t0 = time.perf_counter()
             for w, m in zip(ds["disc_speed"].values[:k], ds["mu"].values[:k], strict=True):
                 solver.solve(float(w), float(m), vectors=False)
