@@ -22,6 +22,7 @@ friction coefficient the dynamometer reports (the matrix's ``mu`` column). A
     pressure_channel = "pressure"    # [bar]; else the application's pressure_bar
     [correlate.laws]         # a model parameter scaled linearly with a condition
     k1 = {of = "temperature_c", ref = 20.0, slope = -5e-4}   # k1 (1 + slope (T - ref))
+    damping = {of = "pressure_bar", ref = 20.0, slope = 0.01}  # "damping": every damping of the model
 
 Any model parameter may be set (``NAME = value``) or scaled (``NAME_scale = factor``) with
 :func:`apply_quantities`; ``damping_scale`` scales every damping of the model.
