@@ -215,7 +215,7 @@ def run_campaign(
                 continue
             row = {"application": a.application, "file": str(a.file), "section": a.section, "mode": a.mode,
                    "pressure_bar": a.pressure_bar, "temperature_c": a.temperature_c, "speed_kmh": a.speed_kmh,
-                   "criteria": crit.describe(), "file_size": sig[0], "file_mtime_ns": sig[1]}
+                   "mu": a.mu, "criteria": crit.describe(), "file_size": sig[0], "file_mtime_ns": sig[1]}
             kw = dict(kw_base)
             if tacho is not None:
                 kw["tacho"] = tacho
