@@ -130,7 +130,7 @@ def main() -> None:
 
         if args.fe:
             from squealkit.models import FEModel
-            from squealkit.models.fe_demo import build_fe_demo
+            from squealkit.fe.demo import build_fe_demo
             from squealkit.stability.fe_sweep import FESolver
 
             demo = build_fe_demo(n_theta=args.fe_theta, n_r=2)

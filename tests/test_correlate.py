@@ -210,7 +210,7 @@ def test_fe_demo_with_one_reduced_basis(tmp_path):
     """The built-in FE brake (small), one POD basis for the campaign; reference: a dense solve of the
     full model (LAPACK) at each distinct operating point."""
     from squealkit.models import FEModel
-    from squealkit.models.fe_demo import build_fe_demo
+    from squealkit.fe.demo import build_fe_demo
     from squealkit.stability.fe_sweep import FESolver
 
     demo = build_fe_demo(n_theta=8, n_r=2)
@@ -239,7 +239,7 @@ def test_mu_from_torque_and_pressure(tmp_path):
     """mu = T / (n_faces p A r_eff): a recording whose torque channel is the brake torque of mu = 0.42
     at 20 bar on a 40 mm piston with a 0.11 m effective radius (two friction faces)."""
     from squealkit.measurement import synthetic_recording
-    from squealkit.measurement.writers import write_recording
+    from squealkit.measurement.formats.writers import write_recording
 
     area, r_eff, p_bar = math.pi * 0.02**2, 0.11, 20.0
     torque = 0.42 * 2 * p_bar * 1e5 * area * r_eff  # [N m]

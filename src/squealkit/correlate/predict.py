@@ -3,7 +3,7 @@
 Applications with identical operating points (friction, disc speed and parameter scales)
 are solved once. Small models (3-DOF, Hoffmann, matrix models) go through the batch
 eigenvalue kernels of :mod:`squealkit.stability.eigen` (one call for every distinct point);
-FE models reuse one reduced basis (:mod:`squealkit.stability.reduction`, POD or modal) for
+FE models reuse one reduced basis (:mod:`squealkit.solvers.reduction`, POD or modal) for
 the whole campaign, every eigenpair checked by its backward error in the full model
 (``trusted``; an untrusted pair never counts as an unstable mode). With a Dask ``client``
 the distinct points are solved in chunks on the cluster.
@@ -141,7 +141,7 @@ def _predict_small(model: FrictionModel, points: xr.Dataset, scale_names: list[s
                    theta: float, client: Any) -> dict[str, Any]:
     from ..scale import map_tasks
     from ..stability._kernels import derived_quantities
-    from ..stability.eigen import UNSTABLE_RTOL
+    from ..stability._schema import UNSTABLE_RTOL
 
     keys, inverse = _distinct(points, scale_names, speed=False)  # (no speed in a small model without a law)
     # one model per distinct set of parameter scales
@@ -192,7 +192,7 @@ def _fe_task(item: tuple) -> list[tuple[np.ndarray, np.ndarray]]:
 def _predict_fe(model: FEModel, points: xr.Dataset, scale_names: list[str], *, theta: float, client: Any,
                 method: str, band: tuple[float, float] | None, n_modes: int | None) -> dict[str, Any]:
     from ..scale import map_tasks
-    from ..stability import reduction
+    from ..solvers import reduction
     from ..stability.fe_sweep import FESolver, _point_arrays
 
     w = points["disc_speed"].values
@@ -243,7 +243,7 @@ def _predict_fe(model: FEModel, points: xr.Dataset, scale_names: list[str], *, t
     mag = np.abs(lam)
     with np.errstate(invalid="ignore", divide="ignore"):
         zeta = np.where(mag > 0, -lam.real / mag, 0.0)
-    from ..stability.eigen import UNSTABLE_RTOL
+    from ..stability._schema import UNSTABLE_RTOL
 
     return {"keys": keys, "inverse": inverse, "sigma": lam.real, "omega": lam.imag, "zeta": zeta,
             "unstable": unstable & valid, "verdict": verdict, "residual": res, "n_models": len(solvers),

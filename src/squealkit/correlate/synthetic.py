@@ -84,7 +84,7 @@ def synthetic_correlation_campaign(
     """
     from ..io import output_folder
     from ..measurement import synthetic_recording
-    from ..measurement.writers import write_recording
+    from ..measurement.formats.writers import write_recording
     from ..models import get_preset
     from ..stability import critical_friction
 
