@@ -1,6 +1,10 @@
-"""Stability of the paper's rig: Fig. 2, the critical friction and a run-out tolerance.
+"""
+Stability map and critical friction
+===================================
 
-Run:  python examples/01_stability.py [OUTPUT_DIR]
+Stability of the paper's rig: Fig. 2, the critical friction and a run-out tolerance.
+
+Run it with ``python examples/01_stability.py [OUTPUT_DIR]``: it writes its results and figures there.
 """
 
 import math
@@ -41,7 +45,7 @@ print(f"at mu = 0.3 keep tan(theta) <= {tol.tan_theta_max:.4f}: q0 <= {tol.q0_ma
 
 # your own rig, from a TOML file: the pin bending frequency is not given there, so it comes
 # from Timoshenko beam theory (every frequency's source is printed)
-path = Path(__file__).with_name("myrig.toml")
+path = Path(sys.argv[0]).with_name("myrig.toml")  # beside this script (the docs gallery sets no __file__)
 mine, rig = load_model(path), load_rig(path)
 print(f"myrig.toml frequencies: {rig.describe()}")
 with warnings.catch_warnings(record=True) as caught:

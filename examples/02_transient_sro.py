@@ -1,6 +1,10 @@
-"""Transient response with the paper's sine run-out (Fig. 4): growth on rising SRO, decay on falling.
+"""
+Transient response with run-out
+===============================
 
-Run:  python examples/02_transient_sro.py [OUTPUT_DIR]
+Transient response with the paper's sine run-out (Fig. 4): growth on rising SRO, decay on falling.
+
+Run it with ``python examples/02_transient_sro.py [OUTPUT_DIR]``: it writes its results and figures there.
 """
 
 import sys

@@ -1,11 +1,15 @@
-"""Squeal propensity of the paper's rig with scattered parameters (Monte Carlo).
+"""
+Squeal propensity under scatter
+===============================
+
+Squeal propensity of the paper's rig with scattered parameters (Monte Carlo).
 
 The rig's stiffnesses, contact stiffness and pin incline are described by distributions in
 ``uncertain_rig.toml``; every sample's stability is computed over mu (paper eqs. 7-8).
 Prints the probability of instability at a few mu and which parameters drive the
 critical friction (Sobol' indices).
 
-Run:  python examples/04_uncertainty.py [OUTPUT_DIR]
+Run it with ``python examples/04_uncertainty.py [OUTPUT_DIR]``: it writes its results and figures there.
 """
 
 import sys
@@ -21,7 +25,7 @@ from squealkit.uncertainty import load_uncertain, propensity_summary, squeal_pro
 out = Path(sys.argv[1] if len(sys.argv) > 1 else "examples-output")
 out.mkdir(parents=True, exist_ok=True)
 
-rig = Path(__file__).with_name("uncertain_rig.toml")
+rig = Path(sys.argv[0]).with_name("uncertain_rig.toml")  # beside this script (the gallery sets no __file__)
 model = load_model(rig)  # the lv2013 preset: nominal mu_crit = 0.4448 at theta = 0
 uncertain = load_uncertain(rig)
 ds = squeal_propensity(model, uncertain, np.linspace(0.0, 1.0, 41), samples=512, seed=1)
