@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
 
@@ -52,6 +53,7 @@ sphinx_gallery_conf = {
     "image_scrapers": ("_gallery.png_scraper",),
     "reset_modules": ("matplotlib",),
     "download_all_examples": False,
+    "within_subsection_order": "FileNameSortKey",  # 01_, 02_, ... in their order
     "remove_config_comments": True,
     "show_memory": False,
     "line_numbers": False,
@@ -99,8 +101,9 @@ def _api_pages_off_the_sidebar(app, doctree) -> None:
 def _constant_docs(app, what, name, obj, options, lines) -> None:
     """A constant re-exported by its package (``squealkit.stability.VERDICTS``) is described by
     the ``#:`` comment where it is defined, not by the docstring of its type (``tuple``)."""
-    if what not in ("data", "attribute") or lines[:1] != (type(obj).__doc__ or "").strip().splitlines()[:1]:
-        return
+    first = (type(obj).__doc__ or "").strip().partition("\n")[0]
+    if what not in ("data", "attribute") or not first or not any(first in line for line in lines):
+        return  # its own docstring (a class's or a function's), or a #: comment autodoc found
     from sphinx.errors import PycodeError
     from sphinx.pycode import ModuleAnalyzer
 
@@ -112,8 +115,8 @@ def _constant_docs(app, what, name, obj, options, lines) -> None:
             comment = ModuleAnalyzer.for_module(modname).find_attr_docs().get(("", short))
         except PycodeError:  # a module without source (none in squealkit); try the next one
             continue
-        if comment:
-            lines[:] = list(comment)
+        if comment:  # |lambda| is an absolute value there, not a reST substitution
+            lines[:] = [re.sub(r"\|(\w+)\|", r"\\|\1\\|", line) for line in comment]
             return
     lines[:] = []
 
