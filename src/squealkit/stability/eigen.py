@@ -18,6 +18,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
+from .._deprecation import keyword_only
 from .._threads import honour_thread_limit, limit_threads, thread_limit, threads_for
 from .._validation import (
     InputError,
@@ -56,6 +57,8 @@ UNSTABLE_RTOL = 1e-9
 #: Largest n solved by the compiled characteristic-polynomial kernel; larger models use
 #: LAPACK on the 2n x 2n state matrix.
 _KERNEL_MAX_DOF = 4
+#: Why ``tan_theta`` is keyword-only: a third positional argument reads like stability_map's theta [rad].
+_TAN_THETA_WHY = "a third positional argument is easily taken for theta in radians, as in stability_map"
 _CHUNK = 4096
 #: Points per block between progress reports.
 _BLOCK = 1 << 18
@@ -318,12 +321,13 @@ def _solve_grid(model, mu, tan_theta, damped, progress=None, friction=None, spee
     return (lam.reshape((*shape, n)), err.reshape((*shape, n)), verdict.reshape(shape), thr.reshape(shape))
 
 
+@keyword_only("tan_theta", why=_TAN_THETA_WHY)
 @honour_thread_limit
 def eigenvalues(
     model: FrictionModel,
     mu: ArrayLike,
-    tan_theta: ArrayLike = 0.0,
     *,
+    tan_theta: ArrayLike = 0.0,
     damped: bool = False,
     friction: Stribeck | None = None,
     speed: float | None = None,
@@ -379,12 +383,13 @@ def eigenvalues(
     return _solve_grid(model, mu, tan_theta, damped, progress, friction, speed)[0]
 
 
+@keyword_only("tan_theta", why=_TAN_THETA_WHY)
 @honour_thread_limit
 def stability_verdict(
     model: FrictionModel,
     mu: ArrayLike,
-    tan_theta: ArrayLike = 0.0,
     *,
+    tan_theta: ArrayLike = 0.0,
     damped: bool = False,
     friction: Stribeck | None = None,
     speed: float | None = None,
@@ -505,7 +510,7 @@ def stability_map(
     -------
     xarray.Dataset
         Dims ``(mu, theta, mode)``. Variables: ``growth_rate`` sigma [1/s], ``omega``
-        [rad/s], ``frequency`` [Hz], ``damping_ratio`` [1], ``unstable`` (bool), and per
+        [rad/s], ``frequency_hz`` [Hz], ``damping_ratio`` [1], ``unstable`` (bool), and per
         grid point ``max_growth_rate`` [1/s], ``any_unstable`` and ``lock_in``.
         Coordinates: ``mu``, ``theta`` [rad], ``theta_deg``, ``tan_theta``, ``mu_e``
         (= mu + tan theta, eq. 6). Units in ``attrs``; the model as JSON in ``attrs``.
@@ -604,7 +609,7 @@ def _stream_map(model, mu, theta, *, damped, track, lock_in_rtol, progress, stor
         rows = max(1, min(rows, -(-mu.size // (4 * threads))))
     # the first column, tracked along mu: each point is the cold first point of its row,
     # so these are the same numbers the tiles compute for their column 0
-    first = eigenvalues(model, mu[:, None], np.tan(theta[:1])[None, :], damped=damped, **fr)[:, 0]
+    first = eigenvalues(model, mu[:, None], tan_theta=np.tan(theta[:1])[None, :], damped=damped, **fr)[:, 0]
     first = track_column(first) if track else first
     sample = _tile((model, mu[:1], theta, first[:1], damped, track, lock_in_rtol, fr))
     template = lazy_template(sample, "mu", mu, rows)
@@ -623,7 +628,7 @@ def _eigen_variables(dims, sigma, omega, zeta, err, unstable, verdict, smax, any
     return {
         "growth_rate": (dims, sigma, {"units": "1/s", "long_name": "growth rate sigma (real part)"}),
         "omega": (dims, omega, {"units": "rad/s", "long_name": "damped circular frequency omega_d"}),
-        "frequency": (dims, omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency"}),
+        "frequency_hz": (dims, omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency"}),
         "damping_ratio": (dims, zeta, {"units": "1", "long_name": "damping ratio -sigma/|lambda|"}),
         "growth_rate_error": (dims, err, {"units": "1/s", "long_name": err_name}),
         "unstable": (dims, unstable,
@@ -665,6 +670,7 @@ def _dataset(model, mu, theta, sol, *, damped, tracked, lock_in_rtol, friction=N
             "mode": ("mode", np.arange(n), {"long_name": "mode index (tracked)" if tracked else "mode index"}),
         },
         attrs={
+            "kind": "stability_map",
             "title": "Complex eigenvalues over friction and run-out incline",
             "model": model.to_json(),
             "model_kind": model.kind,
