@@ -230,7 +230,7 @@ def test_sparse_sweep_tracks_band_modes():
     de_ds = fe_stability_map(fe, [100.0, 200.0], np.linspace(0.0, 1.0, 6), method="dense", band=band)
     np.testing.assert_array_equal(sp_ds.any_unstable.values, de_ds.any_unstable.values)
     assert sp_ds.any_unstable.values[:, -1].all() and not sp_ds.any_unstable.values[:, 0].any()
-    np.testing.assert_allclose(np.sort(sp_ds.frequency.values, axis=-1), np.sort(de_ds.frequency.values, axis=-1),
+    np.testing.assert_allclose(np.sort(sp_ds.frequency_hz.values, axis=-1), np.sort(de_ds.frequency_hz.values, axis=-1),
                                rtol=1e-10)
     np.testing.assert_allclose(sp_ds.max_growth_rate.values, de_ds.max_growth_rate.values, rtol=1e-8, atol=1e-9)
 

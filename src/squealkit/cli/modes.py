@@ -160,7 +160,7 @@ def _modes_fe(model, fe, mu, theta, at_onset, vtk_path, as_json, out_path, plot_
     if vtk_path is not None:
         modes_to_vtk(ds.isel(mode=np.flatnonzero(ds.unstable.values)), model, vtk_path)
     rows = [{"mode": int(k), "eigenvalue": [float(ds.eigenvalue_real[k]), float(ds.eigenvalue_imag[k])],
-             "frequency_hz": float(ds.frequency[k]), "growth_rate": float(ds.growth_rate[k]),
+             "frequency_hz": float(ds.frequency_hz[k]), "growth_rate": float(ds.growth_rate[k]),
              "damping_ratio": float(ds.damping_ratio[k]), "unstable": bool(ds.unstable[k]),
              "residual": float(ds.residual[k])} for k in range(ds.sizes["mode"])]
     if as_json:

@@ -227,7 +227,7 @@ def _snapshot(fe, omega: float, mu: float, band: tuple[float, float], parts: Den
     if parts is None:
         return band_eigs(fe, omega, mu, band=band, workers=workers, tol=SNAPSHOT_TOL).vectors
     sol = dense_eigs(fe, omega, mu, parts=parts)
-    f = sol.frequency
+    f = sol.frequency_hz
     return sol.vectors[:, (f >= band[0]) & (f <= band[1])]
 
 
