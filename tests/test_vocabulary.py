@@ -103,6 +103,7 @@ def fe_small():
 @pytest.fixture(scope="module")
 def results(fe_small):
     from squealkit.transient import SineRunOut, simulate
+    from squealkit.transient.floquet import floquet_map
 
     return {
         "stability_map": stability_map(LV, np.linspace(0, 0.8, 5), np.radians([0.0, 2.0]), damped=False),
@@ -112,6 +113,7 @@ def results(fe_small):
         "fe_modes": fe_modes(fe_small, 100.0, 0.5),
         "fe_critical_friction": fe_critical_friction(fe_small, [100.0, 200.0], mu_max=1.0),
         "simulation": simulate(LV, mu=0.4, profile=SineRunOut(0.08e-3, 1e-3), duration=0.002),
+        "floquet_map": floquet_map(LV, mu=[0.2], amplitude=[1e-5], wavelength=1e-3, speed=0.02),
     }
 
 
@@ -155,7 +157,7 @@ def test_schema_check_catches_a_breach():
 
 
 @pytest.mark.parametrize("kind", ["stability_map", "modes", "critical_friction", "fe_stability_map", "fe_modes",
-                                  "fe_critical_friction", "simulation"])
+                                  "fe_critical_friction", "simulation", "floquet_map"])
 def test_results_follow_one_schema_and_say_their_kind(results, kind):
     from squealkit._accessor import result_kind
 
