@@ -85,8 +85,9 @@ class NumberOrRange(click.ParamType):
 PROBE_RADIUS = Quantity("m", plausible=(5e-3, 1.0), what="the probe radius on the disc")
 #: A disc surface run-out amplitude (sine q0, or RMS of roughness): micrometres to 2 mm.
 RUNOUT_AMPLITUDE = Quantity("m", plausible=(1e-8, 2e-3), what="a disc run-out amplitude")
-#: --sro-amplitude: a run-out amplitude [m] (a single value may carry its unit), or a range of them.
-SRO_AMPLITUDE = NumberOrRange(unit="m", plausible=RUNOUT_AMPLITUDE.plausible, what=RUNOUT_AMPLITUDE.what)
+#: --sro-amplitude: a run-out amplitude [m] (a single value may carry its unit), or a range of them
+#: (the Floquet map checks their range itself: up to 10 mm).
+SRO_AMPLITUDE = NumberOrRange(unit="m")
 #: --sro-amplitude where a command takes one amplitude.
 SRO_AMPLITUDE_ONE = NumberOrRange(single=True, unit="m", plausible=RUNOUT_AMPLITUDE.plausible,
                                   what=RUNOUT_AMPLITUDE.what, needs="one run-out amplitude")
