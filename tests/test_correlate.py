@@ -140,7 +140,7 @@ def test_cli_json_keys_and_report(camp):
     d, _ = camp
     out = d / "corr_out"
     res = CliRunner().invoke(cli, ["correlate", str(d / "out"), "--config", str(d / "model.toml"), "--fit",
-                                   "mu_offset=-0.01:0.11", "--tolerance", "3", "--out", str(out), "--json"])
+                                   "mu_offset=-0.01:0.11", "--tolerance", "3", "--out-dir", str(out), "--json"])
     assert res.exit_code == 0, res.output
     j = json.loads(res.stdout)
     for k in ("applications", "hits", "misses", "over_predictions", "quiet", "per_application", "calibration",
@@ -209,8 +209,8 @@ def _write_store(out, rows):
 def test_fe_demo_with_one_reduced_basis(tmp_path):
     """The built-in FE brake (small), one POD basis for the campaign; reference: a dense solve of the
     full model (LAPACK) at each distinct operating point."""
-    from squealkit.models import FEModel
     from squealkit.fe.demo import build_fe_demo
+    from squealkit.models import FEModel
     from squealkit.stability.fe_sweep import FESolver
 
     demo = build_fe_demo(n_theta=8, n_r=2)

@@ -139,6 +139,11 @@ def test_no_import_circle_among_squealkit_modules():
 _KNOWN_PACKAGE_CIRCLES = [
     ["squealkit._warmup", "squealkit.report", "squealkit.report.reproduce"],
     ["squealkit.measurement", "squealkit.measurement.analysis", "squealkit.plotting.measurement"],
+    # MeasurementResult.plot draws through plotting (imported at the call, as python-control's results do);
+    # plotting reaches back only through the deprecated recording call form, removed with it next release
+    ["squealkit.measurement", "squealkit.measurement.analysis", "squealkit.measurement.analysis.assemble",
+     "squealkit.measurement.analysis.recording", "squealkit.measurement.analysis.result",
+     "squealkit.plotting.measurement"],
 ]
 
 

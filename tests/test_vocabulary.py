@@ -200,7 +200,7 @@ def test_modes_and_fe_modes_name_their_variables_alike(results):
 def test_result_dataclasses_use_the_vocabulary():
     """Fields and properties of the public result dataclasses use the result names (a property kept
     one release under its old name warns: EigenSolution.frequency)."""
-    from squealkit.stability.sparse import EigenSolution
+    from squealkit.solvers.band import EigenSolution
 
     problems = []
     classes = {n: o for n, o in public_objects().items() if inspect.isclass(o) and dataclasses.is_dataclass(o)}

@@ -63,6 +63,10 @@ def renamed_kwargs(**renames: str) -> Callable[[F], F]:
     return decorate
 
 
+#: Why ``tan_theta`` is keyword-only: a third positional argument reads like stability_map's theta [rad].
+TAN_THETA_WHY = "a third positional argument is easily taken for theta in radians, as in stability_map"
+
+
 def keyword_only(*names: str, why: str = "") -> Callable[[F], F]:
     """Make the parameters ``names`` keyword-only, still accepting them by position for one release.
 

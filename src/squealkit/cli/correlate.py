@@ -56,9 +56,9 @@ def correlation_json(ds) -> dict:
               help="Frequency tolerance of a match between a measured squeal and an unstable mode [%].")
 @click.option("--method", type=click.Choice(["pod", "modal", "dense", "sparse"]), default="pod", show_default=True,
               help="FE models: the solver; pod and modal build one reduced basis for the whole campaign.")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+@click.option("--out-dir", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
               callback=writable_folder, help="Output folder: correlation.nc, correlation.json, report.html, figures/.")
-@click.option("--no-report", is_flag=True, help="With --out: skip the HTML report and its figures.")
+@click.option("--no-report", is_flag=True, help="With --out-dir: skip the HTML report and its figures.")
 @scheduler_option
 @click.option("--json", "as_json", is_flag=True, help="Print the correlation summary as JSON on stdout.")
 def correlate(campaign_dir: Path, preset: str | None, config: Path | None, sets: tuple[str, ...], damped: bool,
@@ -66,7 +66,7 @@ def correlate(campaign_dir: Path, preset: str | None, config: Path | None, sets:
               scheduler: str | None, as_json: bool) -> None:
     """Compare a campaign's measured squeal with a model's predicted unstable modes.
 
-    CAMPAIGN_DIR is what 'squealkit campaign --out' wrote. The model file (--config) may hold a
+    CAMPAIGN_DIR is what 'squealkit campaign --out-dir' wrote. The model file (--config) may hold a
     [correlate] table saying how conditions map onto the model: mu = "measured" (the matrix's
     mu column, the default), "law" (a friction law mu(p, T, v) fitted to it, or given as
     mu_law = {...}) or "torque"; mu_offset, mu_scale, theta_deg, disc speed from rpm or
@@ -80,7 +80,7 @@ def correlate(campaign_dir: Path, preset: str | None, config: Path | None, sets:
 
     \b
     Example:
-      squealkit correlate camp/out --config brake.toml --fit mu_offset=-0.2:0.2 --out corr
+      squealkit correlate camp/out --config brake.toml --fit mu_offset=-0.2:0.2 --out-dir corr
     """
     from .._validation import InputError
     from ..correlate import ConditionMap, load_correlation_model, parse_fit
@@ -91,8 +91,8 @@ def correlate(campaign_dir: Path, preset: str | None, config: Path | None, sets:
         raise InputError(f"--tolerance {tolerance:g} must be > 0 and <= 50 (percent).")
     bounds = parse_fit(fits) if fits else None
     if not campaign_dir.is_dir():
-        raise InputError(f"CAMPAIGN_DIR {str(campaign_dir)!r} is not a folder (give what 'squealkit campaign --out' "
-                         "wrote).")
+        raise InputError(f"CAMPAIGN_DIR {str(campaign_dir)!r} is not a folder (give what "
+                         "'squealkit campaign --out-dir' wrote).")
     if config is not None:
         if preset is not None:
             raise InputError("Give either --preset or --config, not both.")

@@ -1,6 +1,6 @@
 """A campaign's conditions and how they become model parameters (step 1 of a correlation).
 
-Each analysed application of a campaign (``squealkit campaign --out DIR``) has its conditions:
+Each analysed application of a campaign (``squealkit campaign --out-dir DIR``) has its conditions:
 brake pressure [bar], temperature [degC], vehicle speed [km/h], disc speed [rpm] and the
 friction coefficient the dynamometer reports (the matrix's ``mu`` column). A
 :class:`ConditionMap` says how they map onto a model; in a model file it is the table::
@@ -353,7 +353,7 @@ def campaign_conditions(campaign_dir: str | Path) -> tuple[xr.Dataset, Any]:
     Parameters
     ----------
     campaign_dir : path
-        What ``squealkit campaign --out`` (:func:`squealkit.campaign.run_campaign`) wrote:
+        What ``squealkit campaign --out-dir`` (:func:`squealkit.campaign.run_campaign`) wrote:
         the folder holding ``campaign.duckdb``.
 
     Returns
@@ -374,10 +374,10 @@ def campaign_conditions(campaign_dir: str | Path) -> tuple[xr.Dataset, Any]:
 
     d = Path(campaign_dir)
     if not d.is_dir():
-        raise InputError(f"Campaign folder {str(d)!r} does not exist (give what 'squealkit campaign --out' wrote).")
+        raise InputError(f"Campaign folder {str(d)!r} does not exist (give what 'squealkit campaign --out-dir' wrote).")
     db = d / "campaign.duckdb"
     if not db.is_file():
-        raise InputError(f"{str(d)!r} holds no campaign.duckdb: give the folder 'squealkit campaign --out' wrote.")
+        raise InputError(f"{str(d)!r} holds no campaign.duckdb: give the folder 'squealkit campaign --out-dir' wrote.")
     with CampaignStore(db) as store:
         apps = store.query("SELECT * FROM applications WHERE error IS NULL ORDER BY application")
         ev = store.query("SELECT application, frequency_hz, peak_dba FROM events ORDER BY application, event")

@@ -83,7 +83,7 @@ def correlate(
     Parameters
     ----------
     campaign_dir : path
-        What ``squealkit campaign --out`` wrote (holds ``campaign.duckdb``).
+        What ``squealkit campaign --out-dir`` wrote (holds ``campaign.duckdb``).
     model : FrictionModel or FEModel
         The model (any kind).
     conditions : ConditionMap, optional

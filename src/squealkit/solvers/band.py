@@ -32,7 +32,8 @@ import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 from threadpoolctl import threadpool_limits
 
-from .._deprecation import renamed_kwargs
+from .._deprecation import TAN_THETA_WHY as _TAN_THETA_WHY
+from .._deprecation import keyword_only, renamed_kwargs
 from .._threads import honour_thread_limit, thread_limit
 from .._validation import InputError, validate_finite, validate_int, validate_model, validate_positive
 from ..fe.model import FEModel
@@ -142,7 +143,8 @@ def pencil_backward_errors(M, C, K, lam: NDArray, X: NDArray) -> NDArray[np.floa
 
 @honour_thread_limit
 @renamed_kwargs(omega="disc_speed")
-def backward_errors(model: FEModel, disc_speed: float, mu: float, lam: NDArray, X: NDArray,
+@keyword_only("tan_theta", why=_TAN_THETA_WHY)
+def backward_errors(model: FEModel, disc_speed: float, mu: float, lam: NDArray, X: NDArray, *,
                     tan_theta: float = 0.0) -> NDArray[np.float64]:
     """Backward error ``eta`` of each eigenpair ``(lam[k], X[:, k])`` of the model (module docstring).
 
@@ -237,7 +239,8 @@ _K_NAMES = ("K1", "KR", "KGeo")
 
 @honour_thread_limit
 @renamed_kwargs(omega="disc_speed")
-def dense_eigs(model: FEModel, disc_speed: float, mu: float, tan_theta: float = 0.0, *, vectors: bool = True,
+@keyword_only("tan_theta", why=_TAN_THETA_WHY)
+def dense_eigs(model: FEModel, disc_speed: float, mu: float, *, tan_theta: float = 0.0, vectors: bool = True,
                parts: DenseParts | None = None) -> EigenSolution:
     """All eigenvalues of the model at ``(disc_speed, mu)`` by LAPACK on the 2n state matrix.
 
@@ -494,7 +497,8 @@ def real_times(A, X: NDArray) -> NDArray[np.complex128]:
 
 @honour_thread_limit
 @renamed_kwargs(omega="disc_speed")
-def band_eigs(model: FEModel, disc_speed: float, mu: float, tan_theta: float = 0.0, *,
+@keyword_only("tan_theta", why=_TAN_THETA_WHY)
+def band_eigs(model: FEModel, disc_speed: float, mu: float, *, tan_theta: float = 0.0,
               band: tuple[float, float] = BAND_HZ, k: int | None = None, sigma_reach: float = 0.0,
               max_shifts: int = 400, workers: int | None = None, tol: float = 1e-12,
               lu: str | Backend | None = None) -> EigenSolution:

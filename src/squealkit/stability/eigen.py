@@ -18,6 +18,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
+from .._deprecation import TAN_THETA_WHY as _TAN_THETA_WHY
 from .._deprecation import keyword_only
 from .._threads import honour_thread_limit, limit_threads, thread_limit, threads_for
 from .._validation import (
@@ -52,8 +53,6 @@ __all__ = [
 #: Largest n solved by the compiled characteristic-polynomial kernel; larger models use
 #: LAPACK on the 2n x 2n state matrix.
 _KERNEL_MAX_DOF = 4
-#: Why ``tan_theta`` is keyword-only: a third positional argument reads like stability_map's theta [rad].
-_TAN_THETA_WHY = "a third positional argument is easily taken for theta in radians, as in stability_map"
 _CHUNK = 4096
 #: Points per block between progress reports.
 _BLOCK = 1 << 18

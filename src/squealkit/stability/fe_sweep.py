@@ -131,13 +131,13 @@ class FESolver:
         backward error, from the basis' residual factor (no full-size product per point).
         """
         if self.method == "sparse":
-            return band_eigs(self.model, omega, mu, tan_theta, band=self.band, sigma_reach=self.sigma_reach,
+            return band_eigs(self.model, omega, mu, tan_theta=tan_theta, band=self.band, sigma_reach=self.sigma_reach,
                              workers=self.band_workers)
         if self.reduced is not None:
             self.model.factors(omega, mu, tan_theta)  # the same checks of omega, mu and tan_theta
             lam, Y, res = reduction.reduced_solve(self.reduced, omega, mu + tan_theta, *self.band)
             return EigenSolution(lam, self.reduced.V @ Y if vectors else None, res)
-        sol = dense_eigs(self.model, omega, mu, tan_theta, vectors=vectors, parts=self.parts)
+        sol = dense_eigs(self.model, omega, mu, tan_theta=tan_theta, vectors=vectors, parts=self.parts)
         if self.band is None:
             return sol
         f = sol.eigenvalues.imag / (2 * math.pi)
