@@ -405,15 +405,17 @@ def tiny_disk(tmp_path_factory):
     ["synth", "{d}/r.uff", "--duration", "5"],  # full-synth-uff: pyuff's raw traceback
     ["synth", "{d}/camp", "--campaign", "30", "--duration", "1", "--json"],  # full-synth-campaign
 ], ids=["stability-nc", "simulate-nc", "simulate-zarr", "synth-uff", "synth-campaign"])
-def test_a_full_disk_is_one_line_and_leaves_nothing(tiny_disk, args):
+def test_a_full_disk_is_one_line_and_leaves_nothing(tiny_disk, args, tmp_path):
+    # also the adversarial table's rows full-stab-nc, full-sim-nc, full-sim-zarr, full-synth-uff,
+    # full-synth-campaign (tests/test_adversarial.py runs them here, not twice): TMPDIR a folder of its own
     for p in tiny_disk.iterdir():
         subprocess.run(["rm", "-rf", str(p)], check=True)
-    r = subprocess.run([*SQUEALKIT, *(a.format(d=tiny_disk) for a in args)], env=ENV, capture_output=True, text=True,
-                       timeout=300)
+    r = subprocess.run([*SQUEALKIT, *(a.format(d=tiny_disk) for a in args)], env={**ENV, "TMPDIR": str(tmp_path)},
+                       capture_output=True, text=True, timeout=300)
     assert r.returncode == 2, (r.returncode, r.stderr[-2000:])
     line = _one_line(r)
     assert "no space left" in line and ".part" not in line  # the output asked for, not its staged name
-    assert os.listdir(tiny_disk) == []
+    assert os.listdir(tiny_disk) == [] and os.listdir(tmp_path) == []
 
 
 # ---------------------------------------------------------------------------------------------
@@ -425,14 +427,19 @@ def test_a_full_disk_is_one_line_and_leaves_nothing(tiny_disk, args):
     ["campaign", "{camp}/matrix.csv", "--out", "same.zarr", *CAMPAIGN_OPTS, "--no-report"],  # race-campaign
 ], ids=["stability", "campaign"])
 def test_an_output_being_written_is_refused_to_a_second_run(tmp_path, small_campaign, args):
-    # the first run holds same.zarr (staged, as a run holds it from its check to its end)
+    # the first run holds same.zarr (staged, as a run holds it from its check to its end); also the adversarial
+    # table's race-stab-zarr and race-campaign (run here, not twice): TMPDIR a folder of its own
+    w, tmpdir = tmp_path / "w", tmp_path / "tmpdir"
+    w.mkdir()
+    tmpdir.mkdir()
     with contextlib.ExitStack() as stack:
-        stack.enter_context(atomic_path(tmp_path / "same.zarr", directory=True)).mkdir()
-        r = subprocess.run([*SQUEALKIT, *(a.format(camp=small_campaign) for a in args)], cwd=tmp_path, env=ENV,
-                           capture_output=True, text=True, timeout=300)
+        stack.enter_context(atomic_path(w / "same.zarr", directory=True)).mkdir()
+        r = subprocess.run([*SQUEALKIT, *(a.format(camp=small_campaign) for a in args)], cwd=w,
+                           env={**ENV, "TMPDIR": str(tmpdir)}, capture_output=True, text=True, timeout=300)
         assert r.returncode == 2, r.stderr
         assert "another squealkit run" in _one_line(r)
-    assert sorted(os.listdir(tmp_path)) == ["same.zarr"]  # the first one's output, no lock file left
+    assert sorted(os.listdir(w)) == ["same.zarr"]  # the first one's output, no lock file left
+    assert os.listdir(tmpdir) == []
 
 
 def test_two_runs_at_once_onto_one_store(tmp_path):
