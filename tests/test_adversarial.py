@@ -692,10 +692,17 @@ def _run_case(case: Case, ctx: Ctx):
     return r.exit_code, r.stdout, r.stderr
 
 
+#: rows that spawn processes or run real work (seconds of CPU each): ``-m "not slow"`` leaves them out
+SLOW = {"full-reproduce", "link-zarr-to-dir", "lc-harm-200", "fe-stab-rpm-huge-n"}
+
+
 def _params():
     out = []
     for cid in CASES:
         marks = [pytest.mark.xfail(strict=True, reason=XFAIL[cid])] if cid in XFAIL else []
+        case = CASES[cid]
+        if case.sub or case.expect == "own" or cid in SLOW:
+            marks.append(pytest.mark.slow)
         out.append(pytest.param(cid, id=cid, marks=marks))
     return out
 
