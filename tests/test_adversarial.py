@@ -84,6 +84,9 @@ class Case:
     root: bool = False
     mount: str | None = None  # a tmpfs of this size at w/tiny
     changes: tuple[str, ...] = ()  # paths (relative to w) a right result may change
+    # the dedicated test (file::name[id]) that runs this very case with the same checks: the row runs it
+    # here only when that test is not part of this run (each costs a process and seconds of CPU)
+    elsewhere: str | None = None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -242,6 +245,9 @@ def junk_server(ctx: Ctx) -> None:
     ctx.notes["cleanup"] = srv.close
 
 
+TOS = "test_output_safety.py::"
+FULL_DISK = TOS + "test_a_full_disk_is_one_line_and_leaves_nothing"
+RACE = TOS + "test_an_output_being_written_is_refused_to_a_second_run"
 CAMP = ["--mic", "mic", "--displacement", "displacement", "--radius", "0.05", "--rpm", "900"]
 ANALYZE = ["analyze", "{rec}", "--mic", "mic", "--displacement", "displacement", "--rpm", "900", "--radius", "0.05"]
 CRIT_FE = ["critical", "--config", "fe.toml", "--rpm", "100"]
@@ -425,12 +431,14 @@ CASES: dict[str, Case] = {
                                    "--rpm", "900", "--radius", "0.05"], setup=_mf4_garbage,
                                   words=("mf4_id_garbage.mf4",)),
     "full-sim-nc": Case(["simulate", "--duration", "3", "--out", "tiny/s.nc"], sub=True, mount="5m",
-                        words=("no space left",)),
+                        words=("no space left",),
+                        elsewhere=FULL_DISK + "[simulate-nc]"),
     "full-sim-zarr": Case(["simulate", "--duration", "3", "--out", "tiny/s.zarr"], sub=True, mount="5m",
-                          words=("no space left",)),
+                          words=("no space left",),
+                          elsewhere=FULL_DISK + "[simulate-zarr]"),
     "full-synth-campaign": Case(["synth", "--out-dir", "tiny/camp", "--campaign", "30", "--duration", "1"], sub=True,
-                                mount="5m",
-                                words=("no space left",)),
+                                mount="5m", words=("no space left",),
+                                elsewhere=FULL_DISK + "[synth-campaign]"),
     "link-zarr-to-dir": Case(["stability", "--mu", "0.3", "--theta", "0", "--out", "link.zarr"], expect="ok",
                              setup=lambda c: ((c.w / "keep").mkdir(), _run()("stability", "--mu", "0.2", "--theta", "0",
                                                      "--out", "keep/real.zarr"),
@@ -448,14 +456,17 @@ CASES: dict[str, Case] = {
     "dask-local-stab": Case(["stability", "--mu", "0:0.8:5", "--theta", "-8:8:5", "--out", "a.zarr",
                              "--scheduler", "local"], expect="ok", sub=True),
     "sig2-campaign-int-1": Case(lambda c: tos.test_campaign_interrupted_in_its_report_writes_no_summary(
-        c.tmp, c.shared.camp), expect="own"),
+        c.tmp, c.shared.camp), expect="own",
+                                elsewhere=TOS + "test_campaign_interrupted_in_its_report_writes_no_summary"),
     "sig2-synth-campaign-term-0": Case(_interrupt_synth(signal.SIGTERM, 4), expect="own"),
     "sig2-synth-campaign-term-1": Case(_interrupt_synth(signal.SIGTERM, 1), expect="own"),
     "sig2-synth-campaign-int-0": Case(_interrupt_synth(signal.SIGINT, 1), expect="own"),
     "sig2-synth-campaign-int-1": Case(_interrupt_synth(signal.SIGINT, 2), expect="own"),
     "sig2-an-out-term-1": Case(lambda c: tos.test_interrupted_analysis_leaves_neither_figures_nor_result(c.tmp),
-                               expect="own"),
-    "sig2-hup-stab-zarr": Case(lambda c: tos.test_sighup_is_handled_like_sigterm(c.tmp), expect="own"),
+                               expect="own",
+                               elsewhere=TOS + "test_interrupted_analysis_leaves_neither_figures_nor_result"),
+    "sig2-hup-stab-zarr": Case(lambda c: tos.test_sighup_is_handled_like_sigterm(c.tmp), expect="own",
+                               elsewhere=TOS + "test_sighup_is_handled_like_sigterm"),
     "sig2-quit-stab-zarr": Case(_interrupt_quit_zarr, expect="own"),
     # -- WRONG ---------------------------------------------------------------------------------
     "tol-mumax-nonfe": Case(["tolerance", "--mu", "0.3", "--mu-max", "0.5"], words=("--mu-max",)),
@@ -536,17 +547,21 @@ CASES: dict[str, Case] = {
                                       setup=_perm_setup, sub=True, words=("campaign.duckdb",),
                                       prefix=("setpriv", "--bounding-set=-dac_override,-dac_read_search", "--")),
     "full-stab-nc": Case(["stability", "--mu", "0:0.8:401", "--theta", "-8:8:401", "--out", "tiny/m.nc"], sub=True,
-                         mount="5m", words=("no space left",)),
+                         mount="5m", words=("no space left",),
+                         elsewhere=FULL_DISK + "[stability-nc]"),
     "full-synth-nc": Case(["synth", "--out", "tiny/r.nc", "--duration", "30"], sub=True, mount="5m",
                           words=("no space left",)),
     "full-synth-uff": Case(["synth", "--out", "tiny/r.uff", "--duration", "5"], sub=True, mount="5m",
-                           words=("no space left",)),
+                           words=("no space left",),
+                           elsewhere=FULL_DISK + "[synth-uff]"),
     "full-reproduce": Case(["reproduce", "--quick", "--out-dir", "tiny/rep"], sub=True, mount="5m",
                            words=("no space left",)),
     "race-stab-zarr": Case(_race(["stability", "--mu", "0:0.8:3", "--theta", "0", "--out", "same.zarr"]),
-                           expect="own"),
+                           expect="own",
+                           elsewhere=RACE + "[stability]"),
     "race-campaign": Case(_race(["campaign", "{camp}/matrix.csv", "--out-dir", "same.zarr", *CAMP, "--no-report"]),
-                          expect="own"),
+                          expect="own",
+                          elsewhere=RACE + "[campaign]"),
     "api-model-from-dict-list": Case(api(lambda c: __import__("squealkit.models.config", fromlist=["x"])
                                          .model_from_dict({"model": ["fe"]})), words=("model",)),
     "api-parse-assign-notstr": Case(api(lambda c: __import__("squealkit.models.config", fromlist=["x"])
@@ -681,17 +696,31 @@ def _run_case(case: Case, ctx: Ctx):
     return r.exit_code, r.stdout, r.stderr
 
 
+#: rows that spawn processes or run real work (seconds of CPU each): ``-m "not slow"`` leaves them out
+SLOW = {"full-reproduce", "link-zarr-to-dir", "lc-harm-200", "fe-stab-rpm-huge-n"}
+
+
 def _params():
     out = []
     for cid in CASES:
         marks = [pytest.mark.xfail(strict=True, reason=XFAIL[cid])] if cid in XFAIL else []
+        case = CASES[cid]
+        if case.sub or case.expect == "own" or cid in SLOW:
+            marks.append(pytest.mark.slow)
         out.append(pytest.param(cid, id=cid, marks=marks))
     return out
 
 
+def _in_this_run(request, test: str) -> bool:
+    """Whether the test ``file::name[id]`` is collected and selected in this session."""
+    return any(item.nodeid.endswith("/" + test) or item.nodeid == test for item in request.session.items)
+
+
 @pytest.mark.parametrize("cid", _params())
-def test_adversarial_case(cid, tmp_path, shared, monkeypatch):
+def test_adversarial_case(cid, tmp_path, shared, monkeypatch, request):
     case = CASES[cid]
+    if case.elsewhere is not None and _in_this_run(request, case.elsewhere):
+        return  # the dedicated test runs this case in this session (not twice)
     if case.root and os.geteuid() != 0:
         pytest.skip("needs root (device nodes)")
     w, tmpdir = tmp_path / "w", tmp_path / "tmpdir"

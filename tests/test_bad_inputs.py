@@ -223,6 +223,7 @@ def test_config_api_wrong_types(call, words):
 
 # -- F. the demo's brake.toml names its mesh and DOF names ---------------------------------------------
 
+@pytest.mark.slow
 def test_fe_demo_mesh_reaches_modes_vtk(run, tmp_path):
     meshio = pytest.importorskip("meshio")
     out = tmp_path / "b"

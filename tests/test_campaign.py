@@ -40,6 +40,7 @@ def camp(tmp_path_factory):
     return d, truth, json.loads(res.stdout)
 
 
+@pytest.mark.slow
 def test_occurrence_per_band_within_one_point_of_truth(camp):
     _, truth, summary = camp
     assert set(summary) >= {"applications", "applications_with_squeal", "occurrence_percent", "by_band", "criteria"}
@@ -54,6 +55,7 @@ def test_occurrence_per_band_within_one_point_of_truth(camp):
     assert summary["by_band"][0]["band_hz"] == pytest.approx([1778.3, 2238.7], abs=0.1)
 
 
+@pytest.mark.slow
 def test_no_event_outside_the_setup_band_and_runout_link(camp):
     d, truth, _ = camp
     con = duckdb.connect(str(d / "out" / "campaign.duckdb"), read_only=True)
@@ -71,6 +73,7 @@ def test_no_event_outside_the_setup_band_and_runout_link(camp):
     assert q == sum(6300.0 in a["lines_hz"] for a in truth["by_application"].values())
 
 
+@pytest.mark.slow
 def test_report_and_figures(camp):
     d, _, _ = camp
     html = (d / "out" / "report.html").read_text()
@@ -78,6 +81,7 @@ def test_report_and_figures(camp):
     assert len(list((d / "out" / "figures").glob("*.png"))) == 5
 
 
+@pytest.mark.slow
 def test_a_failed_application_is_in_every_output(camp):
     # issue #15: the cut recording is named in summary.json, the database, the report and on stderr
     d, _, summary = camp
@@ -96,6 +100,7 @@ def test_a_failed_application_is_in_every_output(camp):
     assert "1 of 41 applications failed" in tail[0] and tail[1].startswith(f"A0041 ({cut}): Recording")
 
 
+@pytest.mark.slow
 def test_killed_run_resumes_and_rerun_updates(tmp_path):
     truth = synthetic_campaign(tmp_path, n_applications=8, duration=1.0, seed=5)
 
@@ -168,6 +173,7 @@ def test_third_octave_bands_are_iec_base_ten():
     assert np.allclose([hi / lo for _, lo, hi in b], 10**0.1)
 
 
+@pytest.mark.slow
 def test_campaign_on_a_local_dask_cluster(tmp_path):
     truth = synthetic_campaign(tmp_path, n_applications=4, duration=0.5, seed=2)
     res = run(["campaign", str(tmp_path / "matrix.csv"), "--out-dir", str(tmp_path / "out"), "--mic", "mic",
@@ -177,6 +183,7 @@ def test_campaign_on_a_local_dask_cluster(tmp_path):
     assert json.loads(res.output)["occurrence_percent"] == pytest.approx(truth["occurrence_percent"])
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(__import__("shutil").which("chromium") is None, reason="Debian's chromium is not installed")
 def test_campaign_report_loads_in_headless_chromium(camp):
     from test_report import _chromium_body

@@ -197,6 +197,7 @@ def test_critical_and_tolerance_write_dataset_and_figure(run, tmp_path):
         assert r.exit_code == 2 and "must end in .nc or .zarr" in r.stderr
 
 
+@pytest.mark.slow
 def test_analyze_plot_takes_a_file_like_every_other_plot(run, tmp_path):
     # issue 15: `analyze --plot` took a folder where every other --plot takes a file
     rec = tmp_path / "r.nc"

@@ -21,6 +21,7 @@ import pytest
 from test_api_docs import _public_modules as public_modules
 
 ROOT = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.slow  # one Sphinx build (the gallery runs the examples) for the module
 
 
 @pytest.fixture(scope="module")

@@ -66,6 +66,7 @@ def test_stdout_to_a_full_device_is_one_line():
     assert r.returncode == 2 and "standard output" in _one_line(r)
 
 
+@pytest.mark.slow
 def test_sigterm_leaves_no_staging_files_and_exits_143(tmp_path):
     out = tmp_path / "map.zarr"
     p = subprocess.Popen([*SQUEALKIT, "stability", "--mu", "0:0.8:3000", "--theta", "-8:8:3000", "--out", str(out)],
@@ -284,6 +285,7 @@ def test_bad_recording_is_one_line_exit_2(run, tmp_path, make):
     assert r.exit_code == 2 and says in line and str(f) in line, line
 
 
+@pytest.mark.slow
 def test_sigterm_during_a_streamed_simulation_leaves_no_partial_file(tmp_path):
     # simulate --out streams block by block into the staged file: killed half way, nothing is left
     # --json: no progress bar filling the unread stderr pipe

@@ -317,6 +317,7 @@ def _interrupt(tmp_path: Path, args: list[str], ready: str, signals: tuple[int, 
     return p.returncode, text, cwd
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGQUIT])
 def test_interrupted_synthetic_campaign_leaves_no_recordings(tmp_path, sig):
     # sig-synth-campaign-int-0, sig2-synth-campaign-term-*: camp2/recordings/A0001-A0006.nc stayed, no matrix.csv
@@ -327,6 +328,7 @@ def test_interrupted_synthetic_campaign_leaves_no_recordings(tmp_path, sig):
     assert os.listdir(cwd) == []
 
 
+@pytest.mark.slow
 def test_interrupted_analysis_leaves_neither_figures_nor_result(tmp_path):
     # sig2-an-out-term-1: f_runout.png, f_spectrogram.png, f_time.png, f_zoom.png stayed without r.nc
     # (signalled once a second figure is under way: the first one was done)
@@ -341,6 +343,7 @@ def test_interrupted_analysis_leaves_neither_figures_nor_result(tmp_path):
     assert os.listdir(cwd) == ["rec.nc"]
 
 
+@pytest.mark.slow
 def test_sighup_is_handled_like_sigterm(tmp_path):
     # sig2-hup-stab-zarr, sig2-quit-stab-zarr: SIGHUP and SIGQUIT killed the run at once, its '.part' stayed
     code, err, cwd = _interrupt(tmp_path, ["stability", "--mu", "0:0.8:2000", "--theta", "-8:8:400", "--out",
@@ -374,6 +377,7 @@ def test_a_second_signal_does_not_break_off_the_cleanup(tmp_path, monkeypatch):
     assert os.listdir(tmp_path) == []
 
 
+@pytest.mark.slow
 def test_campaign_interrupted_in_its_report_writes_no_summary(tmp_path, small_campaign):
     # sig2-campaign-int-1: summary.json and 2 of 5 figures were written, no report.html
     code, err, cwd = _interrupt(tmp_path, ["campaign", str(small_campaign / "matrix.csv"), "--out-dir", "o",
@@ -406,15 +410,18 @@ def tiny_disk(tmp_path_factory):
     ["synth", "--out", "{d}/r.uff", "--duration", "5"],  # full-synth-uff: pyuff's raw traceback
     ["synth", "--out-dir", "{d}/camp", "--campaign", "30", "--duration", "1", "--json"],  # full-synth-campaign
 ], ids=["stability-nc", "simulate-nc", "simulate-zarr", "synth-uff", "synth-campaign"])
-def test_a_full_disk_is_one_line_and_leaves_nothing(tiny_disk, args):
+@pytest.mark.slow
+def test_a_full_disk_is_one_line_and_leaves_nothing(tiny_disk, args, tmp_path):
+    # also the adversarial table's rows full-stab-nc, full-sim-nc, full-sim-zarr, full-synth-uff,
+    # full-synth-campaign (tests/test_adversarial.py runs them here, not twice): TMPDIR a folder of its own
     for p in tiny_disk.iterdir():
         subprocess.run(["rm", "-rf", str(p)], check=True)
-    r = subprocess.run([*SQUEALKIT, *(a.format(d=tiny_disk) for a in args)], env=ENV, capture_output=True, text=True,
-                       timeout=300)
+    r = subprocess.run([*SQUEALKIT, *(a.format(d=tiny_disk) for a in args)], env={**ENV, "TMPDIR": str(tmp_path)},
+                       capture_output=True, text=True, timeout=300)
     assert r.returncode == 2, (r.returncode, r.stderr[-2000:])
     line = _one_line(r)
     assert "no space left" in line and ".part" not in line  # the output asked for, not its staged name
-    assert os.listdir(tiny_disk) == []
+    assert os.listdir(tiny_disk) == [] and os.listdir(tmp_path) == []
 
 
 # ---------------------------------------------------------------------------------------------
@@ -425,17 +432,24 @@ def test_a_full_disk_is_one_line_and_leaves_nothing(tiny_disk, args):
     ["stability", "--mu", "0:0.8:3", "--theta", "0", "--out", "same.zarr"],  # race-stab-zarr
     ["campaign", "{camp}/matrix.csv", "--out-dir", "same.zarr", *CAMPAIGN_OPTS, "--no-report"],  # race-campaign
 ], ids=["stability", "campaign"])
+@pytest.mark.slow
 def test_an_output_being_written_is_refused_to_a_second_run(tmp_path, small_campaign, args):
-    # the first run holds same.zarr (staged, as a run holds it from its check to its end)
+    # the first run holds same.zarr (staged, as a run holds it from its check to its end); also the adversarial
+    # table's race-stab-zarr and race-campaign (run here, not twice): TMPDIR a folder of its own
+    w, tmpdir = tmp_path / "w", tmp_path / "tmpdir"
+    w.mkdir()
+    tmpdir.mkdir()
     with contextlib.ExitStack() as stack:
-        stack.enter_context(atomic_path(tmp_path / "same.zarr", directory=True)).mkdir()
-        r = subprocess.run([*SQUEALKIT, *(a.format(camp=small_campaign) for a in args)], cwd=tmp_path, env=ENV,
-                           capture_output=True, text=True, timeout=300)
+        stack.enter_context(atomic_path(w / "same.zarr", directory=True)).mkdir()
+        r = subprocess.run([*SQUEALKIT, *(a.format(camp=small_campaign) for a in args)], cwd=w,
+                           env={**ENV, "TMPDIR": str(tmpdir)}, capture_output=True, text=True, timeout=300)
         assert r.returncode == 2, r.stderr
         assert "another squealkit run" in _one_line(r)
-    assert sorted(os.listdir(tmp_path)) == ["same.zarr"]  # the first one's output, no lock file left
+    assert sorted(os.listdir(w)) == ["same.zarr"]  # the first one's output, no lock file left
+    assert os.listdir(tmpdir) == []
 
 
+@pytest.mark.slow
 def test_two_runs_at_once_onto_one_store(tmp_path):
     # race-stab-zarr: one run read back the store after the other had replaced it (a reshape error)
     runs = [subprocess.Popen([*SQUEALKIT, "stability", "--mu", "0:0.8:201", "--theta", f"-8:8:{n}", "--out",
@@ -455,6 +469,7 @@ def test_two_runs_at_once_onto_one_store(tmp_path):
 # What libraries leave in the temporary folder
 
 
+@pytest.mark.slow
 def test_a_local_dask_cluster_leaves_no_scratch_space(tmp_path, monkeypatch):
     # dask-local-mc, dask-local-stab: $TMPDIR/dask-scratch-space/{global.lock,purge.lock} stayed
     import tempfile

@@ -24,6 +24,7 @@ def paper(tmp_path_factory):
     return reproduce(tmp_path_factory.mktemp("paper") / "out")
 
 
+@pytest.mark.slow
 def test_reproduce_writes_report_figures_and_data(paper):
     out = paper.out_dir
     assert paper.report.is_file()
@@ -40,6 +41,7 @@ def test_reproduce_writes_report_figures_and_data(paper):
     assert not [p for p in out.parent.iterdir() if p.name.startswith(".")]  # no staging left
 
 
+@pytest.mark.slow
 def test_reproduce_numbers_match_the_paper(paper):
     n = paper.numbers()
     # §3: coupled frequency 14997-15317 rad/s over mu 0-0.8, theta -8..8 deg
@@ -66,6 +68,7 @@ def test_reproduce_numbers_match_the_paper(paper):
                                                "measurement", "conclusions"]
 
 
+@pytest.mark.slow
 def test_no_agrees_without_a_published_number(paper):
     # issue 15: "agrees" was shown beside an empty published cell; a check of a stated expectation "holds"
     rows = re.findall(r"<tr><td>[^<]*</td><td>&mdash;</td>(?:(?!</tr>).)*</tr>", paper.report.read_text())
@@ -73,6 +76,7 @@ def test_no_agrees_without_a_published_number(paper):
     assert [r for r in rows if ">holds<" in r]
 
 
+@pytest.mark.slow
 def test_beyond_the_paper_puts_both_kinematics_side_by_side(paper):
     # issue 12 (checked by LAPACK in tests/test_kinematics.py): theta = +8 deg: 0.305 (paper) vs stable
     # (consistent); -8 deg: 0.585 (paper) vs 0.266 (consistent); frictionless flutter only in the paper's
@@ -90,6 +94,7 @@ def test_beyond_the_paper_puts_both_kinematics_side_by_side(paper):
     assert "Beyond the paper" in paper.report.read_text()
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(CHROMIUM is None and not os.environ.get("CI"), reason="Debian's chromium is not installed")
 def test_report_loads_in_headless_chromium_with_every_figure(paper):
     assert CHROMIUM is not None, "CI must install Debian's chromium (see .ci/run)"
@@ -99,6 +104,7 @@ def test_report_loads_in_headless_chromium_with_every_figure(paper):
     assert f'data-figures-loaded="{n_figures}"' in body
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(CHROMIUM is None and not os.environ.get("CI"), reason="Debian's chromium is not installed")
 def test_browser_check_detects_a_broken_figure(tmp_path, paper):
     # the check can fail: a report whose first figure does not decode
@@ -140,6 +146,7 @@ def test_interrupted_run_leaves_nothing_half_written(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["report"]
 
 
+@pytest.mark.slow
 def test_cli_reproduce_quick_json(tmp_path, monkeypatch, paper):
     # the CLI's plumbing: --quick reaches reproduce() and the numbers come back as JSON. Real quick runs are the
     # own-rig and matrix reports below; this one reuses the paper's report instead of computing a third
@@ -194,6 +201,7 @@ def own_rig(tmp_path_factory, rec2844):
     return SimpleNamespace(numbers=json.loads(r.stdout)["numbers"], html=html, text=_text(html), out=d / "mine")
 
 
+@pytest.mark.slow
 def test_cli_report_for_own_rig(own_rig):
     # issue 15: examples/myrig.toml is not the paper's rig (L/d = 1.61, undamped, pin bending 2722 Hz):
     # every sentence, verdict and caption comes from its own numbers, and the header names the file
@@ -221,6 +229,7 @@ def test_cli_report_for_own_rig(own_rig):
     assert "2561" not in text and "2722" in text
 
 
+@pytest.mark.slow
 def test_cli_report_with_own_recording(own_rig, rec2844):
     # issue 15: squeal at 2844 Hz and 600 rpm; Figs. 6-13 follow the squeal found, not the paper's 1000-2500 Hz
     # band and "three revolutions" at 900 rpm, and the model's frequency stands beside the measured one
@@ -261,6 +270,7 @@ def test_comparison_difference():
     assert Comparison("band", (10.0, 20.0), (11.0, 19.0), "Hz").difference() == "+10.00 % / -5.00 %"
 
 
+@pytest.mark.slow
 def test_report_for_a_matrix_model(tmp_path):
     # issue 15: a valid 2x2 matrix model (no rig, no pin-on-disc DOF names) gets a report, which says so
     cfg = tmp_path / "mat.toml"
@@ -290,6 +300,7 @@ def test_run_out_tolerance_text_follows_the_numbers():
     assert "slopes up to tan(theta) = 0." in text and "beyond it" in text
 
 
+@pytest.mark.slow
 def test_transient_section_for_the_hoffmann_model(tmp_path):
     # issue 15: Hoffmann's model has x, y (no x1_ddot) and vibrates near 175 Hz, below the paper's 1000 Hz
     # high-pass: the section uses the model's own acceleration and band, and its words follow its numbers

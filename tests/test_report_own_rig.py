@@ -81,6 +81,7 @@ def damped(tmp_path_factory, recording):
 # -- 1. a rig that is stable undamped gets a report that says so ------------------------------------------
 
 
+@pytest.mark.slow
 def test_stable_rig_gets_a_report_that_says_so(stable):
     # issue 27: "sensitivity is undefined", exit 2, after 34 s; the model is stable up to mu = 2 (LAPACK)
     n, text = stable.numbers, stable.text
@@ -101,6 +102,7 @@ def test_stable_rig_gets_a_report_that_says_so(stable):
     assert n["measurement"]["squeal_frequency_hz"] == pytest.approx(2844.0, abs=3.0)
 
 
+@pytest.mark.slow
 def test_stable_rig_fig4_says_nothing_grows(stable):
     # frozen-time sigma <= 0 over the whole run: no grow-on-rising claim and no "not the paper's pattern" verdict
     text = stable.text
@@ -111,6 +113,7 @@ def test_stable_rig_fig4_says_nothing_grows(stable):
 # -- 2. an own rig: its own operating point, no paper comparisons, sentences true to its numbers ----------
 
 
+@pytest.mark.slow
 def test_own_operating_point_from_the_report_table(damped):
     # [report] in the model file: every transient, tolerance and run-out sentence uses the rig's values
     text, n = damped.text, damped.numbers
@@ -127,6 +130,7 @@ def test_own_operating_point_from_the_report_table(damped):
         assert not re.search(paper, text), paper
 
 
+@pytest.mark.slow
 def test_own_rig_gets_no_published_comparisons(damped):
     # only the paper's model is compared with the paper's numbers: every comparison row of another rig has an
     # empty published cell, and no paper number appears
@@ -139,6 +143,7 @@ def test_own_rig_gets_no_published_comparisons(damped):
         assert paper not in text, paper
 
 
+@pytest.mark.slow
 def test_incline_sentence_agrees_with_its_own_table(damped):
     # issue 27: "the negative incline destabilises" while the rig's own table has mu_crit above the flat disc's
     # at every negative incline; the table is the data file behind the section
@@ -202,6 +207,7 @@ def test_default_operating_point(tmp_path):
 # -- 3. report --recording reads and analyses as analyze does ---------------------------------------------
 
 
+@pytest.mark.slow
 def test_report_recording_takes_analyze_options(damped):
     # the microphone was stored in hundredths of a pascal and the speed comes from the tacho only (no --rpm):
     # squeal is found at the synthesised 2844 Hz only if --scale and --tacho were applied
@@ -254,6 +260,7 @@ def paper_how_loud(tmp_path_factory):
     return nonlinear_step(get_preset("lv2013"), d, d, quick=True), d
 
 
+@pytest.mark.slow
 def test_how_loud_has_a_db_figure(paper_how_loud):
     s, d = paper_how_loud
     assert "how_loud_level" in [f.stem for f in s.figures] and (d / "how_loud_level.png").stat().st_size > 1000
@@ -269,6 +276,7 @@ def test_how_loud_has_a_db_figure(paper_how_loud):
     assert f"{s.numbers['level_db_mu05']:.1f} dB at mu = 0.5" in text
 
 
+@pytest.mark.slow
 def test_synthetic_frequency_agreement_is_called_circular(tmp_path):
     from squealkit.models import get_preset
     from squealkit.report.steps_measurement import measurement_step
@@ -304,6 +312,7 @@ def test_fig13_labels_do_not_overlap():
         assert lab.height <= ax.get_window_extent(r).height
 
 
+@pytest.mark.slow
 def test_quick_report_is_a_preview_drawn_once_per_figure(stable):
     # --quick saves each figure as the PNG the HTML embeds, not a second time as SVG (a third of the
     # preview's time went to drawing every figure twice); the captions name only what was written

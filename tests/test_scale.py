@@ -89,12 +89,14 @@ def cluster(tmp_path_factory):
         lb.close()
 
 
+@pytest.mark.slow
 def test_workers_are_separate_processes(cluster):
     pids = cluster.worker_pids()
     assert len(pids) >= 2 and os.getpid() not in pids.values()
     assert all(addr.startswith("tcp://127.0.0.1:") for addr in pids)
 
 
+@pytest.mark.slow
 def test_stability_map_on_cluster_is_identical_to_local(cluster, tmp_path):
     model = get_preset("lv2013")
     mu = np.linspace(0.0, 0.8, 161)
@@ -110,6 +112,7 @@ def test_stability_map_on_cluster_is_identical_to_local(cluster, tmp_path):
     assert seen[-1] == (mu.size * theta.size,) * 2
 
 
+@pytest.mark.slow
 def test_worker_killed_mid_run_job_finishes_correctly(cluster, tmp_path):
     """SIGKILL a worker while it computes tiles: the scheduler reruns its tasks elsewhere."""
     cluster.add_workers(1)
@@ -134,6 +137,7 @@ def test_worker_killed_mid_run_job_finishes_correctly(cluster, tmp_path):
     xr.testing.assert_identical(stability_map(model, mu, theta, damped=True), ds.load())
 
 
+@pytest.mark.slow
 def test_transient_batch_on_cluster_is_identical_to_local(cluster, tmp_path):
     model = get_preset("lv2013")
     kw = dict(mu=np.linspace(0.3, 0.7, 7), profiles=SineRunOut(amplitude=0.08e-3, wavelength=1e-3),
@@ -144,6 +148,7 @@ def test_transient_batch_on_cluster_is_identical_to_local(cluster, tmp_path):
     xr.testing.assert_identical(local, ds.load())
 
 
+@pytest.mark.slow
 def test_campaign_on_cluster_matches_local(cluster, tmp_path):
     files = []
     for seed in range(4):
@@ -159,6 +164,7 @@ def test_campaign_on_cluster_matches_local(cluster, tmp_path):
     assert [r["squeal"] for r in remote.rows] == [1, 1, 0, 1]
 
 
+@pytest.mark.slow
 def test_montecarlo_on_cluster_is_identical_to_local(cluster):
     from squealkit.uncertainty import parse_uncertain, squeal_propensity
 
@@ -172,6 +178,7 @@ def test_montecarlo_on_cluster_is_identical_to_local(cluster):
     xr.testing.assert_identical(local, remote)
 
 
+@pytest.mark.slow
 def test_cli_stability_with_scheduler_matches_local(cluster, tmp_path):
     runner = CliRunner()
     args = ["stability", "--mu", "0:0.8:41", "--theta", "-8:8:21", "--json"]
@@ -184,6 +191,7 @@ def test_cli_stability_with_scheduler_matches_local(cluster, tmp_path):
                                 xr.open_zarr(tmp_path / "b.zarr", consolidated=False).load())
 
 
+@pytest.mark.slow
 def test_cli_analyze_campaign_with_scheduler(cluster, tmp_path):
     for seed in (0, 1):
         synthetic_recording(duration=1.0, seed=seed).to_netcdf(tmp_path / f"r{seed}.nc", engine="h5netcdf")

@@ -47,6 +47,7 @@ def test_no_child_when_capped_to_one_thread_or_the_cache_is_warm(monkeypatch, tm
     assert not _warmup.start(["no such group"])
 
 
+@pytest.mark.slow
 def test_child_compiles_its_groups_and_reports_each(monkeypatch, tmp_path):
     monkeypatch.delenv("SQUEALKIT_THREADS", raising=False)
     monkeypatch.setattr(_warmup, "_stamp", lambda: tmp_path / "cold.stamp")  # a cache said to be cold
