@@ -191,13 +191,22 @@ def read_matrices(path: str | Path) -> dict[str, Any]:
     if not p.is_file():
         raise InputError(f"Matrix file {str(p)!r} does not exist.")
     suffix = p.suffix.lower()
+    if suffix not in (".mat", ".op4"):  # Abaqus, ANSYS, Nastran files with node/DOF labels, told by their content
+        from ..fe.readers.labelled import read_labelled
+
+        found = read_labelled(p)
+        if found is not None:
+            return found
     if suffix == ".mat":
         return read_mat(p)
     if suffix == ".mtx":
         return read_mtx(p)
     if suffix == ".op4":
         return read_op4(p)
-    raise InputError(f"Matrix file {p.name!r}: unknown format {suffix!r}; known: {', '.join(_SUFFIXES)}.")
+    from ..fe.readers.labelled import LABELLED_FORMATS
+
+    raise InputError(f"Matrix file {p.name!r}: its content is none of {', '.join(LABELLED_FORMATS)}, and its suffix "
+                     f"{suffix!r} none of {', '.join(_SUFFIXES)}.")
 
 
 def _pick(found: Mapping[str, Any], wanted: str, path: Path) -> Any:
@@ -310,8 +319,11 @@ def load_fe_model(
         mats.pop(key, None)
     if omit:
         source += f" (without {', '.join(omit)})"
+    from ..fe.dofmap import place_labelled
+
     extra = {"mesh": _read_mesh(resolve(mesh)) if mesh is not None else None,
              "dof_names": _read_dof_names(resolve(dof_names)) if dof_names is not None else None}
+    extra["dof_map"], mats = place_labelled(mats, mesh=extra["mesh"])
     try:
         return FEModel.from_matrices(**mats, omega_ref=omega_ref, mu_ref=mu_ref, f_ref=f_ref, source=source,
                                      **extra)
@@ -320,17 +332,10 @@ def load_fe_model(
 
 
 def _read_mesh(path: Path) -> Any:
-    """A mesh file through meshio, or one line saying why not."""
-    try:
-        import meshio
-    except ImportError:
-        raise InputError(f"{path.name}: reading a mesh needs meshio: pip install meshio.") from None
-    if not path.is_file():
-        raise InputError(f"Mesh file {str(path)!r} does not exist.")
-    try:
-        return meshio.read(path)
-    except Exception as e:  # meshio raises many kinds on a malformed or unknown file
-        raise InputError(f"{path.name}: not a readable mesh: {e}") from e
+    """A mesh file (input deck or any meshio format) as an :class:`~squealkit.fe.mesh.FEMesh`."""
+    from ..fe.mesh import read_mesh
+
+    return read_mesh(path)
 
 
 def _read_dof_names(path: Path) -> tuple[str, ...]:
