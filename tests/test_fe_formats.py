@@ -10,6 +10,7 @@ from LAPACK (``scipy.linalg.eigvals`` of the companion form); the demo brake's e
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,7 @@ import scipy.sparse.linalg as spla
 import _fe_format_writers as wr
 from squealkit._validation import InputError
 from squealkit.fe.dofmap import DofMap
+from squealkit.fe.mesh import FEMesh, demo_dof_map, demo_mesh, read_mesh, write_abaqus_inp
 from squealkit.models.config import load_model
 from squealkit.models.fe_readers import load_fe_model
 
@@ -207,3 +209,196 @@ def test_demo_brake_in_each_format_has_the_matrix_market_spectrum(demo, demo_mm,
         assert abs(getattr(model, k)[P][:, P] - getattr(ref_model, k)).max() == 0.0
     sigma = 2j * np.pi * 5000.0
     _assert_same_spectrum(_eigs_near(model, sigma), _eigs_near(ref_model, sigma))
+
+
+def test_ansys_full_file_reads_with_its_labels():
+    # reference: ansys-mapdl-reader's own recipe (examples.solve_km): load_km(sort=True), mirror the
+    # stored upper triangle; its lowest frequencies near 7 kHz must be ours, with DOFs labelled
+    # (node, UX/UY/UZ) and the 63 constrained DOFs (no entries) left out
+    fullmod = pytest.importorskip("ansys.mapdl.reader")
+    from ansys.mapdl.reader import examples
+
+    model = load_fe_model(files={"M": examples.fullfile, "K1": examples.fullfile}, names={"M": "M", "K1": "K"})
+    _dof_ref, k, m = fullmod.read_binary(examples.fullfile).load_km(sort=True)
+    k, m = k + sp.triu(k, 1).T, m + sp.triu(m, 1).T
+    assert model.n_dof == 900 and set(model.dof_map.dof.tolist()) == {1, 2, 3}
+    keep = np.asarray(abs(k).sum(axis=1)).ravel() > 0
+    sigma = (2 * np.pi * 7000.0) ** 2
+    ref = spla.eigsh(k[keep][:, keep].tocsc(), k=4, M=m[keep][:, keep].tocsc(), sigma=sigma,
+                     return_eigenvectors=False)
+    got = spla.eigsh(model.K1.tocsc(), k=4, M=model.M.tocsc(), sigma=sigma, return_eigenvectors=False)
+    np.testing.assert_allclose(np.sort(got), np.sort(ref), rtol=1e-10)
+    assert model.dof_names[0].startswith("n") and model.dof_names[0].endswith(".u1")
+
+
+# ----------------------------------------------------------------------------- meshes
+
+
+def test_abaqus_inp_mesh_with_labels_blocks_and_continuations(tmp_path):
+    inp = tmp_path / "brake.inp"
+    inp.write_text("""*HEADING
+** two node blocks, labels not in order, a 20-node brick over two lines
+*NODE, NSET=A
+ 20, 1.0, 0.0, 0.0
+ 10, 0.0, 0.0, 0.0
+*NODE
+ 30, 0.0, 1.0, 0.0
+ 40, 0.0, 0.0, 1.0
+*ELEMENT, TYPE=C3D4, ELSET=PAD
+ 1, 10, 20, 30, 40
+*ELEMENT, TYPE=T3D2
+ 7, 10,
+ 40
+*MATERIAL, NAME=STEEL
+*DENSITY
+ 7850.,
+""")
+    mesh = read_mesh(inp)
+    assert mesh.node_labels.tolist() == [20, 10, 30, 40]
+    np.testing.assert_array_equal(mesh.points[1], [0.0, 0.0, 0.0])
+    kinds = dict(mesh.cells)
+    assert kinds["tetra"].tolist() == [[1, 0, 2, 3]] and kinds["line"].tolist() == [[1, 3]]
+    dm = DofMap.from_labels([10, 10, 40, 40, -3], [1, 3, 2, 6, 1])
+    dof, point, comp = mesh.dof_points(dm)  # rotations and the internal node have no place
+    assert dof.tolist() == [0, 1, 2] and point.tolist() == [1, 1, 3] and comp.tolist() == [0, 2, 1]
+
+
+def test_nastran_bdf_mesh_small_large_and_free_field(tmp_path):
+    bdf = tmp_path / "brake.bdf"
+    small = "".join(f"{x:>8}" for x in ("", 1, "", "0.", "0.", "0."))[8:]
+    large = "".join(f"{x:>16}" for x in (3, "", "0.", "1."))
+    bdf.write_text("SOL 103\nCEND\nBEGIN BULK\n$ small field\n"
+                   f"GRID    {small}\n"
+                   f"GRID    {small.replace('       1', '       2', 1).replace('0.', '1.', 1)}\n"
+                   f"GRID*   {large}\n*       {'0.':>16}\n"
+                   "GRID,4,,0.,0.,1.\n"
+                   "CTETRA,9,1,1,2,3,4\n"
+                   f"CBAR    {12:>8}{2:>8}{1:>8}{4:>8}{'0.':>8}{'0.':>8}{'1.':>8}\n"
+                   "ENDDATA\n")
+    mesh = read_mesh(bdf)
+    assert mesh.node_labels.tolist() == [1, 2, 3, 4]
+    np.testing.assert_array_equal(mesh.points[2], [0.0, 1.0, 0.0])
+    kinds = dict(mesh.cells)
+    assert kinds["tetra"].tolist() == [[0, 1, 2, 3]] and kinds["line"].tolist() == [[0, 3]]
+
+
+def test_ansys_cdb_mesh():
+    pytest.importorskip("ansys.mapdl.reader")
+    from ansys.mapdl.reader import examples
+
+    mesh = read_mesh(examples.hexarchivefile)
+    assert mesh.n_points == len(set(mesh.node_labels.tolist())) > 0
+    assert any(k.startswith("hexahedron") for k, _ in mesh.cells)
+
+
+def test_demo_mesh_written_as_inp_carries_the_dof_map(demo, tmp_path):
+    mesh = demo_mesh(demo)
+    dm = demo_dof_map(demo)
+    back = read_mesh(write_abaqus_inp(mesh, tmp_path / "demo.inp"))
+    np.testing.assert_array_equal(back.points, mesh.points)
+    dof, point, _comp = back.dof_points(dm)
+    assert dof.size == dm.n_dof  # every demo DOF is a displacement of a node of its mesh
+    np.testing.assert_array_equal(point, demo["dof_node"])
+
+
+# ----------------------------------------------------------------------------- the CLI on Abaqus matrices + .inp
+
+
+@pytest.fixture(scope="module")
+def abaqus_brake(demo, tmp_path_factory):
+    """The demo brake as Abaqus would export it: *MATRIX OUTPUT files, its .inp deck and a TOML naming them."""
+    folder = tmp_path_factory.mktemp("abaqus")
+    node, dof, perm = _demo_labels(demo)
+    files = _write_format("abaqus", folder, {k: demo[k] for k in NAMES}, node, dof)["files"]
+    mesh = demo_mesh(demo)
+    write_abaqus_inp(FEMesh(mesh.points, perm, mesh.cells), folder / "brake.inp")
+    table = ", ".join(f'{k} = "{Path(v).name}"' for k, v in files.items())
+    toml = folder / "brake.toml"
+    toml.write_text(f'model = "fe"\n\n[fe]\nfiles = {{ {table} }}\nomega_ref = {demo["omega_ref"]!r}\n'
+                    f'mu_ref = {demo["mu_ref"]!r}\nmesh = "brake.inp"\n')
+    return toml
+
+
+def test_modes_and_stability_on_abaqus_matrices_with_an_inp(run, abaqus_brake, demo_mm, tmp_path):
+    meshio = pytest.importorskip("meshio")
+    vtu = tmp_path / "modes.vtu"
+    args = ("--rpm", "1000", "--mu", "0.5", "--method", "sparse", "--band", "9000:13000")
+    r = run("modes", "--config", str(abaqus_brake), *args, "--vtk", str(vtu), "--json")
+    assert r.exit_code == 0, (r.output, r.exception)
+    got = json.loads(r.stdout)
+    ref = json.loads(run("modes", "--config", str(demo_mm[1] / "brake.toml"), *args, "--json").stdout)
+    # the same modes as the Matrix Market route (to the sparse solver's own accuracy)
+    np.testing.assert_allclose(sorted(m["frequency_hz"] for m in got["modes"]),
+                               sorted(m["frequency_hz"] for m in ref["modes"]), rtol=1e-8)
+    unstable = [m for m in got["modes"] if m["unstable"]]
+    assert unstable, got["modes"]
+    shapes = meshio.read(vtu)
+    keys = [k for k in shapes.point_data if k.endswith("_re")]
+    assert len(keys) == len(unstable)
+    # the clamped nodes (on the inner radius) carry no DOF: at rest; the others move
+    v = np.linalg.norm(shapes.point_data[keys[0]], axis=1)
+    labels = shapes.point_data["node_label"]
+    inner = np.hypot(shapes.points[:, 0], shapes.points[:, 1]) <= np.hypot(*shapes.points[:, :2].T).min() + 1e-12
+    assert np.all(v[inner] == 0.0) and v.max() > 0.0 and labels.size == shapes.points.shape[0]
+    r = run("stability", "--config", str(abaqus_brake), "--rpm", "1000", "--method", "sparse", "--band",
+            "9000:13000", "--json")
+    assert r.exit_code == 0, (r.output, r.exception)
+
+
+# ----------------------------------------------------------------------------- malformed files: one line, exit 2
+
+MALFORMED = {
+    "abaqus.mtx": ("1,1, 1,1, 2.0\n1,1, 2,x, 3.0\n1,2, 1,2, 1.0\n", r"abaqus\.mtx line 2: not an Abaqus MATRIX INPUT"),
+    "coord.mtx": ("1 1 2.0\n2 2 3.0\n2 1\n", r"coord\.mtx line 3: not an Abaqus COORDINATE"),
+    "dmig.pch": ("DMIG,K1,0,6,2,0,,,2\nDMIG,K1,1,1,,1,1,abc\n", r"dmig\.pch line 2 \(A\): 'abc' is not a real"),
+    "cdmig.bdf": ("DMIG,K1,0,6,4,0,,,2\nDMIG,K1,1,1,,1,1,2.0,0.0\n", r"cdmig\.bdf line 1: DMIG K1 is complex"),
+    "hb.matrix": (None, r"hb\.matrix \(values\): 2 values where the header declares 3"),
+    "bad.full": (None, r"bad\.full: not a readable ANSYS \.full file"),
+}
+
+
+def _malformed(tmp_path: Path, name: str) -> Path:
+    text, _ = MALFORMED[name]
+    path = tmp_path / name
+    if name == "hb.matrix":
+        wr.harwell_boeing(path, sp.csr_matrix(np.array([[2.0, 0.0], [1.0, 3.0]])), symmetric=True)
+        lines = path.read_text().splitlines()
+        path.write_text("\n".join([*lines[:-1], lines[-1][:50]]) + "\n")  # the last value cut off
+    elif name == "bad.full":
+        import struct
+
+        path.write_bytes(struct.pack("<3i", 100, 0, 4) + b"\x07" * 64)  # the header of a .full, then junk
+    else:
+        path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("name", sorted(MALFORMED))
+def test_a_malformed_file_is_one_line_and_exit_2(run, tmp_path, name):
+    if name == "bad.full":
+        pytest.importorskip("ansys.mapdl.reader")
+    path = _malformed(tmp_path, name)
+    with pytest.raises(InputError, match=MALFORMED[name][1]) as info:
+        load_fe_model(files={"M": str(path), "K1": str(path)})
+    assert "\n" not in str(info.value)
+    toml = tmp_path / "m.toml"
+    toml.write_text(f'model = "fe"\n[fe]\nfiles = {{ M = "{name}", K1 = "{name}" }}\n')
+    r = run("modes", "--config", str(toml), "--rpm", "100", "--mu", "0.3")
+    assert r.exit_code == 2, (r.output, r.exception)
+    assert len(r.stderr.strip().splitlines()) == 1 and name in r.stderr
+
+
+def test_labelled_and_unlabelled_files_are_not_mixed(hand, tmp_path):
+    mats = hand["mats"]
+    mm = _write_mm(tmp_path / "mm", {"M": mats["M"]})
+    abq = _write_format("abaqus", tmp_path / "abq", {"K1": mats["K1"]}, hand["node"], hand["dof"])["files"]
+    with pytest.raises(InputError, match="K1 have node/DOF labels but M do not"):
+        load_fe_model(files={"M": mm["M"], "K1": abq["K1"]})
+
+
+def test_a_mesh_without_the_models_nodes_is_refused(hand, tmp_path):
+    files = _write_format("abaqus", tmp_path, {k: hand["mats"][k] for k in ("M", "K1")}, hand["node"],
+                          hand["dof"])["files"]
+    (tmp_path / "other.inp").write_text("*NODE\n1, 0., 0., 0.\n2, 1., 0., 0.\n")
+    with pytest.raises(InputError, match=r"other\.inp: none of the model's 13 DOFs"):
+        load_fe_model(files=files, mesh=tmp_path / "other.inp")

@@ -682,7 +682,7 @@ def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any) -> None:
                          "(nor are they named node{k}.x/y/z).")
     import meshio
 
-    data = {}
+    data = {} if fe_mesh is None else {"node_label": fe_mesh.node_labels}  # the FE code's labels, for lookups
     for k in range(ds.sizes["mode"]):
         for part in ("real", "imag"):
             shape = ds[f"shape_{part}"].values[:, k]

@@ -41,15 +41,16 @@ def _data_lines(text: str) -> list[tuple[int, str]]:
 
 
 def sniff_abaqus(head: str) -> str | None:
-    """``"matrix input"`` or ``"coordinate"`` when the first data lines of a text fit that format, else None."""
-    lines = [line for _, line in _data_lines(head)][:5]
-    if len(lines) > 1:  # the last line of a head may be cut
-        lines = lines[:-1]
+    """``"matrix input"`` or ``"coordinate"`` when the first data line of a text fits that format, else None.
+
+    The first line decides, so that a damaged line further down is named by the reader.
+    """
+    lines = [line for _, line in _data_lines(head)][:1]
     if not lines:
         return None
-    if all(_MATRIX_INPUT.match(line) for line in lines):
+    if _MATRIX_INPUT.match(lines[0]):
         return "matrix input"
-    if all(_COORDINATE.match(line) for line in lines):
+    if _COORDINATE.match(lines[0]):
         return "coordinate"
     return None
 

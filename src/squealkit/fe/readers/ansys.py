@@ -168,6 +168,7 @@ def read_full(path: str | Path) -> dict[str, LabelledMatrix]:
 
     Needs the optional ``ansys-mapdl-reader`` package (``pip install "squealkit[ansys]"``). Only the
     upper triangle of a symmetric matrix is stored; it is mirrored when the model is assembled.
+    Constrained DOFs (rows and columns of zeros in the file) are left out of the DOF map.
     """
     import scipy.sparse as sp
 
@@ -192,5 +193,5 @@ def read_full(path: str | Path) -> dict[str, LabelledMatrix]:
             raise InputError(f"{p.name}: matrix {name} is complex; FE matrices must be real.")
         upper_only = not np.any(a.row > a.col)  # a symmetric matrix is stored as its upper triangle
         out[name] = LabelledMatrix(node[a.row], dof[a.row], node[a.col], dof[a.col], a.data, symmetric=upper_only,
-                                   labels=(node, dof), source=f"{p.name} ({name})")
+                                   source=f"{p.name} ({name})")
     return out
