@@ -205,8 +205,8 @@ def read_matrices(path: str | Path) -> dict[str, Any]:
         return read_op4(p)
     from ..fe.readers.labelled import LABELLED_FORMATS
 
-    raise InputError(f"Matrix file {p.name!r}: its content is none of {', '.join(LABELLED_FORMATS)}, and its suffix "
-                     f"{suffix!r} none of {', '.join(_SUFFIXES)}.")
+    raise InputError(f"Matrix file {p.name!r}: unknown format: its content is none of "
+                     f"{', '.join(LABELLED_FORMATS)}, and its suffix {suffix!r} none of {', '.join(_SUFFIXES)}.")
 
 
 def _pick(found: Mapping[str, Any], wanted: str, path: Path) -> Any:

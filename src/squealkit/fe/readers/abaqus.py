@@ -75,40 +75,78 @@ def read_abaqus_matrix(path: str | Path) -> dict[str, LabelledMatrix]:
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="ascii", errors="strict")
+        with open(p, encoding="ascii", errors="strict") as f:
+            head = f.read(4096)
     except (OSError, UnicodeDecodeError) as e:
         raise InputError(f"{p.name}: not a readable Abaqus matrix file: {e}") from e
-    lines = _data_lines(text)
-    if not lines:
+    first = _data_lines(head)[:1]
+    if not first:
         raise InputError(f"{p.name}: an Abaqus matrix file with no entries.")
-    kind = sniff_abaqus("\n".join(line for _, line in lines[:6]) + "\n")
+    kind = sniff_abaqus(head)
     if kind is None:
-        raise InputError(f"{p.name} line {lines[0][0]}: not an Abaqus matrix entry "
-                         f"(row node, row DOF, column node, column DOF, value): {lines[0][1].strip()[:60]!r}.")
+        raise InputError(f"{p.name} line {first[0][0]}: not an Abaqus matrix entry "
+                         f"(row node, row DOF, column node, column DOF, value): {first[0][1].strip()[:60]!r}.")
     width = 5 if kind == "matrix input" else 3
-    pattern = _MATRIX_INPUT if kind == "matrix input" else _COORDINATE
-    for k, line in lines:  # every line, so that a misplaced field is named, not shifted into the next entry
-        if not pattern.match(line):
-            fields = ("row node, row DOF, column node, column DOF, value" if kind == "matrix input"
-                      else "row, column, value")
-            raise InputError(f"{p.name} line {k}: not an Abaqus {kind.upper()} entry ({fields}): "
-                             f"{line.strip()[:60]!r}.")
-    table = np.array(" ".join(line for _, line in lines).replace(",", " ").split()).reshape(len(lines), width)
-    try:
-        labels = table[:, : width - 1].astype(np.int64)
-    except (ValueError, OverflowError) as e:
-        raise InputError(f"{p.name}: a node, DOF or equation label beyond 64-bit integers: {e}") from e
-    values = np.char.replace(np.char.upper(table[:, -1]), "D", "E").astype(np.float64)
+    table = _fast_table(p, width, comma="," in first[0][1])
+    if table is None:  # some line does not fit: find and name it (the slow path, on errors only)
+        _raise_first_bad(p, kind)
+    labels, values = table
     if kind == "matrix input":
         rn, rd, cn, cd = labels.T
         if min(rd.min(), cd.min()) < 0:
-            k = lines[int(np.flatnonzero((rd < 0) | (cd < 0))[0])]
-            raise InputError(f"{p.name} line {k[0]}: a negative DOF number: {k[1].strip()[:60]!r}.")
+            _raise_first_bad(p, kind, f"row {int(np.flatnonzero((rd < 0) | (cd < 0))[0]) + 1}: a negative DOF number")
     else:
         rn, cn = labels.T
         if min(rn.min(), cn.min()) < 1:
-            k = lines[int(np.flatnonzero((rn < 1) | (cn < 1))[0])]
-            raise InputError(f"{p.name} line {k[0]}: an equation number below 1: {k[1].strip()[:60]!r}.")
+            _raise_first_bad(p, kind, f"row {int(np.flatnonzero((rn < 1) | (cn < 1))[0]) + 1}: an equation number "
+                                      "below 1")
         rd = cd = np.zeros_like(rn)
     return {p.stem: LabelledMatrix(rn, rd, cn, cd, values, symmetric=None, source=p.name,
                                    equations=kind == "coordinate")}
+
+
+def _fast_table(p: Path, width: int, comma: bool) -> tuple[np.ndarray, np.ndarray] | None:
+    """(integer labels (m, width - 1), values (m,)) through pandas' C parser; None if any line does not fit.
+
+    A million entries take seconds; a pure-Python parse of each line would take minutes.
+    """
+    import pandas as pd
+
+    try:
+        df = pd.read_csv(p, sep="," if comma else r"\s+", header=None, comment="*", skipinitialspace=True,
+                         engine="c", skip_blank_lines=True)
+    except (ValueError, pd.errors.ParserError, OSError):
+        return None
+    while df.shape[1] > width and df.iloc[:, -1].isna().all():  # a trailing comma
+        df = df.iloc[:, :-1]
+    if df.shape[1] != width or df.shape[0] == 0:
+        return None
+    if any(df[c].dtype.kind != "i" for c in df.columns[:-1]):
+        return None  # a label that is not an integer, or a missing field
+    last = df.iloc[:, -1]
+    if last.dtype.kind != "f" and last.dtype.kind != "i":  # Fortran's 1.5D+03, or a word
+        try:
+            last = pd.to_numeric(last.astype(str).str.replace("D", "E").str.replace("d", "e"), errors="raise")
+        except (ValueError, TypeError):
+            return None
+    values = last.to_numpy(dtype=np.float64)
+    if not np.all(np.isfinite(values)):
+        return None
+    return df.iloc[:, :-1].to_numpy(dtype=np.int64), values
+
+
+def _raise_first_bad(p: Path, kind: str, extra: str | None = None) -> None:
+    """One line naming the first line of the file that is not an entry of ``kind``."""
+    pattern = _MATRIX_INPUT if kind == "matrix input" else _COORDINATE
+    fields = "row node, row DOF, column node, column DOF, value" if kind == "matrix input" else "row, column, value"
+    with open(p, encoding="ascii", errors="replace") as f:
+        row = 0
+        for k, line in enumerate(f, start=1):
+            if not line.strip() or line.lstrip().startswith("*"):
+                continue
+            row += 1
+            if not pattern.match(line) or (extra is not None and extra.startswith(f"row {row}:")):
+                why = extra.split(": ", 1)[1] if extra is not None and pattern.match(line) else \
+                    f"not an Abaqus {kind.upper()} entry ({fields})"
+                raise InputError(f"{p.name} line {k}: {why}: {line.strip()[:60]!r}.")
+    raise InputError(f"{p.name}: not an Abaqus {kind.upper()} file ({fields} a line).")
