@@ -2,7 +2,7 @@
 
 Issue 11 asks for this in under 2 minutes on 2 cores, in bounded memory. The model is
 built (``--size 176``: 115 326 unknowns) and solved by
-:func:`squealkit.stability.sparse.band_eigs` (shift-invert, one sparse LU per shift, walks
+:func:`squealkit.solvers.band.band_eigs` (shift-invert, one sparse LU per shift, walks
 over the band in ``--workers`` threads) at 600 rpm, mu = 0.45. Baseline in the same run:
 another squealkit version (``--baseline-src``, e.g. a worktree of an older commit) solving the
 same model in a fresh subprocess, after this one.
@@ -33,20 +33,20 @@ import numpy as np
 def solve(size: int, workers: int, out: str) -> None:
     """Build the model, solve the band once and write eigenvalues and timings to ``out`` (.npz)."""
     import squealkit
+    from squealkit.fe.demo import build_fe_demo
     from squealkit.models import FEModel
-    from squealkit.models.fe_demo import build_fe_demo
-    from squealkit.stability import sparse
+    from squealkit.solvers import band as sparse
 
     t0, c0 = time.perf_counter(), time.process_time()
     demo = build_fe_demo(n_theta=size)
     model = FEModel.from_matrices(**{k: demo[k] for k in ("M", "D1", "DG", "DR", "D4", "K1", "KR", "KGeo")
                                      if demo[k] is not None},
-                                  omega_ref=demo["omega_ref"], mu_ref=demo["mu_ref"], f_ref=demo["f_ref"])
+                                  disc_speed_ref=demo["disc_speed_ref"], mu_ref=demo["mu_ref"], f_ref=demo["f_ref"])
     del demo
     built = time.perf_counter() - t0, time.process_time() - c0
     shifts = []
-    # the shift-invert operator: _ShiftInvert (block Krylov-Schur), _shift_operator in older versions
-    name = "_ShiftInvert" if hasattr(sparse, "_ShiftInvert") else "_shift_operator"
+    # the shift-invert operator: ShiftInvert (block Krylov-Schur), _shift_operator in older versions
+    name = "ShiftInvert" if hasattr(sparse, "ShiftInvert") else "_shift_operator"
     operator = getattr(sparse, name)
 
     def counting(*args, **kwargs):

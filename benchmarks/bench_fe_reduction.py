@@ -20,7 +20,7 @@ import time
 
 import numpy as np
 
-from squealkit.stability.sparse import band_eigs
+from squealkit.solvers.band import band_eigs
 
 
 def peak_mb() -> float:
@@ -28,9 +28,9 @@ def peak_mb() -> float:
 
 
 def main() -> None:
-    from squealkit.models.fe_demo import build_fe_demo
-    from squealkit.stability.reduction import (
-        _as_model,
+    from squealkit.fe.demo import build_fe_demo
+    from squealkit.solvers.reduction import (
+        as_fe_model,
         modal_basis,
         pod_basis,
         reduce,
@@ -52,7 +52,7 @@ def main() -> None:
     n = model["n_dofs"]
     print(f"model: n_theta={args.n_theta}, {n} unknowns, nnz(K1)={model['K1'].nnz}, built in {t_build:.1f} s, "
           f"peak RSS {peak_mb():.0f} MB")
-    m = _as_model(model)
+    m = as_fe_model(model)
 
     def full_solve(omega, mu):
         sol = band_eigs(m, omega, mu, band=band, workers=1)  # one point per core, like a sweep

@@ -47,8 +47,8 @@ def main() -> None:
     import pandas as pd
 
     from squealkit.measurement import open_recording, recording_dataset
-    from squealkit.measurement.readers import DEFAULT_BLOCK
-    from squealkit.measurement.writers import write_recording
+    from squealkit.measurement.formats._common import DEFAULT_BLOCK
+    from squealkit.measurement.formats.writers import write_recording
 
     fs = 40000.0
     n = int(args.seconds * fs)

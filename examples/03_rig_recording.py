@@ -15,10 +15,11 @@ out.mkdir(parents=True, exist_ok=True)
 
 rec = synthetic_recording(duration=1.0, seed=7)  # SYNTHETIC: 900 rpm, 40 kHz, squeal on rising run-out
 save_dataset(rec, out / "synthetic_recording.nc")
-res = analyze_recording(out / "synthetic_recording.nc", mic="mic", displacement="displacement", rpm=900, radius=0.05)
+res = analyze_recording(out / "synthetic_recording.nc", mic="mic", displacement="displacement", rpm=900, radius=0.05,
+                        keep_signals=True)  # also what the figures draw: res.signals
 print(f"[SYNTHETIC] criteria: {res.settings.criteria.describe()}")
 print(f"squeal {res.squeal_frequency_hz:.1f} Hz, peak {res.peak_dba:.1f} dB(A) on Fast, "
       f"growth/slope correlation {res.growth_slope_correlation:.2f}, "
       f"rising_fraction {res.rising_fraction:.3f} (truth {rec.attrs['truth_rising_fraction']:.3f})")
-for name, fig in measurement_figures(rec, res).items():
+for name, fig in measurement_figures(res).items():
     save_figure(fig, out / f"{name}.png")

@@ -484,9 +484,9 @@ CASES: dict[str, Case] = {
                                        setup=lambda c: (c.w / "results").mkdir() or tbi._make_store(
                                            "user-table", c.w / "results" / "campaign.duckdb", None),
                                        words=("campaign.duckdb",)),
-    "api-fe-complex-dense": Case(api(lambda c: __import__("squealkit.models.fe", fromlist=["x"]).FEModel.from_matrices(
+    "api-fe-complex-dense": Case(api(lambda c: __import__("squealkit.fe", fromlist=["x"]).FEModel.from_matrices(
         M=np.eye(2), K1=np.eye(2) * (1 + 1j))), words=("complex",)),
-    "api-fe-complex-sparse": Case(api(lambda c: __import__("squealkit.models.fe", fromlist=["x"]).FEModel.from_matrices(
+    "api-fe-complex-sparse": Case(api(lambda c: __import__("squealkit.fe", fromlist=["x"]).FEModel.from_matrices(
         M=__import__("scipy.sparse", fromlist=["x"]).eye(2, format="csr") * (1 + 0.5j), K1=np.eye(2))),
         words=("complex",)),
     "api-run-campaign-radius-neg": Case(api(lambda c: __import__("squealkit.campaign", fromlist=["x"]).run_campaign(

@@ -83,8 +83,9 @@ def docstring_problems(obj) -> list[str]:
 def test_walk_finds_the_public_api():
     objs = public_objects()
     # names the README and docs/api.md use, from several subpackages: the walk reaches them all
-    for name in ("squealkit.stability.eigen.stability_map", "squealkit.measurement.analysis.analyze_recording",
-                 "squealkit.transient.simulate.simulate", "squealkit.models.rig.PinOnDiscRig",
+    for name in ("squealkit.stability.maps.stability_map",
+                 "squealkit.measurement.analysis.recording.analyze_recording", "squealkit.transient.simulate.simulate",
+                 "squealkit.models.rig.PinOnDiscRig",
                  "squealkit.io.save_dataset", "squealkit.uncertainty.squeal_propensity"):
         assert name in objs, name
     assert len(objs) > 100

@@ -15,8 +15,7 @@ import scipy.io
 import scipy.sparse as sp
 
 from squealkit._validation import InputError
-from squealkit.models.fe import FEModel
-from squealkit.models.fe_readers import load_fe_model
+from squealkit.fe import FEModel, load_fe_model
 
 
 def _one_line(excinfo, *words):
@@ -189,7 +188,7 @@ def _cli_refuses(r, *words):
         ("rig = 5\n", ("rig", "integer", "table")),
         ('model = "fe"\n[fe]\nfile = 5\n', ("[fe] file", "integer", "string")),
         ('model = "fe"\n[fe]\nfiles = {M = 5, K1 = "K1.mtx"}\n', ("[fe] files.M", "integer", "string")),
-        ('model = "fe"\n[fe]\nfile = "a.mat"\nomega_ref = "fast"\n', ("[fe] omega_ref", "string", "number")),
+        ('model = "fe"\n[fe]\nfile = "a.mat"\ndisc_speed_ref = "fast"\n', ("[fe] disc_speed_ref", "string", "number")),
         ('model = "fe"\n[fe]\nfile = "a.mat"\nnames = {M = ["MAA"]}\n', ("[fe] names.M", "array", "string")),
         ("description = 3.5\n", ("description", "float", "string")),
         ("parameters = [1, 2]\n", ("parameters", "array", "table")),
@@ -444,7 +443,7 @@ def _public_functions_taking_a_model():
 
     out = {}
     for m in ("squealkit.stability", "squealkit.transient", "squealkit.nonlinear", "squealkit.uncertainty",
-              "squealkit.stability.sparse", "squealkit.stability.fe_sweep"):
+              "squealkit.solvers.band", "squealkit.stability.fe_sweep"):
         mod = importlib.import_module(m)
         for name in mod.__all__:
             f = getattr(mod, name)
@@ -454,7 +453,7 @@ def _public_functions_taking_a_model():
 
 
 _REQUIRED = {"theta": 0.0, "mu": 0.3, "parameter": "k1", "rpm": 100.0, "duration": 0.01, "tan_theta": 0.0,
-             "uncertain": {}, "samples": 8, "omega": 1.0, "lam": [1j], "X": [[1.0]]}
+             "uncertain": {}, "samples": 8, "omega": 1.0, "disc_speed": 1.0, "lam": [1j], "X": [[1.0]]}
 _TAKING_A_MODEL = _public_functions_taking_a_model()
 
 
@@ -485,7 +484,7 @@ def _e_case(name, tmp_path):
 
     from squealkit.io import load_dataset, save_blocks
     from squealkit.nonlinear import limit_cycle_branch
-    from squealkit.stability.sparse import band_eigs
+    from squealkit.solvers.band import band_eigs
     from squealkit.transient import transient_summary
 
     if name == "band-k-0":

@@ -8,7 +8,7 @@ import pytest
 import xarray as xr
 
 from squealkit.measurement import analyze_recording
-from squealkit.measurement.criteria import P_REF, a_weighting_db, squeal_criteria, time_weighted_level
+from squealkit.measurement.squeal.criteria import P_REF, a_weighting_db, squeal_criteria, time_weighted_level
 
 FS = 48000.0
 

@@ -307,8 +307,8 @@ def test_sigterm_during_a_streamed_simulation_leaves_no_partial_file(tmp_path):
 @pytest.mark.parametrize("suffix", [".nc", ".csv", ".wav", ".tdms", ".mf4"])
 def test_recording_written_block_by_block_reads_back_whole(tmp_path, suffix):
     # issue #15: synth streams long recordings; blocks of 1000 samples read back as the one-shot dataset
+    from squealkit.measurement.formats.writers import write_recording_blocks
     from squealkit.measurement.synthetic import synthetic_attrs, synthetic_source
-    from squealkit.measurement.writers import write_recording_blocks
 
     src = synthetic_source(duration=0.1, seed=3)
     whole = src.block(0, src.n_samples)

@@ -18,8 +18,8 @@ import scipy.sparse as sp
 from squealkit._validation import InputError
 from squealkit.data import nlevp_path
 from squealkit.models import FEModel, MatrixModel, load_fe_model, load_model
+from squealkit.solvers.band import band_eigs, dense_eigs
 from squealkit.stability import eigenvalues, fe_critical_friction, fe_modes, fe_stability_map, stability_map
-from squealkit.stability.sparse import band_eigs, dense_eigs
 
 # -- the NLEVP problem and its dense reference -------------------------------------------------
 
@@ -47,7 +47,7 @@ def nlevp_matrices(omega):
 
 
 def test_fe_model_reproduces_nlevp_assembly(brake):
-    # omega_ref = mu_ref = 1 and mu = 1: exactly NLEVP's formulation (README, "Finite element brake models")
+    # disc_speed_ref = mu_ref = 1 and mu = 1: exactly NLEVP's formulation (README, "Finite element brake models")
     for omega in (2 * np.pi, 8 * np.pi):
         M, D, K = nlevp_matrices(omega)
         np.testing.assert_array_equal(brake.mass_matrix().toarray(), M)
@@ -154,7 +154,7 @@ def test_speed_terms_follow_their_formulas():
     parts = {"M": np.eye(n), "K1": np.diag([1.0, 2.0, 3.0]), "KR": rng.normal(size=(n, n)),
              "DR": rng.normal(size=(n, n)), "DG": G - G.T, "D4": np.eye(n), "KGeo": np.diag([1.0, 0.0, 1.0]),
              "D1": 0.1 * np.eye(n)}
-    m = FEModel.from_matrices(**parts, omega_ref=2.0, mu_ref=0.5, f_ref=4.0)
+    m = FEModel.from_matrices(**parts, disc_speed_ref=2.0, mu_ref=0.5, f_ref=4.0)
     w, mu, t = 3.0, 0.3, 0.1
     C = parts["D1"] + (mu + t) / 0.5 * (2.0 / w) * parts["DR"] + w / 2.0 * parts["DG"] + parts["D4"] / 4.0
     K = parts["K1"] + (mu + t) / 0.5 * parts["KR"] + (w / 2.0) ** 2 * parts["KGeo"]
@@ -276,7 +276,7 @@ def test_bad_reference_values():
     with pytest.raises(InputError, match="mu_ref"):
         FEModel.from_matrices(M=np.eye(1), K1=np.eye(1), mu_ref=0.0)
     m = FEModel.from_matrices(M=np.eye(1), K1=np.eye(1), DR=np.eye(1))
-    with pytest.raises(InputError, match="omega"):
+    with pytest.raises(InputError, match="disc_speed"):
         m.damping_matrix(0.0, 0.3)
 
 
@@ -331,10 +331,10 @@ def test_read_matrix_market_files_and_toml(tmp_path, small):
     (tmp_path / "sub").mkdir()
     toml = tmp_path / "sub" / "brake.toml"
     files = ", ".join(f'{k} = "../{k}.mtx"' for k in small)
-    toml.write_text(f'model = "fe"\n[fe]\nfiles = {{{files}}}\nomega_ref = 2.0\nf_ref = 1600\n')
+    toml.write_text(f'model = "fe"\n[fe]\nfiles = {{{files}}}\ndisc_speed_ref = 2.0\nf_ref = 1600\n')
     m = load_model(toml)
     _same(m, small)
-    assert (m.omega_ref, m.mu_ref, m.f_ref) == (2.0, 1.0, 1600.0)
+    assert (m.disc_speed_ref, m.mu_ref, m.f_ref) == (2.0, 1.0, 1600.0)
 
 
 def test_read_op4_round_trip(tmp_path, small):
@@ -466,8 +466,8 @@ def test_unstable_mode_shapes_to_vtk(tmp_path):
 
 @pytest.fixture()
 def reduction_calls(monkeypatch):
-    """The arguments squealkit.stability.reduction's basis builders are called with."""
-    from squealkit.stability import reduction
+    """The arguments squealkit.solvers.reduction's basis builders are called with."""
+    from squealkit.solvers import reduction
 
     calls = {}
     modal, pod = reduction.modal_basis, reduction.pod_basis

@@ -10,7 +10,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from squealkit import InputError
-from squealkit.models.fe_demo import FEDemoGeometry, build_fe_demo, fe_demo_dofs, write_fe_demo
+from squealkit.fe.demo import FEDemoGeometry, build_fe_demo, fe_demo_dofs, write_fe_demo
 
 pytest.importorskip("skfem")
 
@@ -77,7 +77,7 @@ def test_matrix_structure(brake):
     # a common normal motion of disc and pads (rigid heave) changes no normal force
     heave = (comp == 2).astype(float)
     assert np.abs(KR @ heave).max() < 1e-9 * abs(KR).max()
-    assert brake["omega_ref"] > 0 and brake["mu_ref"] == 0.4 and brake["f_ref"] == 1.0
+    assert brake["disc_speed_ref"] > 0 and brake["mu_ref"] == 0.4 and brake["f_ref"] == 1.0
 
 
 def test_geometric_stiffness_is_signed():
@@ -90,13 +90,13 @@ def test_geometric_stiffness_is_signed():
 
 def test_friction_makes_mode_coupling_squeal_in_band(brake):
     # the band solver itself is checked against scipy's shift-invert in test_reduction.py
-    from squealkit.stability.reduction import _as_model
-    from squealkit.stability.sparse import band_eigs
+    from squealkit.solvers.band import band_eigs
+    from squealkit.solvers.reduction import as_fe_model
 
     # on this coarse mesh (1566 unknowns) the pair near 11.4 kHz locks in below mu = 0.3
     omega = 2 * math.pi * 600 / 60  # 600 rpm
     band = (10e3, 12.5e3)
-    model = _as_model(brake)
+    model = as_fe_model(brake)
     stable = band_eigs(model, omega, 0.0, band=band).eigenvalues
     assert stable.size >= 3 and np.all(stable.real < 0)
     lam = band_eigs(model, omega, 0.3, band=band).eigenvalues
@@ -121,7 +121,7 @@ def test_write_fe_demo_round_trip(brake, tmp_path):
     toml_path = write_fe_demo(brake, tmp_path / "brake")
     cfg = tomllib.loads(toml_path.read_text())
     assert cfg["model"] == "fe"
-    assert cfg["fe"]["mu_ref"] == brake["mu_ref"] and cfg["fe"]["omega_ref"] == brake["omega_ref"]
+    assert cfg["fe"]["mu_ref"] == brake["mu_ref"] and cfg["fe"]["disc_speed_ref"] == brake["disc_speed_ref"]
     assert set(cfg["fe"]["files"]) == {"M", "D1", "DG", "K1", "KR", "KGeo"}
     for name, file in cfg["fe"]["files"].items():
         A = scipy.io.mmread(toml_path.parent / file)
@@ -144,12 +144,12 @@ def test_reduced_maps_of_the_built_in_brake_agree_with_the_band_solve_or_say_the
     # the POD basis (built for the squeal band) gives the band solve's numbers; a modal basis
     # too small for the coupled modes fails the residual check, and those points are
     # indeterminate, never a made-up flutter from eigenpairs that are not the brake's
+    from squealkit.fe.demo import FE_MATRIX_NAMES
     from squealkit.models import FEModel
-    from squealkit.models.fe_demo import FE_MATRIX_NAMES
     from squealkit.stability import stability_map
 
     model = FEModel.from_matrices(**{k: brake[k] for k in FE_MATRIX_NAMES if brake[k] is not None},
-                                  omega_ref=brake["omega_ref"], mu_ref=brake["mu_ref"], f_ref=brake["f_ref"])
+                                  disc_speed_ref=brake["disc_speed_ref"], mu_ref=brake["mu_ref"], f_ref=brake["f_ref"])
     mu = np.array([0.0, 0.3])
     full = stability_map(model, mu, rpm=[600.0], method="sparse")
     pod = stability_map(model, mu, rpm=[600.0], method="pod")

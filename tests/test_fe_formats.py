@@ -22,10 +22,11 @@ import scipy.sparse.linalg as spla
 
 import _fe_format_writers as wr
 from squealkit._validation import InputError
+from squealkit.fe.demo import demo_dof_map, demo_mesh
 from squealkit.fe.dofmap import DofMap
-from squealkit.fe.mesh import FEMesh, demo_dof_map, demo_mesh, read_mesh, write_abaqus_inp
+from squealkit.fe.mesh import FEMesh, read_mesh, write_abaqus_inp
+from squealkit.fe.readers import load_fe_model
 from squealkit.models.config import load_model
-from squealkit.models.fe_readers import load_fe_model
 
 OMEGA, MU = 10.0, 0.4
 SYM = ("M", "D1", "K1", "KGeo")
@@ -72,7 +73,7 @@ def hand():
 
 @pytest.fixture(scope="module")
 def demo():
-    from squealkit.models.fe_demo import build_fe_demo
+    from squealkit.fe.demo import build_fe_demo
 
     return build_fe_demo(n_theta=8, n_r=2)  # 738 DOFs
 
@@ -80,7 +81,7 @@ def demo():
 @pytest.fixture(scope="module")
 def demo_mm(demo, tmp_path_factory):
     """The demo brake by the Matrix Market route (``fe-demo``'s files and TOML): the reference."""
-    from squealkit.models.fe_demo import write_fe_demo
+    from squealkit.fe.demo import write_fe_demo
 
     toml = write_fe_demo(demo, tmp_path_factory.mktemp("mm") / "brake")
     return load_model(toml), toml.parent
@@ -182,8 +183,8 @@ def test_dof_map_orders_labels_and_names_them():
 @pytest.mark.parametrize("fmt", ["abaqus", "abaqus-coordinate", "dmig", "dmig-punch", "hb"])
 def test_hand_model_in_each_format_has_the_matrix_market_spectrum(hand, tmp_path, fmt):
     mats, node, dof = hand["mats"], hand["node"], hand["dof"]
-    ref_model = load_fe_model(files=_write_mm(tmp_path / "mm", mats), omega_ref=OMEGA, mu_ref=MU)
-    model = load_fe_model(**_write_format(fmt, tmp_path / fmt, mats, node, dof), omega_ref=OMEGA, mu_ref=MU)
+    ref_model = load_fe_model(files=_write_mm(tmp_path / "mm", mats), disc_speed_ref=OMEGA, mu_ref=MU)
+    model = load_fe_model(**_write_format(fmt, tmp_path / fmt, mats, node, dof), disc_speed_ref=OMEGA, mu_ref=MU)
     assert model.n_dof == 13 and model.dof_map is not None
     if fmt != "abaqus-coordinate":  # labelled: the map holds the file's labels, positive ones first
         assert model.dof_map.node.tolist() == [7] * 3 + [55] * 3 + [101] * 3 + [3000] * 3 + [-1]
@@ -199,7 +200,7 @@ def test_demo_brake_in_each_format_has_the_matrix_market_spectrum(demo, demo_mm,
     ref_model = demo_mm[0]
     node, dof, _ = _demo_labels(demo)
     mats = {k: demo[k] for k in NAMES}
-    model = load_fe_model(**_write_format(fmt, tmp_path / fmt, mats, node, dof), omega_ref=demo["omega_ref"],
+    model = load_fe_model(**_write_format(fmt, tmp_path / fmt, mats, node, dof), disc_speed_ref=demo["disc_speed_ref"],
                           mu_ref=demo["mu_ref"])
     assert model.n_dof == ref_model.n_dof == 738
     # the same matrices, renumbered: the DOF map puts each (node, DOF) where the labels say
@@ -314,7 +315,7 @@ def abaqus_brake(demo, tmp_path_factory):
     write_abaqus_inp(FEMesh(mesh.points, perm, mesh.cells), folder / "brake.inp")
     table = ", ".join(f'{k} = "{Path(v).name}"' for k, v in files.items())
     toml = folder / "brake.toml"
-    toml.write_text(f'model = "fe"\n\n[fe]\nfiles = {{ {table} }}\nomega_ref = {demo["omega_ref"]!r}\n'
+    toml.write_text(f'model = "fe"\n\n[fe]\nfiles = {{ {table} }}\ndisc_speed_ref = {demo["disc_speed_ref"]!r}\n'
                     f'mu_ref = {demo["mu_ref"]!r}\nmesh = "brake.inp"\n')
     return toml
 

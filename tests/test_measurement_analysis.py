@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from squealkit import InputError
 from squealkit.io import load_dataset, save_dataset
 from squealkit.measurement import a_weighting_db, analyze_recording, synthetic_recording, synthetic_source
-from squealkit.measurement.events import critical_bandwidth
+from squealkit.measurement.squeal.events import critical_bandwidth
 
 KW = dict(mic="mic", displacement="displacement", rpm=900.0, radius=0.05)
 
@@ -205,7 +205,7 @@ def test_progress_callback_reaches_total():
 
 
 def test_campaign_summary_occurrence_and_frequencies(rising, falling):
-    from squealkit.measurement.campaign import summarize_campaign
+    from squealkit.campaign import summarize_campaign
 
     quiet = analyze_recording(synthetic_recording(duration=0.5, seed=9, squeal_on="none"), **KW)
     summ = summarize_campaign([rising[1], falling[1], quiet], ["a", "b", "c"])
@@ -297,7 +297,7 @@ def test_event_phase_plot_places_each_event_at_its_runout_phase(rising):
 
 @pytest.mark.parametrize("dec", [1, 3, 8, 16])
 def test_mean_squares_kernel_matches_numpy(dec):
-    from squealkit.measurement.analysis import _mean_squares
+    from squealkit.measurement.analysis.kernels import _mean_squares
 
     x = (np.random.default_rng(dec).standard_normal(1000 * dec + dec // 2) * 40.0).astype(np.float32)
     m = x.size // dec
@@ -309,7 +309,7 @@ def test_mean_squares_kernel_matches_numpy(dec):
 def test_time_weight_rows_matches_lfilter_down_each_column():
     from scipy.signal import lfilter
 
-    from squealkit.measurement.analysis import _time_weight_rows
+    from squealkit.measurement.analysis.kernels import _time_weight_rows
 
     rng = np.random.default_rng(5)
     p = rng.exponential(1.0, (300, 37)).astype(np.float32)
@@ -323,7 +323,7 @@ def test_time_weight_rows_matches_lfilter_down_each_column():
 
 @pytest.mark.parametrize("index", [[], [0], [3, 4, 5, 6], [2, 3, 5], [0, 0, 1], [0, 0, 2], [4, 6, 8], [5, 4, 6]])
 def test_rows_select_what_the_index_selects(index):
-    from squealkit.measurement.analysis import _rows
+    from squealkit.measurement.analysis.components import _rows
 
     x = np.arange(40.0).reshape(10, 4)
     idx = np.array(index, dtype=np.intp)
@@ -333,7 +333,7 @@ def test_rows_select_what_the_index_selects(index):
 
 
 def test_running_sums_kernel_matches_numpy():
-    from squealkit.measurement.analysis import _running_sums
+    from squealkit.measurement.analysis.kernels import _running_sums
 
     rng = np.random.default_rng(8)
     ms, tan_t = rng.exponential(1.0, 5000), rng.standard_normal(5000) * 1e-3
@@ -346,7 +346,7 @@ def test_running_sums_kernel_matches_numpy():
 
 
 def test_angle_sums_kernel_matches_bincount():
-    from squealkit.measurement.analysis import _angle_sums
+    from squealkit.measurement.analysis.kernels import _angle_sums
 
     rng = np.random.default_rng(9)
     turns = np.sort(rng.uniform(-1.5, 40.0, 20000))
@@ -359,7 +359,7 @@ def test_angle_sums_kernel_matches_bincount():
 
 
 def test_bin_powers_kernel_matches_numpy():
-    from squealkit.measurement.analysis import _bin_powers
+    from squealkit.measurement.analysis.kernels import _bin_powers
 
     rng = np.random.default_rng(10)
     full = (rng.standard_normal((200, 257)) + 1j * rng.standard_normal((200, 257))).astype(np.complex64) * 1e-3

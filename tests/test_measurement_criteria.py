@@ -13,7 +13,7 @@ import pytest
 
 from squealkit import InputError
 from squealkit.measurement import analyze_recording, synthetic_recording
-from squealkit.measurement.criteria import (
+from squealkit.measurement.squeal.criteria import (
     SETUPS,
     a_weighting_db,
     exponential_average,
@@ -144,7 +144,7 @@ def test_criteria_named_in_every_output(tmp_path):
     assert d["criteria"]["name"].startswith("SAE J2521") and d["criteria"]["time_weighting"] == "Fast"
     ds = res.to_dataset()
     assert "J2521" in ds.attrs["criteria"]
-    from squealkit.measurement.campaign import summarize_campaign
+    from squealkit.campaign import summarize_campaign
 
     assert "J2521" in summarize_campaign([res], ["a"]).to_csv().splitlines()[0]
 
@@ -181,7 +181,7 @@ def _lobe_peaks_reference(pa, sc, thr, dyn):
 
 
 def test_lobe_peaks_kernel_matches_array_reference():
-    from squealkit.measurement.events import _DYNAMIC_RANGE_DB, _lobe_peaks
+    from squealkit.measurement.squeal.events import _DYNAMIC_RANGE_DB, _lobe_peaks
 
     rng = np.random.default_rng(12)
     dyn = np.float32(10 ** (-_DYNAMIC_RANGE_DB / 10))

@@ -143,7 +143,7 @@ def test_missing_file_and_unknown_channel(tmp_path, signals):
 @pytest.mark.parametrize("suffix", [".wav", ".tdms", ".mf4", ".uff", ".csv"])
 def test_every_synth_format_reads_back(tmp_path, suffix):
     from squealkit.measurement import synthetic_recording
-    from squealkit.measurement.writers import write_recording
+    from squealkit.measurement.formats.writers import write_recording
 
     rec = synthetic_recording(duration=0.5, seed=1, rpm_end=600.0)
     path = write_recording(rec, tmp_path / f"r{suffix}")
@@ -163,7 +163,7 @@ def test_every_synth_format_reads_back(tmp_path, suffix):
 
 def test_mdf4_recording_analyses_like_the_dataset(tmp_path):
     from squealkit.measurement import analyze_recording, synthetic_recording
-    from squealkit.measurement.writers import write_recording
+    from squealkit.measurement.formats.writers import write_recording
 
     rec = synthetic_recording(duration=2.0, seed=1, rpm_end=300.0)
     path = write_recording(rec, tmp_path / "stop.mf4")
@@ -181,7 +181,7 @@ FAULT_N, FAULT_FS = 1200, 1000.0
 
 def _good(tmp_path, suffix, t=None, **extra):
     """A small good recording (mic, probe) in ``suffix``; ``t`` replaces the time axis where the format has one."""
-    from squealkit.measurement.writers import write_recording
+    from squealkit.measurement.formats.writers import write_recording
 
     rng = np.random.default_rng(0)
     rec = recording_dataset({"mic": rng.standard_normal(FAULT_N), "probe": rng.standard_normal(FAULT_N)},
@@ -364,7 +364,7 @@ def test_csv_trailing_blank_lines_and_rounded_times_are_fine(tmp_path):
 from hypothesis import given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
-from squealkit.measurement.readers import _TimeAxis  # noqa: E402
+from squealkit.measurement.formats._common import _TimeAxis  # noqa: E402
 
 
 def _first_fault(t, dt, block):
@@ -401,7 +401,7 @@ def test_time_axis_check_finds_each_fault_at_its_sample_whatever_the_blocks(fs, 
 
 def test_branch_free_time_check_agrees_with_the_scan_that_locates_a_fault():
     # _time_steps_ok (vectorised, no early exit) must pass exactly the blocks _first_bad_time passes
-    from squealkit.measurement.readers import _first_bad_time, _time_steps_ok
+    from squealkit.measurement.formats._common import _first_bad_time, _time_steps_ok
 
     rng = np.random.default_rng(7)
     dt = 1 / 48000.0
@@ -424,17 +424,19 @@ def test_branch_free_time_check_agrees_with_the_scan_that_locates_a_fault():
         assert bool(_time_steps_ok(t, last, has_last, dt)) == (_first_bad_time(t, last, has_last, dt) == -1), trial
 
 
-def test_time_axis_is_checked_on_the_first_complete_pass_only(tmp_path, signals):
+def test_time_axis_is_checked_on_the_first_complete_pass_only(tmp_path, signals, monkeypatch):
     # a second pass (the analysis after the tacho pass) neither reads nor checks the time coordinate,
     # but only once a pass has gone through the whole axis
+    from squealkit.measurement.formats import netcdf
+
     p, q = signals
     f = tmp_path / "rec.nc"
     recording_dataset({"mic": p, "disp": q}, FS, {"mic": "Pa", "disp": "m"}).to_netcdf(f, engine="h5netcdf")
     src = open_recording(f)
     reads = []
-    blocks = src._blocks_netcdf
-    object.__setattr__(src, "_blocks_netcdf", lambda names, block, with_time: reads.append(with_time) or
-                       blocks(names, block, with_time))
+    blocks = netcdf.blocks
+    monkeypatch.setattr(netcdf, "blocks", lambda src, names, block, with_time: reads.append(with_time) or
+                        blocks(src, names, block, with_time))
     next(src.iter_blocks(["mic"], block=1000))  # stopped early: the axis is not yet known good
     for _ in src.iter_blocks(["mic"], block=1000):
         pass
@@ -458,7 +460,7 @@ def test_netcdf_time_coordinate_in_milliseconds_is_scaled_then_checked(tmp_path,
 
 
 def test_all_finite_kernel_matches_numpy():
-    from squealkit.measurement.readers import _all_finite
+    from squealkit.measurement.formats._common import _all_finite
 
     rng = np.random.default_rng(11)
     for trial in range(200):
@@ -476,7 +478,7 @@ def test_contiguous_datasets_are_mapped_as_h5py_reads_them(tmp_path):
     # order and type), writable without touching the file; chunked or unwritten datasets are not mapped
     import h5py
 
-    from squealkit.measurement.readers import _mapped_block, _stored_as_is
+    from squealkit.measurement.formats._common import _mapped_block, _stored_as_is
 
     f = tmp_path / "d.h5"
     rng = np.random.default_rng(5)
@@ -506,7 +508,7 @@ def test_netcdf_head_is_what_h5netcdf_reads(tmp_path):
     import h5netcdf
     import h5py
 
-    from squealkit.measurement.readers import _head
+    from squealkit.measurement.formats._common import _head
 
     f = tmp_path / "pad.nc"
     with h5netcdf.File(f, "w") as nc:

@@ -1,10 +1,10 @@
-"""A-weighting, peak refinement and spectrogram of squealkit.measurement.spectral."""
+"""A-weighting, peak refinement and spectrogram of squealkit.measurement.signal.spectral."""
 
 import numpy as np
 import pytest
 
 from squealkit.measurement import a_weighting_db, phase_advance_freq, refine_peak, spectrogram
-from squealkit.measurement.spectral import frame_power
+from squealkit.measurement.signal.spectral import frame_power
 
 # IEC 61672-1:2013 Table 3, A-weighting rounded to 0.1 dB. The table is computed at the exact
 # base-10 frequencies 10**(n/10) Hz whose nominal names are 31.5, 2000, 4000, 8000, 16000 Hz.

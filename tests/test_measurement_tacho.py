@@ -11,8 +11,8 @@ import pytest
 
 from squealkit import InputError
 from squealkit.measurement import analyze_recording, synthetic_recording, synthetic_source
-from squealkit.measurement.readers import recording_dataset
-from squealkit.measurement.tacho import (
+from squealkit.measurement.formats.readers import recording_dataset
+from squealkit.measurement.signal.tacho import (
     angular_resample,
     pulse_times,
     read_tacho,
@@ -63,7 +63,7 @@ def test_pulse_times_interpolate_between_samples():
 def test_blockwise_tacho_equals_whole(stop):
     src, data = stop
     rec = recording_dataset(data, FS, src.units, {})
-    from squealkit.measurement.analysis import _DatasetSource
+    from squealkit.measurement.analysis.framing import _DatasetSource
 
     whole = tacho_angle(data["tacho"], FS)
     blocks = read_tacho(_DatasetSource(rec, FS), "tacho", block=7777)  # edges straddle block ends
@@ -154,7 +154,7 @@ def test_tacho_errors_are_clear(stop):
 
 def test_figures_follow_the_squeal_found():
     # issue 14: the Figs. 10-13 views were fixed (0.1-0.3 s, 1000-2500 Hz); they follow the squeal now
-    from squealkit.plotting.measurement import squeal_views
+    from squealkit.measurement import squeal_views
 
     rec = synthetic_recording(duration=2.0, seed=1, rpm_end=300.0, freq=6100.0)
     res = analyze_recording(rec, tacho="tacho", **KW)
@@ -186,7 +186,7 @@ def test_each_event_has_its_own_runout_phase():
 def test_rising_edges_kernel_matches_pulse_times_of_the_joined_block():
     # read_tacho finds the edges of a block and the sample before it in one compiled pass; the times
     # must be those pulse_times gives for the two joined, to the last bit
-    from squealkit.measurement.tacho import _rising_edges
+    from squealkit.measurement.signal.tacho import _rising_edges
 
     rng = np.random.default_rng(7)
     for trial in range(100):
@@ -205,8 +205,8 @@ def test_rising_edges_kernel_matches_pulse_times_of_the_joined_block():
 def test_tacho_blocks_are_the_sources_blocks(stop, block):
     # read_tacho reads several blocks at a time, then takes them one by one: the same blocks (starts
     # and samples) as the source yields them one by one, so the edges and the level are the same
-    from squealkit.measurement.analysis import _DatasetSource
-    from squealkit.measurement.tacho import _tacho_blocks
+    from squealkit.measurement.analysis.framing import _DatasetSource
+    from squealkit.measurement.signal.tacho import _tacho_blocks
 
     src, data = stop
     source = _DatasetSource(recording_dataset(data, FS, src.units, {}), FS)

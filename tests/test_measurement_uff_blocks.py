@@ -12,7 +12,7 @@ import pytest
 
 from squealkit import InputError
 from squealkit.measurement import open_recording, synthetic_recording
-from squealkit.measurement.writers import write_recording
+from squealkit.measurement.formats.writers import write_recording
 
 pyuff = pytest.importorskip("pyuff")
 NAMES = ["mic", "displacement", "tacho"]

@@ -88,7 +88,7 @@ def test_stable_rig_gets_a_report_that_says_so(stable):
     assert "stays stable over the friction range searched" in text
     assert "no sensitivities and no onset mode shape are computed" in text
     assert "No mode loses stability anywhere on the grid" in text
-    assert "no squeal onset on a flat disc up to mu = 2" in text
+    assert "the damped model stays stable for every mu up to 2: there is no squeal onset" in text
     assert "no onset up to mu = 2 with either kinematics" in text
     # without an onset the operating point cannot be placed from it, and the report says whose it is
     assert "this model has no damped onset on a flat disc up to mu = 2 to place one from" in text
@@ -290,11 +290,11 @@ def test_fig13_labels_do_not_overlap():
     # issue 27: the band in the displacement's y label made it taller than its panel, over the pressure's label
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    from squealkit.measurement import synthetic_recording
+    from squealkit.measurement import figure_signals, synthetic_recording
     from squealkit.plotting.measurement import band_vs_pressure_plot
 
     rec = synthetic_recording(duration=0.2, fs=40_000.0, rpm=900.0, radius=0.05, freq=2388.0, seed=1)
-    fig = band_vs_pressure_plot(rec, band=(1430.87, 2980.98))
+    fig = band_vs_pressure_plot(figure_signals(rec, rpm=900.0, band=(1430.87, 2980.98)))
     FigureCanvasAgg(fig).draw()
     r = fig.canvas.get_renderer()
     a1, a2 = fig.axes[:2]
@@ -310,3 +310,33 @@ def test_quick_report_is_a_preview_drawn_once_per_figure(stable):
     figures = stable.out / "figures"
     assert sorted(p.suffix for p in figures.iterdir()) == [".png"] * len(list(figures.iterdir()))
     assert "<code>.svg</code>" not in stable.html and "figures/" in stable.html
+
+
+def test_fig4_envelope_far_beyond_the_frozen_time_growth_is_not_called_self_excited():
+    # Found on an own rig (disc 2.65 kHz, c = 30 N s/m, q0 = 2.5 um): the envelope swung at +26.1 and
+    # -26.1 1/s while the frozen-time growth rate of the same stages averaged +1.5 and -4.5 1/s (at most
+    # +3.2 1/s), and the report said "mu_e swings through the stability boundary, so the response grows on
+    # every rising stage": the swings are the run-out's own excitation, not the instability.
+    from squealkit.report.steps_transient import _fig4_text
+
+    driven = _fig4_text([26.1, 26.1], [-26.1, -25.9, -25.9], None, (-6.2, 3.2),
+                        stage_sigma=([1.49, 1.49], [-4.5, -4.5, -4.5]))
+    assert "swings through the stability boundary, so" not in driven
+    assert "not the instability" in driven and "+1.5" in driven and "-4.5" in driven
+    # the paper's own run (reproduce, this session: +34.3 against +25.0, -39.6 against -25.7) keeps its sentence
+    paper = _fig4_text([34.3], [-39.6], None, (-40.0, 30.0), stage_sigma=([25.0], [-25.7]))
+    assert "swings through the stability boundary, so the response grows on every rising stage" in paper
+
+
+def test_conclusions_do_not_call_a_stable_runs_envelope_intermittent_squeal():
+    # the stable rig (disc 5.2 kHz): "decays on 2 of 3 falling stages (the last at +49.7 1/s)" beside the
+    # paper's "squeal is intermittent", while the frozen-time growth rate never rose above -3.75 1/s
+    from squealkit.report.document import Section
+    from squealkit.report.steps_conclusions import conclusions_step
+
+    tr = {"rising_stages_growing": 0.0, "rising_stages": 2.0, "falling_stages_decaying": 2.0,
+          "falling_stages": 3.0, "rise_rate": -3.6, "fall_rate": 49.7, "fig4_self_excited": 0.0,
+          "fig4_sigma_max": -3.75}
+    section = Section("transient", "§4", (), numbers=tr)
+    text = " ".join(" ".join(map(str, r)) for t in conclusions_step([section]).tables for r in t.rows)
+    assert "stays stable all through the run" in text and "-3.75 1/s" in text and "+49.7" not in text

@@ -23,9 +23,9 @@ from click.testing import CliRunner
 
 distributed = pytest.importorskip("distributed")
 
+from squealkit.campaign import analyze_campaign  # noqa: E402
 from squealkit.cli.main import cli  # noqa: E402
 from squealkit.measurement import synthetic_recording  # noqa: E402
-from squealkit.measurement.campaign import analyze_campaign  # noqa: E402
 from squealkit.models import get_preset  # noqa: E402
 from squealkit.scale import map_tasks  # noqa: E402
 from squealkit.stability import stability_map, stability_summary  # noqa: E402

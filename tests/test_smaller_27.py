@@ -140,8 +140,8 @@ def blas_threads_seen(monkeypatch):
 def test_squealkit_threads_bounds_blas_in_reduction_called_directly(monkeypatch, blas_threads_seen, nlevp):
     from threadpoolctl import threadpool_limits
 
-    from squealkit.stability.reduction import modal_basis, reduce, reduced_eigs
-    from squealkit.stability.sparse import dense_eigs
+    from squealkit.solvers.band import dense_eigs
+    from squealkit.solvers.reduction import modal_basis, reduce, reduced_eigs
 
     monkeypatch.setenv("SQUEALKIT_THREADS", "1")
     with threadpool_limits(2, user_api="blas"):  # BLAS's own default on this 2-core machine
@@ -158,7 +158,7 @@ def test_squealkit_threads_bounds_blas_in_reduction_called_directly(monkeypatch,
 def test_thread_bound_never_raises_an_enclosing_blas_limit(monkeypatch, blas_threads_seen, nlevp):
     from threadpoolctl import threadpool_limits
 
-    from squealkit.stability.reduction import modal_basis
+    from squealkit.solvers.reduction import modal_basis
 
     monkeypatch.setenv("SQUEALKIT_THREADS", "2")
     with threadpool_limits(1, user_api="blas"):
@@ -173,11 +173,14 @@ def test_every_public_stability_computation_honours_the_thread_limit():
 
     import squealkit.stability as stability
     from squealkit._threads import honour_thread_limit
-    from squealkit.stability import reduction, sparse
+    from squealkit.solvers import band, lu, reduction
 
     no_lapack = {"lock_in", "modes_summary", "stability_summary", "track_modes", "unstable_threshold",
-                 "fill_reducing_order", "validate_band"}
-    names = [(m, n) for m in (stability, reduction, sparse) for n in m.__all__
+                 "fill_reducing_order", "validate_band",
+                 # solvers/: the LU registry, and helpers called inside the decorated entry points
+                 "register_lu_backend", "get_lu_backend", "lu_backend", "set_lu_backend", "use_lu_backend",
+                 "real_times", "as_fe_model", "reduced_solve"}
+    names = [(m, n) for m in (stability, reduction, band, lu) for n in m.__all__
              if inspect.isfunction(getattr(m, n)) and n not in no_lapack]
     assert len(names) > 20
     wrapper_code = honour_thread_limit(lambda: None).__code__
@@ -193,7 +196,7 @@ def test_opening_uff_reads_headers_only(tmp_path, monkeypatch):
 
     pyuff = pytest.importorskip("pyuff")
     from squealkit.measurement import open_recording, synthetic_recording
-    from squealkit.measurement.writers import write_recording
+    from squealkit.measurement.formats.writers import write_recording
 
     rec = synthetic_recording(duration=2.0, seed=1)  # 3 channels x 80000 samples: 1.9 MB of float64
     path = write_recording(rec, tmp_path / "rec.uff")  # ASCII, about 5 MB
@@ -231,7 +234,7 @@ def small_campaign(tmp_path_factory):
     has only 2 marks (300 rpm for 0.5 s), squealing at 2388 Hz (the generator's default line)."""
     from squealkit.campaign import synthetic_campaign
     from squealkit.measurement import synthetic_recording
-    from squealkit.measurement.writers import write_recording
+    from squealkit.measurement.formats.writers import write_recording
 
     d = tmp_path_factory.mktemp("camp27")
     truth = synthetic_campaign(d, n_applications=3, duration=0.5, seed=5, stop_share=0.0)
@@ -355,7 +358,7 @@ def _match(got, ref):
 
 @pytest.mark.parametrize("omega", [2 * np.pi, 8 * np.pi])
 def test_nlevp_assemblies_against_an_independent_dense_solve(omega):
-    from squealkit.stability.sparse import dense_eigs
+    from squealkit.solvers.band import dense_eigs
 
     raw, D_mfile, K, formula = _mfile_assembly(omega)
     assert formula == "D1 + DR/omega + omega*DG"  # what the shipped .m file writes

@@ -191,7 +191,7 @@ def test_csv_sample_rate_is_the_least_squares_slope_of_its_time_column(rounded_t
     # the jitter is the rounding: uniform over +-0.5e-7 s, RMS 1e-7 / sqrt(12) = 2.9e-8 s
     assert ds.attrs["time_jitter_rms"] == pytest.approx(1e-7 / math.sqrt(12), rel=0.1)
     # an in-memory recording with the same rounded time coordinate and no fs attribute: the same
-    from squealkit.measurement.analysis import _DatasetSource
+    from squealkit.measurement.analysis.framing import _DatasetSource
 
     mem = ds.drop_attrs().assign_coords(time=np.round(ds["time"].values, 7))
     assert _DatasetSource(mem, None).fs == pytest.approx(48000.0, rel=1e-6)
@@ -243,7 +243,7 @@ def test_channel_units_from_the_header_and_unit_option_are_applied(recording_in_
     src = open_recording(bare, units={"probe": "um"})
     assert src.units["probe"] == "m" and src.scales["probe"] == 1e-6
     # an in-memory recording with a probe in mm is analysed in metres too
-    from squealkit.measurement.analysis import _DatasetSource
+    from squealkit.measurement.analysis.framing import _DatasetSource
 
     ds = a.copy()
     ds["probe"] = ds["probe"] * 1e3

@@ -60,18 +60,26 @@ def _short(value: object) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
+#: The model base classes by kind (``"friction"``, ``"fe"``), registered by the modules that define them
+#: (:func:`register_model_type`): this foundation checks models without importing the layers above it.
+_MODEL_TYPES: dict[str, tuple[type, ...]] = {}
+
+
+def register_model_type(kind: str, cls: type) -> None:
+    """Make instances of ``cls`` pass :func:`validate_model` as models of ``kind`` (``"friction"`` or ``"fe"``)."""
+    _MODEL_TYPES[kind] = (*_MODEL_TYPES.get(kind, ()), cls)
+
+
 def validate_model(model: object, name: str = "model", *, kind: str = "any") -> object:
     """Return ``model`` if it is a squealkit model, else one line naming the argument and its type.
 
-    ``kind``: ``"any"`` (a friction model or an :class:`~squealkit.models.fe.FEModel`), ``"friction"``
+    ``kind``: ``"any"`` (a friction model or an :class:`~squealkit.fe.model.FEModel`), ``"friction"``
     (a preset, a rig's model, a matrix model) or ``"fe"``.
     """
-    from .models._base import FrictionModel
-    from .models.fe import FEModel
-
-    kinds = {"any": ((FrictionModel, FEModel), "a squealkit model (get_preset, load_model, FEModel)"),
-             "friction": ((FrictionModel,), "a squealkit model (get_preset, load_model; not an FE model here)"),
-             "fe": ((FEModel,), "an FEModel (load_fe_model, FEModel.from_matrices)")}[kind]
+    friction, fe = _MODEL_TYPES.get("friction", ()), _MODEL_TYPES.get("fe", ())
+    kinds = {"any": ((*friction, *fe), "a squealkit model (get_preset, load_model, FEModel)"),
+             "friction": (friction, "a squealkit model (get_preset, load_model; not an FE model here)"),
+             "fe": (fe, "an FEModel (load_fe_model, FEModel.from_matrices)")}[kind]
     if not isinstance(model, kinds[0]):
         raise InputTypeError(f"{name} must be {kinds[1]}, not {type(model).__name__} {_short(model)}.")
     return model

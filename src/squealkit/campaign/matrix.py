@@ -3,7 +3,8 @@
 A CSV with a header row. Required columns: ``application`` (a unique id) and ``file`` (the
 recording, relative to the matrix's folder or absolute). Known optional columns: ``section``,
 ``mode`` (``drag`` or ``stop``), ``pressure_bar``, ``temperature_c``, ``speed_kmh`` and
-``rpm`` (the disc speed when there is no tacho). Any other column is kept as text.
+``rpm`` (the disc speed when there is no tacho) and ``mu`` (the friction coefficient the
+dynamometer reports for the application). Any other column is kept as text.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ _NUMBER_RANGES = {
     "temperature_c": (-273.15, True, ">= -273.15 (absolute zero)"),
     "speed_kmh": (0.0, True, ">= 0"),
     "rpm": (0.0, False, "> 0"),
+    "mu": (0.0, True, ">= 0"),
 }
 _NUMBERS = tuple(_NUMBER_RANGES)
 #: A matrix is a few MB of text at most (2,000 rows for a J2521 matrix are 200 kB).
@@ -49,6 +51,8 @@ class Application:
         Brake pressure [bar], temperature [degC] and vehicle speed [km/h]; NaN when not given.
     rpm : float
         Disc speed [rev/min] where there is no tacho; NaN when not given.
+    mu : float
+        Friction coefficient the dynamometer reports for the application [1]; NaN when not given.
     extra : dict of str to str
         Any other column of the matrix, as text.
     """
@@ -61,6 +65,7 @@ class Application:
     temperature_c: float = math.nan
     speed_kmh: float = math.nan
     rpm: float = math.nan
+    mu: float = math.nan
     extra: dict[str, str] = field(default_factory=dict)
 
 
@@ -83,7 +88,7 @@ def read_matrix(path: str | Path) -> tuple[Application, ...]:
         If the file is missing, empty, binary or not UTF-8, lacks the ``application`` or
         ``file`` column, or a row has an empty or repeated id, no file, an unknown mode or a
         condition that is not a finite number in its range (``rpm > 0``, ``pressure_bar`` and
-        ``speed_kmh >= 0``, ``temperature_c >= -273.15``); the message names the line.
+        ``speed_kmh`` and ``mu >= 0``, ``temperature_c >= -273.15``); the message names the line.
 
     Examples
     --------

@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from .._validation import InputError
-from ..measurement.criteria import squeal_criteria
+from ..measurement.squeal.criteria import squeal_criteria
 from .matrix import read_matrix
 from .store import CampaignStore
 from .summary import band_of, campaign_summary, third_octave_bands
@@ -37,8 +37,14 @@ def _analyze_application(item: dict[str, Any]) -> tuple[dict[str, Any], list[dic
     Whatever goes wrong with one application (an unreadable or damaged file, a channel that
     is missing or text, an unforeseen error) makes it a failed application with its reason;
     the campaign goes on with the others.
+
+    ``item``: ``app`` (the application's row: ``application``, ``file``, ...), ``analysis`` (the
+    arguments of :func:`~squealkit.measurement.analyze_recording`), ``bands`` (third-octave bands
+    of the events), optionally ``condition_channels`` and ``open`` (arguments of
+    :func:`~squealkit.measurement.open_recording`: ``fs``, ``scale``, ``units``). The one analysis
+    task of both :func:`run_campaign` and :func:`~squealkit.campaign.analyze_campaign`.
     """
-    from ..measurement import analyze_recording
+    from ..measurement import analyze_recording, open_recording
 
     app, kw, bands = item["app"], item["analysis"], item["bands"]
     row = {**app, "error": None}
@@ -46,7 +52,8 @@ def _analyze_application(item: dict[str, Any]) -> tuple[dict[str, Any], list[dic
         for col, channel in item.get("condition_channels", {}).items():
             if not math.isfinite(row[col]):  # the matrix does not say: the channel's mean over the application
                 row[col] = _channel_mean(app["file"], channel, col)
-        res = analyze_recording(app["file"], **kw)
+        open_kw = {k: v for k, v in item.get("open", {}).items() if v is not None}
+        res = analyze_recording(open_recording(app["file"], **open_kw) if open_kw else app["file"], **kw)
     except Exception as e:  # one application's fault, whatever it is, is recorded, not raised
         row["error"] = _failure(e)
         return row, []
@@ -208,7 +215,7 @@ def run_campaign(
                 continue
             row = {"application": a.application, "file": str(a.file), "section": a.section, "mode": a.mode,
                    "pressure_bar": a.pressure_bar, "temperature_c": a.temperature_c, "speed_kmh": a.speed_kmh,
-                   "criteria": crit.describe(), "file_size": sig[0], "file_mtime_ns": sig[1]}
+                   "mu": a.mu, "criteria": crit.describe(), "file_size": sig[0], "file_mtime_ns": sig[1]}
             kw = dict(kw_base)
             if tacho is not None:
                 kw["tacho"] = tacho

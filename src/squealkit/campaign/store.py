@@ -36,6 +36,7 @@ APPLICATION_COLUMNS = {
     "n_events": "INTEGER", "growth_slope_correlation": "DOUBLE", "rising_fraction": "DOUBLE",
     "runout_phase_deg": "DOUBLE", "mean_rpm": "DOUBLE", "criteria": "VARCHAR", "file_size": "BIGINT",
     "file_mtime_ns": "BIGINT", "error": "VARCHAR", "status": "VARCHAR", "runout_unavailable": "VARCHAR",
+    "mu": "DOUBLE",
 }
 EVENT_COLUMNS = {
     "application": "VARCHAR", "event": "INTEGER", "start_s": "DOUBLE", "end_s": "DOUBLE", "duration_s": "DOUBLE",
@@ -143,7 +144,8 @@ class CampaignStore:
             cols = dict(self.con.execute("SELECT column_name, data_type FROM information_schema.columns "
                                          "WHERE table_schema = 'main' AND table_name = ?", [table]).fetchall())
             want = {k: v.split()[0] for k, v in spec.items()}
-            optional = {"status"} if table == "applications" else set()  # a store written before status
+            # a store written before status, or before the matrix's mu column
+            optional = {"status", "mu"} if table == "applications" else set()
             wrong = sorted(k for k in set(cols) | set(want)
                            if cols.get(k) != want.get(k) and not (k in optional and k not in cols))
             if wrong:
@@ -160,6 +162,8 @@ class CampaignStore:
                          "WHERE status IS NULL")
         # and before the run-out link could be unavailable (then it never was)
         self.con.execute("ALTER TABLE applications ADD COLUMN IF NOT EXISTS runout_unavailable VARCHAR")
+        # and before the matrix's mu column (the dynamometer's friction coefficient per application)
+        self.con.execute("ALTER TABLE applications ADD COLUMN IF NOT EXISTS mu DOUBLE")
         cols = ", ".join(f"{k} {v}" for k, v in EVENT_COLUMNS.items())
         self.con.execute(f"CREATE TABLE IF NOT EXISTS events ({cols})")
         self.con.execute(

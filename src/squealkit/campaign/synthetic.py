@@ -68,7 +68,7 @@ def synthetic_campaign(
     duration, fs : float
         Length [s] and sample rate [Hz] of each recording.
     suffix : str
-        Recording format (any of :data:`squealkit.measurement.writers.FORMATS`).
+        Recording format (any of :data:`squealkit.measurement.formats.writers.FORMATS`).
     stop_share : float
         Share of decelerating stops (the rest are drags).
     seed : int
@@ -107,8 +107,8 @@ def _write_campaign(out: Path, n_applications: int, duration: float, fs: float, 
                     seed: int, level_dba: float, condition_channels: bool) -> dict[str, Any]:
     """Write the campaign into the (staging) folder ``out``; the truth."""
     from ..measurement import synthetic_recording
-    from ..measurement.criteria import P_REF, a_weighting_db
-    from ..measurement.writers import write_recording
+    from ..measurement.formats.writers import write_recording
+    from ..measurement.squeal.criteria import P_REF, a_weighting_db
 
     (out / "recordings").mkdir()
     rng = np.random.default_rng(seed)

@@ -305,8 +305,8 @@ def criteria_options(f: F) -> F:
 
 def criteria_from_options(setup: str | None, band: str | None, threshold_dba: float, time_weighting: str,
                           min_duration: float):
-    """The :class:`~squealkit.measurement.criteria.SquealCriteria` of the criteria options."""
-    from ..measurement.criteria import squeal_criteria
+    """The :class:`~squealkit.measurement.squeal.criteria.SquealCriteria` of the criteria options."""
+    from ..measurement.squeal.criteria import squeal_criteria
 
     band_ = None
     if band is not None:

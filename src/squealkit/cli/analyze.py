@@ -94,9 +94,9 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float | N
     others: it is left out of the summary and listed on stderr at the end, and the
     exit code is 1 (2 when none could be analysed).
     """
+    from ..campaign.recordings import summarize_campaign
     from ..io import save_dataset, write_text
     from ..measurement import open_recording
-    from ..measurement.campaign import summarize_campaign
 
     crit_kw, scale_map, unit_map = recording_kwargs_from_options(
         rpm=rpm, tacho=tacho, tacho_kind=tacho_kind, pulses_per_rev=pulses_per_rev, probe_offset_deg=probe_offset_deg,
@@ -195,13 +195,14 @@ def _print_campaign(campaign) -> None:
 
 
 def _campaign_on_cluster(files, scheduler: str, as_json: bool, summary_path: Path | None, **kwargs) -> None:
+    from ..campaign.recordings import analyze_campaign
     from ..io import write_text
-    from ..measurement.campaign import analyze_campaign
     from ..scale import cluster_client
 
     with cluster_client(scheduler) as client, \
             progress_callback("recordings", enabled=not as_json and len(files) > 1) as cb:
-        campaign = analyze_campaign(list(files), client=client, progress=cb, **kwargs)
+        # as the local path: analyze needs a disc speed (the campaign command is the one without)
+        campaign = analyze_campaign(list(files), client=client, progress=cb, require_runout=True, **kwargs)
     if summary_path is not None:
         write_text(summary_path, campaign.to_csv())
     if as_json:
@@ -254,7 +255,7 @@ def _write_plots(src, res, mic: str, displacement: str, stem: Path, suffix: str 
     import numpy as np
 
     from ..io import save_figure
-    from ..measurement import recording_dataset
+    from ..measurement import measurement_signals, recording_dataset
     from ..plotting import measurement as mp
 
     names = [src.resolve(mic), src.resolve(displacement)]
@@ -270,7 +271,7 @@ def _write_plots(src, res, mic: str, displacement: str, stem: Path, suffix: str 
     rec = recording_dataset({n: np.concatenate(v) for n, v in parts.items()}, src.fs,
                             {n: src.units.get(n, "") for n in names},
                             {"synthetic": int(bool(res.attrs.get("synthetic")))})
-    figs = mp.measurement_figures(rec, res, mic=names[0], displacement=names[1])
+    figs = mp.measurement_figures(res, measurement_signals(rec, res, mic=names[0], displacement=names[1]))
     figs["event_phase"] = mp.event_phase_plot(res)  # every event's place on the disc
     for key, fig in figs.items():
         save_figure(fig, stem.parent / f"{stem.name}_{key}{suffix}")

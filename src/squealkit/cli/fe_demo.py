@@ -26,15 +26,17 @@ def fe_demo(n_theta: int, n_z: int, out: Path, as_json: bool) -> None:
       squealkit fe-demo --size 48 --out brake
     """
     from .._validation import InputError
+    from ..fe.demo import build_fe_demo, write_fe_demo
     from ..io import check_output, written_path
-    from ..models.fe_demo import build_fe_demo, write_fe_demo
 
     if n_theta % 2:
         raise InputError(f"--size={n_theta} must be even.")
     check_output(out, directory=True)  # before the work: a new folder, or one squealkit wrote
     model = build_fe_demo(n_theta=n_theta, n_z=n_z)
     toml = write_fe_demo(model, out)
-    info = {"config": str(toml), "n_dofs": int(model["n_dofs"]), "omega_ref": model["omega_ref"],
+    # omega_ref: the older key of disc_speed_ref, printed too for one release
+    info = {"config": str(toml), "n_dofs": int(model["n_dofs"]), "disc_speed_ref": model["disc_speed_ref"],
+            "omega_ref": model["disc_speed_ref"],
             "mu_ref": model["mu_ref"], "f_ref": model["f_ref"],
             "files": sorted(p.name for p in written_path(out).iterdir() if not p.name.startswith("."))}
     if as_json:

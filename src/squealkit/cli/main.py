@@ -41,6 +41,7 @@ COMMANDS: dict[str, str] = {
     "montecarlo": "squealkit.cli.montecarlo:montecarlo",
     "synth": "squealkit.cli.synth:synth",
     "campaign": "squealkit.cli.campaign:campaign",
+    "correlate": "squealkit.cli.correlate:correlate",
     "limitcycle": "squealkit.cli.limitcycle:limitcycle",
 }
 

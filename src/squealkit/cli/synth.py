@@ -57,8 +57,8 @@ def synth(out: Path, seed: int, duration: float, fs: float, rpm: float, rpm_end:
       squealkit synth stop.mf4 --rpm 900 --rpm-end 300
       squealkit analyze stop.mf4 --mic mic --displacement displacement --tacho tacho --radius 0.05
     """
+    from ..measurement.formats.writers import FORMATS, write_recording_blocks
     from ..measurement.synthetic import synthetic_attrs, synthetic_source
-    from ..measurement.writers import FORMATS, write_recording_blocks
 
     if n_campaign is not None:
         from ..campaign import synthetic_campaign

@@ -1,1 +1,25 @@
-"""The finite element side of squealkit: DOF maps, meshes and readers of industrial FE exports."""
+"""The finite element side of squealkit, in one place.
+
+- :mod:`~squealkit.fe.model`: :class:`FEModel`, a brake given by its sparse matrices
+  ``M, D1, DG, DR, D4, K1, KR, KGeo``, with ``C(disc_speed, mu)`` and ``K(disc_speed, mu)``;
+- :mod:`~squealkit.fe.readers`: the exported matrices read from files, one module per format
+  behind one table of formats (:data:`~squealkit.fe.readers.READERS`);
+- :mod:`~squealkit.fe.demo`: the built-in disc and pads (scikit-fem), with its mesh.
+
+The numerical engines are in :mod:`squealkit.solvers`, the analyses (maps, onset, modes of FE
+models) in :mod:`squealkit.stability`.
+"""
+
+from .model import FE_MATRICES, FEModel, rpm_to_disc_speed, rpm_to_omega
+from .readers import READERS, load_fe_model, read_matrices, register_reader
+
+__all__ = [
+    "FE_MATRICES",
+    "READERS",
+    "FEModel",
+    "load_fe_model",
+    "read_matrices",
+    "register_reader",
+    "rpm_to_disc_speed",
+    "rpm_to_omega",
+]

@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from .._validation import InputError
 
-__all__ = ["SYMMETRIC_MATRICES", "DofMap", "LabelledMatrix", "assemble_labelled", "place_labelled"]
+__all__ = ["SYMMETRIC_MATRICES", "DofMap", "LabelledMatrix", "assemble_labelled"]
 
 #: FE matrices symmetric by definition: a file giving one triangle of these is mirrored.
 SYMMETRIC_MATRICES: tuple[str, ...] = ("M", "D1", "D4", "K1", "KGeo")
@@ -254,45 +254,3 @@ def assemble_labelled(found: Mapping[str, LabelledMatrix]) -> tuple[DofMap, dict
     nodes, dofs = zip(*(m.label_sets() for m in found.values()), strict=True)
     dof_map = DofMap.from_labels(np.concatenate(nodes), np.concatenate(dofs))
     return dof_map, {name: m.to_sparse(dof_map, name) for name, m in found.items()}
-
-
-def place_labelled(mats: Mapping[str, Any], *, mesh: Any = None) -> tuple[DofMap | None, dict[str, Any]]:
-    """The model's matrices in one DOF map when they come from labelled files, else as given.
-
-    Parameters
-    ----------
-    mats : mapping of str to LabelledMatrix or sparse matrix
-        FE matrix name -> the matrix its file gave.
-    mesh : FEMesh, optional
-        The model's mesh: checked to carry some of the DOFs (the right mesh for these matrices).
-
-    Returns
-    -------
-    (DofMap or None, dict)
-        The map (None for unlabelled files) and the matrices in its numbering.
-
-    Raises
-    ------
-    InputError
-        When labelled and unlabelled files are mixed (their numberings cannot be matched), or
-        equation-numbered files (Abaqus COORDINATE, Harwell-Boeing without its mapping) with
-        node-labelled ones.
-    """
-    labelled = {k: v for k, v in mats.items() if isinstance(v, LabelledMatrix)}
-    if not labelled:
-        return None, dict(mats)
-    if len(labelled) != len(mats):
-        plain = [k for k in mats if k not in labelled]
-        raise InputError(f"Matrices {', '.join(labelled)} have node/DOF labels but {', '.join(plain)} do not: their "
-                         "numberings cannot be matched; export all of them in one labelled format.")
-    kinds = {k: bool(v.equations) for k, v in labelled.items()}
-    if len(set(kinds.values())) > 1:
-        eq = [k for k, v in kinds.items() if v]
-        raise InputError(f"Matrices {', '.join(eq)} are numbered by equation (no node labels) but the others by "
-                         "node and DOF: their numberings cannot be matched.")
-    dof_map, placed = assemble_labelled(labelled)
-    from .mesh import FEMesh
-
-    if isinstance(mesh, FEMesh) and not any(kinds.values()):
-        mesh.dof_points(dof_map)  # one line when the mesh holds none of the DOFs
-    return dof_map, placed

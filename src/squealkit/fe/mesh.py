@@ -25,9 +25,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._validation import InputError
+from ._bulk import bulk_cards, field_int, field_real
 from .dofmap import DofMap
 
-__all__ = ["FEMesh", "demo_dof_map", "demo_mesh", "read_mesh", "write_abaqus_inp"]
+__all__ = ["FEMesh", "abaqus_inp_text", "read_mesh", "write_abaqus_inp"]
 
 #: Nastran element cards: (meshio cell type, number of nodes); CHEXA/CPENTA/CTETRA by their node count.
 _NASTRAN_ELEMENTS = {
@@ -247,8 +248,6 @@ def _points_of(mesh: FEMesh, node_table: NDArray[np.int64], name: str, kind: str
 
 def _read_bdf(p: Path) -> FEMesh:
     """GRID and element cards of Nastran bulk data."""
-    from .readers.nastran import _int, _real, bulk_cards
-
     try:
         text = p.read_text(encoding="latin-1")
     except OSError as e:
@@ -263,8 +262,8 @@ def _read_bdf(p: Path) -> FEMesh:
             if card[2].strip() not in ("", "0"):
                 raise InputError(f"{where}: GRID {card[1].strip()} is given in coordinate system {card[2].strip()}; "
                                  "only basic coordinates (CP blank or 0) are read.")
-            labels.append(_int(card[1], f"{where} (GRID ID)"))
-            coords.append([_real(x, f"{where} (GRID X)") if x.strip() else 0.0 for x in card[3:6]])
+            labels.append(field_int(card[1], f"{where} (GRID ID)"))
+            coords.append([field_real(x, f"{where} (GRID X)") if x.strip() else 0.0 for x in card[3:6]])
             continue
         kind, per = _NASTRAN_ELEMENTS[card[0]]
         nodes = [x for x in card[3:] if x.strip()]
@@ -277,7 +276,7 @@ def _read_bdf(p: Path) -> FEMesh:
             nodes = card[3:3 + per]
         if len(nodes) < per:
             raise InputError(f"{where}: {card[0]} {card[1].strip()} has {len(nodes)} nodes, needs {per}.")
-        elements.setdefault(kind, []).append([_int(x, f"{where} ({card[0]} node)") for x in nodes[:per]])
+        elements.setdefault(kind, []).append([field_int(x, f"{where} ({card[0]} node)") for x in nodes[:per]])
     if not labels:
         raise InputError(f"{p.name}: no GRID cards; not a Nastran bulk data file with a mesh.")
     mesh = FEMesh(np.array(coords), np.array(labels), (), source=p.name)
@@ -304,35 +303,15 @@ def _read_cdb(p: Path) -> FEMesh:
     return FEMesh(np.asarray(grid.points), np.asarray(grid.point_data["ansys_node_num"]), cells, source=p.name)
 
 
-# ----------------------------------------------------------------------------- the demo and writing
-
-
-def demo_mesh(demo: Any) -> FEMesh:
-    """The mesh of the built-in FE brake (:func:`~squealkit.models.fe_demo.build_fe_demo`), nodes labelled 1..N.
-
-    Every scalar node of the quadratic elements is a point (``node_points``), labelled ``k + 1``
-    for the demo's node k, so a DOF ``node<k>.<x|y|z>`` is ``(k + 1, 1|2|3)`` in the DOF map
-    (:func:`demo_dof_map`); the elements are the 8-vertex hexahedra.
-    """
-    pts = np.asarray(demo["node_points"], dtype=np.float64)
-    hexes = np.asarray(demo["mesh"]["cells"]["hexahedron"], dtype=np.int64)
-    return FEMesh(pts, np.arange(1, len(pts) + 1), (("hexahedron", hexes),), source="built-in FE brake")
-
-
-def demo_dof_map(demo: Any) -> DofMap:
-    """The DOF map of the built-in FE brake: unknown i is ``(dof_node[i] + 1, dof_component[i] + 1)``."""
-    return DofMap(np.asarray(demo["dof_node"]) + 1, np.asarray(demo["dof_component"]) + 1)
+# ----------------------------------------------------------------------------- writing
 
 
 _INP_TYPES = {"hexahedron": "C3D8", "hexahedron20": "C3D20", "tetra": "C3D4", "tetra10": "C3D10",
               "wedge": "C3D6", "quad": "S4", "triangle": "S3", "line": "B31"}
 
 
-def write_abaqus_inp(mesh: FEMesh, path: str | Path) -> Path:
-    """Write a mesh as an Abaqus input deck (``*NODE``, ``*ELEMENT``), atomically; returns the path."""
-    from ..io import atomic_path
-
-    out = Path(path)
+def abaqus_inp_text(mesh: FEMesh) -> str:
+    """A mesh as the text of an Abaqus input deck (``*NODE``, one ``*ELEMENT`` block per cell type)."""
     rows = ["** nodes and elements written by squealkit", "*NODE"]
     rows += [f"{n}, {x!r}, {y!r}, {z!r}" for n, (x, y, z) in zip(mesh.node_labels.tolist(), mesh.points.tolist(),
                                                                strict=True)]
@@ -344,6 +323,15 @@ def write_abaqus_inp(mesh: FEMesh, path: str | Path) -> Path:
         for e in mesh.node_labels[conn].tolist():
             rows.append(", ".join(map(str, [label, *e])))
             label += 1
+    return "\n".join(rows) + "\n"
+
+
+def write_abaqus_inp(mesh: FEMesh, path: str | Path) -> Path:
+    """Write a mesh as an Abaqus input deck (:func:`abaqus_inp_text`), atomically; returns the path."""
+    from ..io import atomic_path
+
+    out = Path(path)
+    text = abaqus_inp_text(mesh)
     with atomic_path(out) as tmp:
-        Path(tmp).write_text("\n".join(rows) + "\n")
+        Path(tmp).write_text(text)
     return out

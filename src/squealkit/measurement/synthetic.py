@@ -22,8 +22,8 @@ import xarray as xr
 from numpy.typing import NDArray
 
 from .._validation import InputError, check_budget, check_memory, validate_fs, validate_plausible, validate_positive
-from .criteria import P_REF, a_weighting_db, exponential_average
-from .readers import DEFAULT_BLOCK, RecordingSource, recording_dataset
+from .formats import DEFAULT_BLOCK, RecordingSource, recording_dataset
+from .squeal.criteria import P_REF, a_weighting_db, exponential_average
 
 __all__ = ["SyntheticSource", "synthetic_attrs", "synthetic_recording"]
 
@@ -37,7 +37,7 @@ SECONDS_PER_SAMPLE = 1e-7
 class SyntheticSource:
     """A synthetic recording generated block by block (bounded memory for any duration).
 
-    Same block interface as :class:`~squealkit.measurement.readers.RecordingSource`.
+    Same block interface as :class:`~squealkit.measurement.formats.readers.RecordingSource`.
     Build it with :func:`synthetic_source` (whose parameters these fields hold, in SI units);
     see the module docstring for the physics.
 
@@ -386,7 +386,7 @@ def synthetic_source(
     -------
     SyntheticSource
         The recording, with the block interface of
-        :class:`~squealkit.measurement.readers.RecordingSource` and its known truth
+        :class:`~squealkit.measurement.formats.readers.RecordingSource` and its known truth
         (:meth:`SyntheticSource.truth`).
 
     Raises
@@ -489,7 +489,7 @@ def synthetic_attrs(src: SyntheticSource, threshold_dba: float = 70.0, squeal_on
     """The attributes of a synthetic recording: the SYNTHETIC label, its settings and its truth.
 
     Computed block by block (bounded memory), so that a long recording can be written as it is
-    generated (:func:`~squealkit.measurement.writers.write_recording_blocks`).
+    generated (:func:`~squealkit.measurement.formats.writers.write_recording_blocks`).
 
     Parameters
     ----------

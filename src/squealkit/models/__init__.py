@@ -1,5 +1,7 @@
 """Models of friction-coupled brake systems (paper §2) and their parameters (§3, §5.1)."""
 
+from ..fe.model import FEModel
+from ..fe.readers import load_fe_model
 from ._base import FrictionModel, SystemMatrices
 from .config import (
     PRESETS,
@@ -11,8 +13,6 @@ from .config import (
     model_from_dict,
     parse_assignments,
 )
-from .fe import FEModel
-from .fe_readers import load_fe_model
 from .friction import Stribeck
 from .hoffmann import Hoffmann2002
 from .matrix import MatrixModel

@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import (
     InputError,
+    register_model_type,
     validate_angle,
     validate_finite,
     validate_positive,
@@ -600,3 +601,6 @@ def resolve_damped(model: Any, damped: bool | None, *, stacklevel: int = 3) -> b
     if names:
         warnings.warn(_DAMPING_LEFT_OUT.format(names=names), UserWarning, stacklevel=stacklevel)
     return False
+
+
+register_model_type("friction", FrictionModel)  # validate_model knows it without importing models/

@@ -19,11 +19,11 @@ A model file (all sections optional; SI units, angles in rad or as ``*_deg`` in 
     [matrices]                 # model = "matrix": M, K0 (required), C, Kn, Kf, F0, fn, ff
     M = [[1.0, 0.0], [0.0, 1.0]]
 
-    [fe]                       # model = "fe": exported FE matrices (see models/fe.py)
+    [fe]                       # model = "fe": exported FE matrices (see squealkit/fe/)
     file = "brake.mat"         # all matrices in one file (.mat v5/v7.3, .op4, Nastran DMIG .bdf/.pch), or
     # files = {M = "M.mtx", K1 = "K1.mtx", KR = "KR.mtx"}     # one file per matrix
     names = {M = "MAA"}        # the names in the file where they differ (optional)
-    omega_ref = 1.0            # rad/s; mu_ref, f_ref likewise (defaults 1)
+    disc_speed_ref = 1.0       # rad/s (formerly omega_ref); mu_ref, f_ref likewise (defaults 1)
     mesh = "brake.inp"         # optional: the mesh (.inp, .bdf, .cdb or meshio's), for modes --vtk
     dof_names = "dof_names.txt"  # optional: one DOF name per line (node12.x: mesh point 12, x)
     omit = ["DG"]              # matrices read but left out of the assembly (optional)
@@ -39,14 +39,15 @@ from __future__ import annotations
 import difflib
 import math
 import tomllib
+import warnings
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
 from .._units import parse_quantity
 from .._validation import InputError, validate_finite
+from ..fe.model import FEModel
 from ._base import FrictionModel
-from .fe import FEModel
 from .hoffmann import Hoffmann2002
 from .matrix import MatrixModel
 from .pin_on_disc import PinOnDisc3DOF
@@ -75,8 +76,9 @@ _MODEL_KINDS: dict[str, type[FrictionModel]] = {
 _PRESET_KIND = {"lv2013": "pin_on_disc", "hoffmann2002": "hoffmann"}
 _TOP_KEYS = {"model", "preset", "parameters", "rig", "matrices", "fe", "description"}
 #: Tables a model file may hold for other commands (``montecarlo`` reads ``[uncertain]``, ``report``
-#: reads ``[report]``: see :mod:`squealkit.report.settings`).
-_OTHER_TABLES = {"uncertain", "report"}
+#: reads ``[report]``: see :mod:`squealkit.report.settings`; ``correlate`` reads ``[correlate]``:
+#: see :mod:`squealkit.correlate.conditions`).
+_OTHER_TABLES = {"uncertain", "report", "correlate"}
 #: A model file is text of a few kB (large matrices go in the files an [fe] table names).
 _MAX_FILE_BYTES = 16 * 2**20
 
@@ -87,8 +89,8 @@ _SCHEMA: dict[str, dict[str, type | tuple[type, ...]]] = {
     "": {"model": str, "preset": str, "description": str, "parameters": Mapping, "rig": Mapping,
          "matrices": Mapping, "fe": Mapping, "uncertain": Mapping},
     "fe": {"file": str, "files": Mapping, "files.*": str, "names": Mapping, "names.*": str,
-           "omega_ref": _NUMBER, "mu_ref": _NUMBER, "f_ref": _NUMBER, "mesh": str, "dof_names": str,
-           "omit": (list, str)},
+           "disc_speed_ref": _NUMBER, "omega_ref": _NUMBER, "mu_ref": _NUMBER, "f_ref": _NUMBER, "mesh": str,
+           "dof_names": str, "omit": (list, str)},
     "rig": {"*": (*_NUMBER, str)},
     "parameters": {"*": (*_NUMBER, str)},
 }
@@ -192,14 +194,20 @@ def _parameters(doc: Mapping[str, Any], overrides: Mapping[str, Any] | None) -> 
 
 
 def _fe_from_table(table: Any, base_dir: Path | None) -> FEModel:
-    from .fe_readers import load_fe_model
+    from ..fe.readers import load_fe_model
 
     if not isinstance(table, Mapping):
         raise InputError('An FE model needs an [fe] table with file = "..." or files = {M = "...", ...}.')
     for key in table:
         if key not in _FE_KEYS:
             raise InputError(f"Unknown [fe] key {key!r}; known: {', '.join(_FE_KEYS)}.")
-    refs = {k: validate_finite(k, table[k]) for k in ("omega_ref", "mu_ref", "f_ref") if k in table}
+    refs = {k: validate_finite(k, table[k]) for k in ("disc_speed_ref", "mu_ref", "f_ref") if k in table}
+    if "omega_ref" in table:  # the disc speed's older name (omega is an eigenfrequency elsewhere)
+        if "disc_speed_ref" in table:
+            raise InputError("[fe] has both omega_ref (deprecated) and disc_speed_ref; give disc_speed_ref only.")
+        warnings.warn("[fe] omega_ref is deprecated; use disc_speed_ref (same meaning).", DeprecationWarning,
+                      stacklevel=3)
+        refs["disc_speed_ref"] = validate_finite("omega_ref", table["omega_ref"])
     omit = table.get("omit", [])
     if isinstance(omit, str):
         omit = [omit]

@@ -11,6 +11,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from .._validation import InputError
+
 __all__ = [
     "band_vs_pressure_plot",
     "event_phase_plot",
@@ -19,7 +21,6 @@ __all__ = [
     "polar_plot",
     "runout_plot",
     "spectrogram_plot",
-    "squeal_views",
     "time_history_plot",
 ]
 
@@ -39,6 +40,38 @@ def _window(rec: xr.Dataset, t_range: tuple[float, float] | None) -> xr.Dataset:
     return rec if t_range is None else rec.sel(time=slice(*t_range))
 
 
+def _is_signals(ds: Any) -> bool:
+    return isinstance(ds, xr.Dataset) and ds.attrs.get("kind") == "measurement_signals"
+
+
+def _signals(func: str, ds: xr.Dataset, legacy: dict[str, Any], **defaults: Any) -> xr.Dataset:
+    """``ds`` if it holds the signals; a recording (deprecated call form) is filtered by
+    :func:`_legacy_signals`. The old call's keywords apply to a recording only."""
+    if _is_signals(ds):
+        if legacy:
+            raise InputError(f"{func}() takes {', '.join(sorted(legacy))} with a recording only; the signals "
+                             "already carry them (see figure_signals).")
+        return ds
+    return _legacy_signals(func, ds, **{**defaults, **legacy})
+
+
+def _legacy_signals(func: str, rec: xr.Dataset, **kw: Any) -> xr.Dataset:
+    """The signals of a recording passed where the figure now takes them (deprecated call form):
+    computed by :func:`squealkit.measurement.figure_signals`, the one place that filters them."""
+    import warnings
+
+    from ..measurement.analysis.views import figure_signals
+
+    warnings.warn(f"{func}(recording, ...) is deprecated; use {func}(figure_signals(recording, ...)) or the "
+                  "result's signals (analyze_recording(..., keep_signals=True)) (same meaning).",
+                  DeprecationWarning, stacklevel=3)
+    return figure_signals(rec, **kw)
+
+
+def _t_sel(t: np.ndarray, t_range: tuple[float, float] | None) -> Any:
+    return slice(None) if t_range is None else (t >= t_range[0]) & (t <= t_range[1])
+
+
 def time_history_plot(rec: xr.Dataset, *, mic: str = "mic", displacement: str = "displacement",
                       t_range: tuple[float, float] | None = None):
     """Sound pressure and disc displacement against time (paper Figs. 6-7; zoom: Figs. 10-11).
@@ -46,9 +79,12 @@ def time_history_plot(rec: xr.Dataset, *, mic: str = "mic", displacement: str = 
     Parameters
     ----------
     rec : xarray.Dataset
-        The recording (:func:`squealkit.measurement.read_recording`), with attribute ``fs`` [Hz].
+        The signals of :func:`squealkit.measurement.figure_signals` (or ``result.signals``), or
+        the recording itself (:func:`squealkit.measurement.read_recording`): both channels are drawn
+        as recorded.
     mic, displacement : str, default "mic", "displacement"
-        Names of the microphone [Pa] and displacement [m] channels.
+        Names of the microphone [Pa] and displacement [m] channels in a recording (the signals
+        name them ``mic`` and ``displacement``).
     t_range : (float, float), optional
         Time window [s] drawn (default: all).
 
@@ -56,6 +92,8 @@ def time_history_plot(rec: xr.Dataset, *, mic: str = "mic", displacement: str = 
     -------
     matplotlib.figure.Figure
     """
+    if _is_signals(rec):
+        mic, displacement = "mic", "displacement"
     r = _window(rec, t_range)
     fig = _figure(figsize=(8, 5))
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
@@ -68,127 +106,114 @@ def time_history_plot(rec: xr.Dataset, *, mic: str = "mic", displacement: str = 
     return fig
 
 
-def spectrogram_plot(rec: xr.Dataset, result: Any = None, *, mic: str = "mic", displacement: str = "displacement",
-                     nperseg: int = 1024, freq_max: float = 10000.0):
+def spectrogram_plot(signals: xr.Dataset, result: Any = None, **legacy: Any):
     """Spectrograms of both channels in dB (paper Figs. 8-9), with the squeal ridge if given.
 
     Parameters
     ----------
-    rec : xarray.Dataset
-        The recording (:func:`squealkit.measurement.read_recording`), with attribute ``fs`` [Hz].
+    signals : xarray.Dataset
+        From :func:`squealkit.measurement.figure_signals` or ``result.signals``: its
+        ``mic_level`` and ``displacement_level`` [dB] are drawn.
     result : MeasurementResult, optional
         Its analysis: the ridge of the frames above the threshold is drawn on the sound.
-    mic, displacement : str, default "mic", "displacement"
-        Names of the microphone [Pa] and displacement [m] channels.
-    nperseg : int, default 1024
-        Frame length [samples] (Hann window).
-    freq_max : float, default 10000.0
-        Highest frequency drawn [Hz].
+    **legacy
+        ``mic``, ``displacement``, ``nperseg``, ``freq_max`` of the deprecated call with a
+        recording instead of its signals.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
-    from ..measurement.spectral import P_REF, spectrogram
-
-    fs = float(rec.attrs["fs"])
+    signals = _signals("spectrogram_plot", signals, legacy, rpm=None)
     fig = _figure(figsize=(8, 6))
     axes = fig.subplots(2, 1, sharex=True)
-    for ax, name, ref, unit in ((axes[0], mic, P_REF, "dB re 20 uPa"), (axes[1], displacement, 1e-12, "dB re 1 pm")):
-        sg = spectrogram(rec[name].values, fs, nperseg=nperseg, name=name).sel(freq=slice(0, freq_max))
-        db = 10 * np.log10(np.maximum(sg.values.T, 1e-30) / ref**2)
+    names = (signals.attrs.get("mic_channel", "mic"), signals.attrs.get("displacement_channel", "displacement"))
+    for ax, var, name in ((axes[0], "mic_level", names[0]), (axes[1], "displacement_level", names[1])):
+        db = signals[var].values
         # rasterized: a vector mesh of every time-frequency cell made a 15-30 MB SVG
-        m = ax.pcolormesh(sg["time"], sg["freq"], db, shading="auto", vmin=np.percentile(db, 5), rasterized=True)
-        fig.colorbar(m, ax=ax, label=unit)
+        m = ax.pcolormesh(signals["frame_time"], signals["freq"], db, shading="auto", vmin=np.percentile(db, 5),
+                          rasterized=True)
+        fig.colorbar(m, ax=ax, label=signals[var].attrs["units"])
         ax.set_ylabel(f"{name}\nfrequency [Hz]")
     if result is not None and result.squeal:
         fr = result.frames
         loud = fr["level_dba"] >= result.settings.threshold_dba
         axes[0].plot(fr["time"][loud], fr["ridge_freq"][loud], ".", ms=1.5, color="w", label="ridge")
-    t = rec["time"].values
+    t = signals["time"].values
     axes[1].set_xlim(float(t[0]), float(t[-1]))  # the recording, not the ridge's frames beyond it (a blank strip)
     axes[1].set_xlabel("time [s]")
-    axes[0].set_title("Spectrograms" + _tag(rec))
+    axes[0].set_title("Spectrograms" + _tag(signals))
     return fig
 
 
-def runout_plot(rec: xr.Dataset, *, displacement: str = "displacement", rpm: float, lowpass_freq: float = 1000.0,
-                macro_orders: int = 10, t_range: tuple[float, float] | None = None):
+def runout_plot(signals: xr.Dataset, *, t_range: tuple[float, float] | None = None, **legacy: Any):
     """Low-passed displacement with its macro and micro run-out (paper Fig. 12).
 
     Parameters
     ----------
-    rec : xarray.Dataset
-        The recording (:func:`squealkit.measurement.read_recording`), with attribute ``fs`` [Hz].
-    displacement : str, default "displacement"
-        Name of the displacement channel [m].
-    rpm : float
-        Disc speed [rev/min].
-    lowpass_freq : float, default 1000.0
-        Corner [Hz] of the low-pass that keeps the surface (:func:`~squealkit.measurement.split_runout`).
-    macro_orders : int, default 10
-        Highest revolution order counted as macro run-out.
+    signals : xarray.Dataset
+        From :func:`squealkit.measurement.figure_signals` or ``result.signals``: its
+        ``runout_lowpass``, ``runout_macro`` and ``runout_micro`` [m] are drawn.
     t_range : (float, float), optional
         Time window [s] drawn (default: all).
+    **legacy
+        ``displacement``, ``rpm``, ``lowpass_freq``, ``macro_orders`` of the deprecated call with a
+        recording instead of its signals.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
-    from ..measurement.runout import split_runout
-
-    fs = float(rec.attrs["fs"])
-    sro, macro, micro = split_runout(rec[displacement].values, fs, rpm, lowpass_freq=lowpass_freq,
-                                     macro_orders=macro_orders)
-    t = rec["time"].values
-    sel = slice(None) if t_range is None else (t >= t_range[0]) & (t <= t_range[1])
+    signals = _signals("runout_plot", signals, legacy)
+    a = signals.attrs
+    t = signals["time"].values
+    sel = _t_sel(t, t_range)
     fig = _figure(figsize=(8, 4))
     ax = fig.subplots()
-    ax.plot(t[sel], sro[sel] * 1e6, lw=0.8, label=f"low-pass {lowpass_freq:g} Hz")
-    ax.plot(t[sel], macro[sel] * 1e6, lw=1.2, label=f"macro (orders <= {macro_orders})")
-    ax.plot(t[sel], micro[sel] * 1e6, lw=0.8, label="micro")
+    ax.plot(t[sel], signals["runout_lowpass"].values[sel] * 1e6, lw=0.8, label=f"low-pass {a['lowpass_freq']:g} Hz")
+    ax.plot(t[sel], signals["runout_macro"].values[sel] * 1e6, lw=1.2,
+            label=f"macro (orders <= {a['macro_orders']})")
+    ax.plot(t[sel], signals["runout_micro"].values[sel] * 1e6, lw=0.8, label="micro")
     ax.set_xlabel("time [s]")
     ax.set_ylabel("run-out [um]")
     ax.legend(loc="upper right")
-    ax.set_title("Disc surface run-out" + _tag(rec))
+    ax.set_title("Disc surface run-out" + _tag(signals))
     return fig
 
 
-def band_vs_pressure_plot(rec: xr.Dataset, *, mic: str = "mic", displacement: str = "displacement",
-                          band: tuple[float, float] = (1000.0, 2500.0), t_range: tuple[float, float] | None = None):
-    """Band-passed displacement (1000-2500 Hz) against the sound pressure (paper Fig. 13).
+def band_vs_pressure_plot(signals: xr.Dataset, *, t_range: tuple[float, float] | None = None, **legacy: Any):
+    """Band-passed displacement against the sound pressure (paper Fig. 13: 1000-2500 Hz).
 
     Parameters
     ----------
-    rec : xarray.Dataset
-        The recording (:func:`squealkit.measurement.read_recording`), with attribute ``fs`` [Hz].
-    mic, displacement : str, default "mic", "displacement"
-        Names of the microphone [Pa] and displacement [m] channels.
-    band : (float, float), default (1000.0, 2500.0)
-        ``(freq_lower, freq_upper)`` [Hz] of the displacement's band-pass (the paper's Fig. 13).
+    signals : xarray.Dataset
+        From :func:`squealkit.measurement.figure_signals` or ``result.signals``: its ``mic`` [Pa]
+        and ``displacement_band`` [m] are drawn.
     t_range : (float, float), optional
         Time window [s] drawn (default: all).
+    **legacy
+        ``mic``, ``displacement``, ``band`` of the deprecated call with a recording instead of its
+        signals.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
-    from ..measurement.filters import bandpass
-
-    fs = float(rec.attrs["fs"])
-    qb = bandpass(rec[displacement].values, band[0], band[1], fs)
-    t = rec["time"].values
-    sel = slice(None) if t_range is None else (t >= t_range[0]) & (t <= t_range[1])
+    signals = _signals("band_vs_pressure_plot", signals, legacy, rpm=None)
+    band = (signals.attrs["freq_lower"], signals.attrs["freq_upper"])
+    t = signals["time"].values
+    sel = _t_sel(t, t_range)
     fig = _figure(figsize=(8, 5))
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
-    ax1.plot(t[sel], rec[mic].values[sel], lw=0.5)
+    ax1.plot(t[sel], signals["mic"].values[sel], lw=0.5)
     ax1.set_ylabel("sound pressure [Pa]")
-    ax2.plot(t[sel], qb[sel] * 1e6, lw=0.5, color="C1", label=f"band-passed {band[0]:.0f}-{band[1]:.0f} Hz")
+    ax2.plot(t[sel], signals["displacement_band"].values[sel] * 1e6, lw=0.5, color="C1",
+             label=f"band-passed {band[0]:.0f}-{band[1]:.0f} Hz")
     # the band goes in the legend: in the axis label it made a label longer than the panel (issue 27)
     ax2.set_ylabel("displacement [um]")
     ax2.legend(loc="upper right", fontsize=8)
     ax2.set_xlabel("time [s]")
-    ax1.set_title("Vibration band against sound pressure" + _tag(rec))
+    ax1.set_title("Vibration band against sound pressure" + _tag(signals))
     fig.align_ylabels([ax1, ax2])
     return fig
 
@@ -319,82 +344,67 @@ def event_phase_plot(result: Any, ax: Any = None):
     return fig
 
 
-def squeal_views(result: Any, t_end: float, *, revolutions: float = 3.0) -> dict[str, Any]:
-    """Where the figures look: a zoom over ``revolutions`` turns at the actual speed from the squeal's
-    onset, the vibration band around the detected squeal frequency, the spectrogram's top.
-
-    Without squeal: the first revolutions from the start, the paper's 1000-2500 Hz band (Fig. 13).
-
-    Parameters
-    ----------
-    result : MeasurementResult
-        A result of :func:`squealkit.measurement.analyze_recording`.
-    t_end : float
-        End of the recording [s]; the zoom stops there.
-    revolutions : float, default 3.0
-        Length of the zoom in disc revolutions.
-
-    Returns
-    -------
-    dict
-        ``zoom``: ``(t0, t1)`` [s]; ``band``: ``(freq_lower, freq_upper)`` [Hz] around the squeal
-        frequency ``f`` (``max(lowpass_freq, 0.6 f)`` to ``min(1.25 f, 0.45 fs)``); ``freq_max``:
-        top of the spectrogram [Hz].
-    """
-    fr = result.frames
-    fs = result.fs
-    t = fr["time"].values
-    rpm = fr["rpm"].values if "rpm" in fr else np.full(t.size, result.settings.rpm)
-    f_sq = result.squeal_frequency_hz
-    if f_sq is not None:
-        loud = np.flatnonzero(fr["leq_dba"].values >= result.settings.threshold_dba)
-        i = int(loud[0]) if loud.size else int(np.argmax(fr["leq_dba"].values))
-        turn = 60.0 / float(rpm[i])
-        t0 = max(0.0, float(t[i]) - 0.5 * turn)
-        band = (max(result.settings.lowpass_freq, 0.6 * f_sq), min(1.25 * f_sq, 0.45 * fs))
-        freq_max = min(0.5 * fs, max(10000.0, 2.5 * f_sq))
-    else:
-        turn = 60.0 / float(rpm[0])
-        t0, band, freq_max = 0.0, (1000.0, 2500.0), min(10000.0, 0.5 * fs)
-    t1 = min(t_end, t0 + revolutions * turn)
-    return {"zoom": (t0, t1), "band": band, "freq_max": freq_max}
-
-
-def measurement_figures(rec: xr.Dataset, result: Any, *, mic: str = "mic", displacement: str = "displacement",
-                        zoom: tuple[float, float] | None = None) -> dict[str, Any]:
+def measurement_figures(result: Any, signals: xr.Dataset | None = None, *,
+                        zoom: tuple[float, float] | None = None, **legacy: Any) -> dict[str, Any]:
     """All figures of a measurement, keyed by a short name (for ``analyze --plot``).
 
     The zoom, the band-pass of Fig. 13 and the spectrogram follow the squeal found
-    (:func:`squeal_views`): three revolutions at the actual disc speed from the onset of the squeal,
-    the band around its frequency. ``zoom`` overrides the time range.
+    (:func:`squealkit.measurement.squeal_views`, as :func:`squealkit.measurement.measurement_signals`
+    computed them): three revolutions at the actual disc speed from the onset of the squeal, the
+    band around its frequency. ``zoom`` overrides the time range drawn.
 
     Parameters
     ----------
-    rec : xarray.Dataset
-        The recording (:func:`squealkit.measurement.read_recording`), with attribute ``fs`` [Hz].
     result : MeasurementResult
-        Its analysis (:func:`squealkit.measurement.analyze_recording`).
-    mic, displacement : str, default "mic", "displacement"
-        Names of the microphone [Pa] and displacement [m] channels.
+        The analysis (:func:`squealkit.measurement.analyze_recording`).
+    signals : xarray.Dataset, optional
+        What the figures draw (:func:`squealkit.measurement.measurement_signals`); default
+        ``result.signals`` (``analyze_recording(..., keep_signals=True)``).
     zoom : (float, float), optional
-        Time window [s] of the zoomed figures (default: from :func:`squeal_views`).
+        Time window [s] of the zoomed figures (default: the signals' ``zoom_start``, ``zoom_end``).
+    **legacy
+        ``mic``, ``displacement`` of the deprecated call ``measurement_figures(rec, result)``.
 
     Returns
     -------
     dict of str to matplotlib.figure.Figure
         ``time``, ``spectrogram``, ``zoom``, ``runout``, ``band``, ``level`` and ``polar``.
     """
-    rpm = result.settings.rpm
-    views = squeal_views(result, float(rec["time"].values[-1]))
-    z = zoom if zoom is not None else views["zoom"]
+    if isinstance(result, xr.Dataset):  # deprecated: measurement_figures(rec, result, mic=..., displacement=...)
+        import warnings
+
+        from ..measurement.analysis.views import measurement_signals
+
+        warnings.warn("measurement_figures(recording, result) is deprecated; use measurement_figures(result, "
+                      "measurement_signals(recording, result)) (same meaning).", DeprecationWarning, stacklevel=2)
+        rec, result = result, signals
+        signals = measurement_signals(rec, result, zoom=zoom, **legacy)
+    if signals is None:
+        signals = result.signals
+    if not _is_signals(signals):
+        raise InputError("measurement_figures needs the signals the figures draw: analyze_recording(..., "
+                         "keep_signals=True), or pass measurement_signals(recording, result).")
+    a = signals.attrs
+    z = zoom if zoom is not None else (None if np.isnan(a["zoom_start"]) else (a["zoom_start"], a["zoom_end"]))
     return {
-        "time": time_history_plot(rec, mic=mic, displacement=displacement),
-        "spectrogram": spectrogram_plot(rec, result, mic=mic, displacement=displacement,
-                                        freq_max=views["freq_max"]),
-        "zoom": time_history_plot(rec, mic=mic, displacement=displacement, t_range=z),
-        "runout": runout_plot(rec, displacement=displacement, rpm=rpm, t_range=z,
-                              lowpass_freq=result.settings.lowpass_freq, macro_orders=result.settings.macro_orders),
-        "band": band_vs_pressure_plot(rec, mic=mic, displacement=displacement, t_range=z, band=views["band"]),
+        "time": time_history_plot(signals),
+        "spectrogram": spectrogram_plot(signals, result),
+        "zoom": time_history_plot(signals, t_range=z),
+        "runout": runout_plot(signals, t_range=z),
+        "band": band_vs_pressure_plot(signals, t_range=z),
         "level": level_plot(result),
         "polar": polar_plot(result),
     }
+
+
+def __getattr__(name: str) -> Any:
+    """``squeal_views`` moved to :mod:`squealkit.measurement` (it computes; plotting only draws)."""
+    if name == "squeal_views":
+        import warnings
+
+        from ..measurement.analysis.views import squeal_views
+
+        warnings.warn("squealkit.plotting.measurement.squeal_views is deprecated; use "
+                      "squealkit.measurement.squeal_views (same meaning).", DeprecationWarning, stacklevel=2)
+        return squeal_views
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

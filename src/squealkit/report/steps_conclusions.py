@@ -7,6 +7,7 @@ from collections.abc import Sequence
 
 from .document import Section, Table
 from .settings import ReportSettings
+from .steps_transient import NEUTRAL
 
 
 def _um(x: float) -> str:
@@ -14,6 +15,11 @@ def _um(x: float) -> str:
     if not math.isfinite(x):
         return "no finite amplitude"
     return f"{x * 1e6:.1f} um" if x < 1e-3 else f"{x * 1e3:.3g} mm"
+
+
+def _events(n: float) -> str:
+    """A count of squeal events as words: "1 event", "3 events"."""
+    return f"{n:.0f} event" + ("" if round(n) == 1 else "s")
 
 
 def conclusions_step(sections: Sequence[Section], *, settings: ReportSettings | None = None,
@@ -76,12 +82,20 @@ def conclusions_step(sections: Sequence[Section], *, settings: ReportSettings | 
     if tr:
         up, nr = int(tr.get("rising_stages_growing", 0)), int(tr.get("rising_stages", 0))
         down, nf = int(tr.get("falling_stages_decaying", 0)), int(tr.get("falling_stages", 0))
+        stable_run = tr.get("fig4_sigma_max", math.nan) <= NEUTRAL
         rows.append((
             "With SRO the response grows while the SRO rises and decays while it falls: squeal is intermittent.",
             (f"With the Fig. 4 sine SRO (q0 = {st.sro_amplitude * 1e6:.3g} um, lambda = {st.sro_wavelength * 1e3:g} "
+             f"mm, mu = {st.mu_transient:g}) the model stays stable all through the run (frozen-time growth rate at "
+             f"most {tr['fig4_sigma_max']:+.2f} 1/s): no self-excited squeal starts or stops; what the envelope "
+             "does is the run-out's own excitation (§4).") if stable_run and nr and nf else
+            (f"With the Fig. 4 sine SRO (q0 = {st.sro_amplitude * 1e6:.3g} um, lambda = {st.sro_wavelength * 1e3:g} "
              f"mm, mu = {st.mu_transient:g}) the vibration envelope grows on {up} of {nr} rising stages (the last at "
              f"{tr['rise_rate']:+.1f} 1/s) and decays on {down} of {nf} falling stages (the last at "
-             f"{tr['fall_rate']:+.1f} 1/s).") if nr and nf else
+             f"{tr['fall_rate']:+.1f} 1/s)"
+             + ("" if tr.get("fig4_self_excited", 1.0) else
+                ", but far faster than the frozen-time growth rates of those stages: the run-out's own excitation, "
+                "not self-excited squeal (§4)") + ".") if nr and nf else
             "The Fig. 4 run holds no whole rising and falling stage to measure the envelope on.",
         ))
     ms = n.get("measurement", {})
@@ -94,9 +108,9 @@ def conclusions_step(sections: Sequence[Section], *, settings: ReportSettings | 
                   if math.isfinite(ms["rising_fraction"]) else "no rising-run-out share (no squeal)")
         if "truth_rising_fraction" in ms:
             rows.append((claim, f"SYNTHETIC: the analysis recovers {f_txt}, {rf_txt} "
-                                f"(truth {ms['truth_rising_fraction']:.1%}), {ms['events']:.0f} events."))
+                                f"(truth {ms['truth_rising_fraction']:.1%}), {_events(ms['events'])}."))
         else:
-            rows.append((claim, f"Your recording: {f_txt}, {rf_txt}, {ms['events']:.0f} events."))
+            rows.append((claim, f"Your recording: {f_txt}, {rf_txt}, {_events(ms['events'])}."))
     return Section(
         "conclusions", "§6: the paper's conclusions with squealkit's numbers",
         ("Each conclusion of the paper beside the number squealkit computed for it in the sections above.",),

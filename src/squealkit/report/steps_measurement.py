@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io import save_dataset
-from ..measurement import analyze_recording, synthetic_recording
+from ..measurement import analyze_recording, squeal_views, synthetic_recording
 from ..models import FrictionModel
 from ..stability import critical_friction
 from .document import Comparison, FigureRef, Section, Table
@@ -21,8 +21,6 @@ RPM, FS, RADIUS, F_PUBLISHED = 900.0, 40_000.0, 0.05, 2388.0
 def _captions(res, t_end: float) -> dict[str, str]:
     """Captions of the §5 figures from what they show: the zoom's revolutions at the actual speed,
     the band around the squeal found (or the paper's band without squeal), the filters used."""
-    from ..plotting.measurement import squeal_views
-
     v = squeal_views(res, t_end)
     (t0, t1), (lo, hi), s = v["zoom"], v["band"], res.settings
     fr = res.frames
@@ -82,18 +80,15 @@ def recording_step(recording: Path, figures: Path, data: Path, *, mic: str, disp
     ``scale`` and ``units`` are applied where the channels are read (as ``analyze --scale/--unit``);
     ``options`` are further arguments of :func:`squealkit.measurement.analyze_recording` (a tacho
     channel, the squeal criteria, probe offset, polarity...)."""
-    from ..measurement import open_recording, read_recording
+    from ..measurement import open_recording
     from ..plotting.measurement import measurement_figures
 
     read_kw = {"fs": fs, "scale": scale or None, "units": units or None}
     res = analyze_recording(open_recording(recording, **read_kw), mic=mic, displacement=displacement, rpm=rpm,
-                            radius=radius, **(options or {}))
+                            radius=radius, keep_signals=True, **(options or {}))
     save_dataset(res.to_dataset(), data / "recording_analysis.nc")
-    rec = read_recording(recording, channels=[mic, displacement], **read_kw)
-    mic_name, disp_name = list(rec.data_vars)[:2]
-    captions = _captions(res, float(rec["time"].values[-1]))
-    refs = _save_measurement_figures(measurement_figures(rec, res, mic=mic_name, displacement=disp_name), figures, "",
-                                     captions)
+    captions = _captions(res, float(res.signals["time"].values[-1]))
+    refs = _save_measurement_figures(measurement_figures(res), figures, "", captions)
     f_sq, rf = res.squeal_frequency_hz, res.rising_fraction
     comps = (
         Comparison("growth/slope correlation", None, res.growth_slope_correlation, "1", None,
@@ -147,10 +142,10 @@ def measurement_step(model: FrictionModel, figures: Path, data: Path, *, quick: 
     f_model = onset.frequency_hz if math.isfinite(onset.frequency_hz) else F_PUBLISHED
     rec = synthetic_recording(duration=1.0 if quick else 2.0, fs=FS, rpm=RPM, radius=RADIUS, freq=f_model,
                               seed=seed)
-    res = analyze_recording(rec, mic="mic", displacement="displacement", rpm=RPM, radius=RADIUS)
+    res = analyze_recording(rec, mic="mic", displacement="displacement", rpm=RPM, radius=RADIUS, keep_signals=True)
     save_dataset(rec, data / "synthetic_recording.nc")
     save_dataset(res.to_dataset(), data / "synthetic_recording_analysis.nc")
-    refs = _save_measurement_figures(measurement_figures(rec, res), figures, "[SYNTHETIC] ",
+    refs = _save_measurement_figures(measurement_figures(res), figures, "[SYNTHETIC] ",
                                      _captions(res, float(rec["time"].values[-1])))
     f_sq = res.squeal_frequency_hz
     rf = res.rising_fraction

@@ -116,8 +116,11 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
                                            "written for the pin-on-disc model.",))
     crit = critical_friction(model, 0.0, damped=True, mu_max=2.0)
     if crit.status != "onset":
-        return Section("how_loud", title, (f"The damped model has no squeal onset on a flat disc up to mu = 2 "
-                                           f"({crit.status}): there is no limit cycle to follow.",))
+        why = {"stable_in_range": "stays stable for every mu up to 2",
+               "unstable_at_start": "is already unstable without friction (mu = 0)",
+               }.get(crit.status, "has an onset that could not be decided (indeterminate) up to mu = 2")
+        return Section("how_loud", title, (f"On a flat disc the damped model {why}: there is no squeal onset "
+                                           "to follow a limit cycle from.",))
     # the paper's range, widened for a model whose onset lies outside it
     mu_range = (min(MU_RANGE[0], 0.9 * crit.mu_critical), max(MU_RANGE[1], crit.mu_critical + 0.3))
     n = 11 if quick else 26

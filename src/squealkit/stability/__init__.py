@@ -2,6 +2,7 @@
 mode shapes and sensitivities."""
 
 from .. import _accessor  # noqa: F401  (registers ds.squeal.plot() on the results)
+from ._schema import UNSTABLE_RTOL
 from ._solve import IndeterminateWarning
 from .critical import (
     ONSET_STATUS,
@@ -14,16 +15,15 @@ from .critical import (
     runout_tolerance,
 )
 from .eigen import (
-    UNSTABLE_RTOL,
     VERDICTS,
     eigenvalues,
-    stability_map,
     stability_summary,
     stability_verdict,
     unstable_threshold,
 )
 from .ensemble import ModelEnsemble, ensemble_onset, ensemble_unstable
 from .fe_sweep import fe_critical_friction, fe_modes, fe_stability_map
+from .maps import stability_map
 from .modes import eigenvalue_sensitivity, mode_shapes, modes, modes_summary, onset_modes
 from .sensitivity import critical_friction_sensitivity
 from .tracking import lock_in, track_modes

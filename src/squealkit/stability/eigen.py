@@ -27,16 +27,15 @@ from .._validation import (
     validate_dataset,
     validate_model,
 )
-from ..models import FEModel, FrictionModel
-from ..models._base import resolve_damped
+from ..models import FrictionModel
 from ..models.friction import Stribeck, validate_friction
 from ._kernels import (
     charpoly_table,
-    derived_quantities,
     permutations_table,
     quadratic_eigvals,
     quadratic_eigvals_stack,
 )
+from ._schema import UNSTABLE_RTOL, derived_variables, eigen_variables
 from ._solve import VERDICTS, lapack_roots, solve_points
 from .tracking import carry_along, track_column, track_modes, track_rows
 
@@ -44,15 +43,11 @@ __all__ = [
     "UNSTABLE_RTOL",
     "VERDICTS",
     "eigenvalues",
-    "stability_map",
     "stability_summary",
     "stability_verdict",
     "unstable_threshold",
 ]
 
-#: A mode is unstable when sigma > UNSTABLE_RTOL * |lambda|: undamped stable modes have
-#: real parts at rounding level (~1e-13 |lambda|), far below this.
-UNSTABLE_RTOL = 1e-9
 #: Largest n solved by the compiled characteristic-polynomial kernel; larger models use
 #: LAPACK on the 2n x 2n state matrix.
 _KERNEL_MAX_DOF = 4
@@ -433,108 +428,12 @@ def stability_verdict(
     return np.asarray(VERDICTS)[_solve_grid(model, mu, tan_theta, damped, None, friction, speed)[2]]
 
 
-@honour_thread_limit
-def stability_map(
-    model: FrictionModel,
-    mu: ArrayLike,
-    theta: ArrayLike = 0.0,
-    *,
-    damped: bool | None = None,
-    friction: Stribeck | None = None,
-    speed: float | None = None,
-    track: bool = True,
-    lock_in_rtol: float = 1e-3,
-    progress: Callable[[int, int], None] | None = None,
-    store: str | Path | None = None,
-    client: Any = None,
-    tile_points: int = _TILE_POINTS,
-    rpm: ArrayLike | None = None,
-    method: str = "auto",
-    band: tuple[float, float] | None = None,
-    n_modes: int | None = None,
-) -> xr.Dataset:
-    """Eigenvalues over a grid of friction ``mu`` and run-out incline ``theta`` (paper Fig. 2).
-
-    For an :class:`~squealkit.models.FEModel` the grid is disc speed ``rpm`` x friction ``mu``
-    at one ``theta`` (see :func:`~squealkit.stability.fe_sweep.fe_stability_map`, which takes
-    ``rpm``, ``method``, ``band`` and ``n_modes``); its damping is always included.
-
-    Parameters
-    ----------
-    model : FrictionModel
-        The system, e.g. ``get_preset("lv2013")``.
-    mu : array_like, 1-D
-        Friction coefficients.
-    theta : array_like, 1-D
-        Incline angles of the disc surface run-out [rad]; ``tan(theta)`` enters the model.
-    damped : bool, optional
-        Include the damping matrix C. Not given: left out (paper eq. 7 is undamped), with a
-        warning when the model has damping.
-    friction : Stribeck, optional
-        Speed-dependent friction, ``mu`` its kinetic coefficient (see :func:`eigenvalues`).
-    speed : float, optional
-        Sliding speed V [m/s]; needed with ``friction``.
-    track : bool
-        Follow each mode across the grid (see :func:`~squealkit.stability.track_modes`);
-        otherwise modes are ordered by frequency at each point.
-    lock_in_rtol : float
-        Relative frequency tolerance for the ``lock_in`` flag.
-    progress : callable, optional
-        ``progress(done, total)`` during the eigenvalue computation.
-    store : path, optional
-        Stream the result into this zarr store (``.zarr``) tile by tile (blocks of whole
-        ``mu`` rows, about ``tile_points`` points each) instead of building it in memory;
-        the store is opened lazily (dask-backed) and returned. For grids larger than memory.
-    client : distributed.Client, optional
-        Compute the tiles on this Dask cluster (needs ``store``, on a file system the
-        workers share). Numbers are identical to the local run: each ``mu`` row is solved
-        and tracked on its own, from a first column tracked up front.
-    tile_points : int
-        Grid points per tile when streaming.
-    rpm : array_like, 1-D, optional
-        FE models only: disc speeds [rev/min] (see
-        :func:`~squealkit.stability.fe_sweep.fe_stability_map`).
-    method : {"auto", "dense", "sparse", "modal", "pod"}, default "auto"
-        FE models only: the eigenvalue solver.
-    band : (float, float), optional
-        FE models only: frequency band [Hz] of the modes reported.
-    n_modes : int, optional
-        FE models only: reduced basis size for ``modal``/``pod``.
-
-    Returns
-    -------
-    xarray.Dataset
-        Dims ``(mu, theta, mode)``. Variables: ``growth_rate`` sigma [1/s], ``omega``
-        [rad/s], ``frequency`` [Hz], ``damping_ratio`` [1], ``unstable`` (bool), and per
-        grid point ``max_growth_rate`` [1/s], ``any_unstable`` and ``lock_in``.
-        Coordinates: ``mu``, ``theta`` [rad], ``theta_deg``, ``tan_theta``, ``mu_e``
-        (= mu + tan theta, eq. 6). Units in ``attrs``; the model as JSON in ``attrs``.
-        With ``friction``: coordinate ``mu_sliding`` (mu at ``speed``, which ``mu_e`` then
-        uses) and attributes ``friction`` and ``speed`` [m/s].
-
-    Examples
-    --------
-    >>> from squealkit.models import get_preset
-    >>> ds = stability_map(get_preset("lv2013"), np.linspace(0, 0.8, 9),
-    ...                    np.radians(np.linspace(-8, 8, 5)))
-    >>> sorted(ds.sizes.items())
-    [('mode', 3), ('mu', 9), ('theta', 5)]
-    """
-    validate_model(model)
-    damped = resolve_damped(model, damped)
-    if isinstance(model, FEModel):
-        from .fe_sweep import fe_stability_map
-
-        if rpm is None:
-            raise InputError("A map of an FE model needs the disc speeds: rpm=[...].")
-        if friction is not None or store is not None or client is not None:
-            raise InputError("FE models take neither friction laws nor streamed (store/client) maps yet.")
-        if np.size(theta) != 1:
-            raise InputError("A map of an FE model takes one run-out incline theta (mu_e = mu + tan theta).")
-        return fe_stability_map(model, rpm, mu, float(np.ravel(theta)[0]), method=method, band=band,
-                                n_modes=n_modes, progress=progress)
-    if rpm is not None or band is not None or n_modes is not None or method != "auto":
-        raise InputError("rpm, method, band and n_modes apply to FE models only.")
+def _stability_map_small(model: FrictionModel, mu: ArrayLike, theta: ArrayLike, *, damped: bool,
+                         friction: Stribeck | None, speed: float | None, track: bool, lock_in_rtol: float,
+                         progress: Callable[[int, int], None] | None, store: str | Path | None, client: Any,
+                         tile_points: int) -> xr.Dataset:
+    """:func:`~squealkit.stability.stability_map` of a small (friction) model, ``damped`` resolved
+    (:mod:`~squealkit.stability.maps` dispatches here)."""
     friction, speed = validate_friction(model, friction, speed)
     fr = {"friction": friction, "speed": speed}
     mu_a = validate_array_finite("mu", mu)
@@ -614,46 +513,14 @@ def _stream_map(model, mu, theta, *, damped, track, lock_in_rtol, progress, stor
                           weights=[(b - a) * n_th for *_, a, b in pieces], name="squealkit-stability")
 
 
-def _eigen_variables(dims, sigma, omega, zeta, err, unstable, verdict, smax, any_u, locked, lock_in_rtol,
-                     err_name: str = "error radius of the eigenvalue") -> dict:
-    """The per-mode and per-point variables of a stability map over ``dims`` (grid dims + ``mode``),
-    from :func:`~squealkit.stability._kernels.derived_quantities`: one builder for every map
-    (small models here, FE models in :mod:`~squealkit.stability.fe_sweep`)."""
-    point = dims[:-1]
-    return {
-        "growth_rate": (dims, sigma, {"units": "1/s", "long_name": "growth rate sigma (real part)"}),
-        "omega": (dims, omega, {"units": "rad/s", "long_name": "damped circular frequency omega_d"}),
-        "frequency": (dims, omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency"}),
-        "damping_ratio": (dims, zeta, {"units": "1", "long_name": "damping ratio -sigma/|lambda|"}),
-        "growth_rate_error": (dims, err, {"units": "1/s", "long_name": err_name}),
-        "unstable": (dims, unstable,
-                     {"long_name": "mode unstable (sigma beyond 1e-9 |lambda|_max by more than its error)"}),
-        "verdict": (point, verdict,
-                    {"long_name": "stability verdict", "flag_values": np.arange(len(VERDICTS), dtype=np.int8),
-                     "flag_meanings": " ".join(VERDICTS)}),
-        "max_growth_rate": (point, smax, {"units": "1/s", "long_name": "largest growth rate"}),
-        "any_unstable": (point, any_u, {"long_name": "unstable: flutter or divergence"}),
-        "lock_in": (point, locked,
-                    {"long_name": "lock-in: an unstable oscillating mode nearer another in frequency than in growth",
-                     "rtol": lock_in_rtol}),
-    }
-
-
 def _dataset(model, mu, theta, sol, *, damped, tracked, lock_in_rtol, friction=None, speed=None) -> xr.Dataset:
     lam, err, verdict, thr = sol
-    n = lam.shape[-1]
-    grid = lam.shape[:-1]
-    flat = np.ascontiguousarray(lam.reshape(-1, n))
-    sigma, omega, zeta, unstable, smax, any_u, locked = (
-        a.reshape(grid + a.shape[1:])
-        for a in derived_quantities(flat, np.ascontiguousarray(err.reshape(-1, n)), thr.ravel(),
-                                    verdict.ravel(), lock_in_rtol)
-    )
+    sigma, omega, zeta, unstable, smax, any_u, locked = derived_variables(lam, err, thr, verdict, lock_in_rtol)
     dims = ("mu", "theta", "mode")
     n = lam.shape[-1]
     tan_t = np.tan(theta)
     ds = xr.Dataset(
-        data_vars=_eigen_variables(dims, sigma, omega, zeta, err, unstable, verdict, smax, any_u, locked,
+        data_vars=eigen_variables(dims, sigma, omega, zeta, err, unstable, verdict, smax, any_u, locked,
                                    lock_in_rtol),
         coords={
             "mu": ("mu", mu, {"units": "1", "long_name": "friction coefficient"}),

@@ -1,11 +1,11 @@
 """Complex eigenvalue analysis of FE brake models over disc speed and friction.
 
 The FE counterpart of :func:`~squealkit.stability.stability_map`: eigenvalues of an
-:class:`~squealkit.models.fe.FEModel` over a grid of disc speed (rpm, ``omega = 2 pi rpm/60``)
+:class:`~squealkit.fe.model.FEModel` over a grid of disc speed (rpm, ``omega = 2 pi rpm/60``)
 and friction ``mu`` (the run-out slope enters as ``mu_e = mu + tan(theta)``), the critical
 friction at each speed, and the modes at one operating point with their shapes. Solvers
 (``method``): ``dense`` (all modes, LAPACK), ``sparse`` (a frequency band by shift-invert),
-``modal`` and ``pod`` (a reduced basis from :mod:`squealkit.stability.reduction`, every
+``modal`` and ``pod`` (a reduced basis from :mod:`squealkit.solvers.reduction`, every
 eigenpair checked by its backward error in the full model); ``auto`` is dense up to
 :data:`DENSE_MAX_DOF` DOFs, sparse above.
 """
@@ -34,12 +34,9 @@ from .._validation import (
     validate_plausible,
     validate_positive,
 )
-from ..models.fe import FEModel, rpm_to_omega
-from . import reduction
-from ._kernels import derived_quantities
-from ._solve import VERDICTS
-from .eigen import UNSTABLE_RTOL, _eigen_variables
-from .sparse import (
+from ..fe.model import FEModel, rpm_to_disc_speed
+from ..solvers import reduction
+from ..solvers.band import (
     BAND_HZ,
     DENSE_MAX_DOF,
     RESIDUAL_TOL,
@@ -49,7 +46,9 @@ from .sparse import (
     dense_parts,
     validate_band,
 )
-from .tracking import _MacTracker
+from ..solvers.mac import MacTracker
+from ._schema import UNSTABLE_RTOL, derived_variables, eigen_variables
+from ._solve import VERDICTS
 
 __all__ = ["DENSE_MAX_DOF", "METHODS", "FESolver", "fe_critical_friction", "fe_modes", "fe_stability_map"]
 
@@ -78,7 +77,7 @@ class FESolver:
     sigma_reach : float
         For ``sparse``: find every mode in the band with ``|sigma|`` up to this [1/s].
     band_workers : int, optional
-        For ``sparse``: sub-bands solved at once (:func:`~squealkit.stability.sparse.band_eigs`'s
+        For ``sparse``: sub-bands solved at once (:func:`~squealkit.solvers.band.band_eigs`'s
         ``workers``); 1 where operating points are already solved in parallel.
     """
 
@@ -113,7 +112,7 @@ class FESolver:
     def _basis(self) -> NDArray[np.float64]:
         """The reduced basis of ``modal`` (real modes of (M, K1) up to 1.5 times the band's top,
         or ``n_modes`` of them) or ``pod`` (real modes, eigenvectors at the sample points and
-        left corrections, compressed: :func:`~squealkit.stability.reduction.pod_basis`)."""
+        left corrections, compressed: :func:`~squealkit.solvers.reduction.pod_basis`)."""
         if self.method == "modal":
             fmax = None if self.n_modes is not None else 1.5 * self.band[1]
             return np.asarray(reduction.modal_basis(self.model, n_modes=self.n_modes, freq_max=fmax))
@@ -136,7 +135,7 @@ class FESolver:
                              workers=self.band_workers)
         if self.reduced is not None:
             self.model.factors(omega, mu, tan_theta)  # the same checks of omega, mu and tan_theta
-            lam, Y, res = reduction._reduced_solve(self.reduced, omega, mu + tan_theta, *self.band)
+            lam, Y, res = reduction.reduced_solve(self.reduced, omega, mu + tan_theta, *self.band)
             return EigenSolution(lam, self.reduced.V @ Y if vectors else None, res)
         sol = dense_eigs(self.model, omega, mu, tan_theta, vectors=vectors, parts=self.parts)
         if self.band is None:
@@ -184,6 +183,7 @@ def fe_stability_map(
     n_modes: int | None = None,
     sigma_reach: float = 0.0,
     track: bool = True,
+    lock_in_rtol: float = 1e-3,
     workers: int | None = None,
     client: Any = None,
     progress: Callable[[int, int], None] | None = None,
@@ -207,10 +207,13 @@ def fe_stability_map(
     n_modes : int, optional
         Reduced basis size for ``modal``/``pod``.
     sigma_reach : float
-        ``sparse`` only: see :func:`~squealkit.stability.sparse.band_eigs`.
+        ``sparse`` only: see :func:`~squealkit.solvers.band.band_eigs`.
     track : bool
         Follow each mode across the grid by MAC on its right eigenvector; otherwise modes
         are ordered by frequency at each point and no eigenvectors are computed (faster).
+    lock_in_rtol : float
+        Relative frequency tolerance for the ``lock_in`` flag (as for
+        :func:`~squealkit.stability.stability_map`).
     workers : int, optional
         Points solved at once (threads; LAPACK and SuperLU release the GIL); default: the
         thread limit of :mod:`squealkit._threads`.
@@ -247,7 +250,7 @@ def fe_stability_map(
     t = _tan_theta(theta)
     n_r, n_m = rpm_a.size, mu_a.size
     _check_work(model, method, f"An FE map of {n_r} speeds x {n_m} frictions", float(n_r) * n_m, float(n_r) * n_m)
-    omegas = rpm_to_omega(rpm_a)
+    omegas = rpm_to_disc_speed(rpm_a)
     samples = None
     if method == "pod":
         # benchmarks/bench_fe_reduction.py's samples: the middle speed, the first and last friction
@@ -259,7 +262,7 @@ def fe_stability_map(
     # points in parallel, or a single point's sub-bands in parallel: never both
     solver = FESolver(model, method, band, n_modes, samples, sigma_reach, band_workers=1 if n_r * n_m > 1 else None)
     results: dict[tuple[int, int], tuple[NDArray, NDArray, NDArray]] = {}
-    tracker = _MacTracker()
+    tracker = MacTracker()
     total, done = n_r * n_m, 0
 
     def solve(ij):
@@ -317,7 +320,8 @@ def fe_stability_map(
                 if progress is not None:
                     progress(done, total)
     # at least one (NaN) mode: a band without eigenvalues gives a map that is stable everywhere
-    return _fe_dataset(solver, rpm_a, omegas, mu_a, theta, t, results, max(1, tracker.n_slots), tracked=track)
+    return _fe_dataset(solver, rpm_a, omegas, mu_a, theta, t, results, max(1, tracker.n_slots), tracked=track,
+                       lock_in_rtol=lock_in_rtol)
 
 
 #: Provisional indices of modes that enter the band inside a row computed on a worker.
@@ -330,7 +334,7 @@ def _row_task(item: tuple) -> list[tuple[NDArray, NDArray, NDArray]]:
     Modes new to the row get provisional indices from ``_PROVISIONAL`` up, renumbered by the caller.
     """
     solver, omega, mus, t, first, track = item
-    tracker = _MacTracker()
+    tracker = MacTracker()
     tracker.n_slots = _PROVISIONAL
     out = []
     prev = first
@@ -376,20 +380,16 @@ def _fe_dataset(solver, rpm, omegas, mu, theta, t, results, n_slots, *, tracked:
     err, _unstable, verdict, thr = _point_arrays(np.where(valid, lam, 0.0), np.where(np.isfinite(res), res, 0.0),
                                                  valid)
     err = np.where(valid, err, np.nan)
-    flat = (n_r * n_m, n_slots)
     # the small models' kernel for the derived quantities; modes outside the band (NaN) are
     # never unstable nor locked in, their damping ratio NaN and the largest growth rate skips them
-    sigma, omega, zeta, unstable, _smax, any_u, locked = (
-        a.reshape((n_r, n_m, *a.shape[1:]))
-        for a in derived_quantities(np.ascontiguousarray(lam.reshape(flat)), np.ascontiguousarray(err.reshape(flat)),
-                                    thr.ravel(), verdict.ravel(), lock_in_rtol))
+    sigma, omega, zeta, unstable, _smax, any_u, locked = derived_variables(lam, err, thr, verdict, lock_in_rtol)
     zeta = np.where(valid, zeta, np.nan)
     smax = np.max(np.where(valid, sigma, -np.inf), axis=-1, initial=-np.inf)
     dims = ("rpm", "mu", "mode")
     model = solver.model
     ds = xr.Dataset(
         data_vars={
-            **_eigen_variables(dims, sigma, omega, zeta, err, unstable, verdict, smax, any_u, locked, lock_in_rtol,
+            **eigen_variables(dims, sigma, omega, zeta, err, unstable, verdict, smax, any_u, locked, lock_in_rtol,
                                err_name="error radius of the eigenvalue (16 x backward error x |lambda|)"),
             "residual": (dims, res, {"units": "1", "long_name": "backward error of the eigenpair in the full model"}),
             "trusted": (dims, valid & ~(res > RESIDUAL_TOL),
@@ -539,7 +539,7 @@ def fe_critical_friction(
     if isinstance(n_scan, bool) or int(n_scan) != n_scan or n_scan < 2:
         raise InputError(f"Parameter n_scan={n_scan!r} must be an integer >= 2.")
     _check_work(model, method, f"An FE onset search at {rpm_a.size} speeds", rpm_a.size, rpm_a.size * float(n_scan))
-    omegas = rpm_to_omega(rpm_a)
+    omegas = rpm_to_disc_speed(rpm_a)
     # the middle speed, as fe_stability_map; three frictions over the search range (one band
     # solve per speed instead cost as much as the searches it was to speed up)
     samples = (omegas[[len(omegas) // 2]], np.array([0.0, mu_max / 2, mu_max]) + t) if method == "pod" else None
@@ -612,7 +612,7 @@ def fe_modes(
     rpm = float(_validate_grid("rpm", rpm)[0])
     mu = float(model.mu_ref if mu is None else mu)
     t = _tan_theta(theta)
-    omega = float(rpm_to_omega(rpm))
+    omega = float(rpm_to_disc_speed(rpm))
     samples = (np.array([omega]), np.array([mu + t])) if method == "pod" else None
     solver = FESolver(model, method, band, n_modes, samples)
     with threadpool_limits(1, user_api="blas"):

@@ -18,8 +18,8 @@ import itertools
 import numba as nb
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import linear_sum_assignment
 
+from ..solvers.mac import MacTracker as _MacTracker  # noqa: F401  (moved; the old private name kept)
 from ._kernels import _REAL_RTOL, _locked_in
 
 __all__ = ["lock_in", "track_modes"]
@@ -244,42 +244,3 @@ def lock_in(
         np.ascontiguousarray(unstable.reshape(flat)), np.ascontiguousarray(oscillating.reshape(flat)),
         strict=True)]
     return np.array(out, dtype=bool).reshape(lead)
-
-
-def _mac(A: NDArray, B: NDArray) -> NDArray:
-    """Modal assurance criterion between the columns of A and B (unit-norm columns)."""
-    return np.abs(A.conj().T @ B) ** 2
-
-
-class _MacTracker:
-    """Mode tracking for large models: slots matched to the previous point's by MAC and eigenvalue.
-
-    A point's modes (any number: modes enter and leave a frequency band) are assigned to
-    the previous point's slots by the least total cost ``1 - MAC + |lambda_i - lambda_j| / scale``
-    (``scipy.optimize.linear_sum_assignment``); a mode left over gets a new slot. Used by the
-    FE sweeps, full (eigenvectors in the model's DOFs) and reduced (in an orthonormal basis's
-    coordinates, where the MAC is the same).
-    """
-
-    def __init__(self) -> None:
-        self.n_slots = 0
-
-    def first(self, count: int) -> NDArray[np.intp]:
-        """New slots for the ``count`` modes of a point with no predecessor."""
-        slots = np.arange(self.n_slots, self.n_slots + count)
-        self.n_slots += count
-        return slots
-
-    def match(self, prev: tuple[NDArray, NDArray, NDArray], lam: NDArray, X: NDArray) -> NDArray[np.intp]:
-        """Slots of the modes ``(lam, X)`` given the previous point's ``(slots, lam, X)``."""
-        p_slots, p_lam, p_X = prev
-        slots = np.full(lam.size, -1, dtype=np.intp)
-        if p_lam.size and lam.size:
-            scale = max(np.max(np.abs(p_lam)), np.max(np.abs(lam)), 1e-300)
-            cost = (1.0 - _mac(p_X, X)) + np.abs(p_lam[:, None] - lam[None, :]) / scale
-            rows, cols = linear_sum_assignment(cost)
-            slots[cols] = p_slots[rows]
-        new = slots < 0
-        slots[new] = np.arange(self.n_slots, self.n_slots + int(new.sum()))
-        self.n_slots += int(new.sum())
-        return slots

@@ -24,82 +24,17 @@ from pathlib import Path
 import numpy as np
 
 from ..._validation import InputError
+from .._bulk import bulk_cards, field_int, field_real
 from ..dofmap import LabelledMatrix
 
-__all__ = ["bulk_cards", "read_dmig", "sniff_dmig"]
+__all__ = ["read_dmig", "sniff_dmig"]
 
 _DMIG_LINE = re.compile(r"^DMIG\*?\s*[,\s]", re.IGNORECASE | re.MULTILINE)
-_IMPLICIT_EXP = re.compile(r"^([-+]?(?:\d+\.?\d*|\.\d+))([-+]\d+)$")
 
 
 def sniff_dmig(head: str) -> bool:
     """Whether a text holds a DMIG card (a line starting ``DMIG``, ``DMIG*`` or ``DMIG,``)."""
     return bool(_DMIG_LINE.search(head))
-
-
-def _real(text: str, where: str) -> float:
-    s = text.strip().upper().replace("D", "E")
-    try:
-        return float(s)
-    except ValueError:
-        m = _IMPLICIT_EXP.match(s)  # Nastran's 1.5+3 = 1.5e3
-        if m:
-            return float(f"{m.group(1)}E{m.group(2)}")
-        raise InputError(f"{where}: {text.strip()!r} is not a real number.") from None
-
-
-def _int(text: str, where: str, blank: int | None = None) -> int:
-    s = text.strip()
-    if not s and blank is not None:
-        return blank
-    try:
-        return int(s)
-    except ValueError:
-        raise InputError(f"{where}: {text.strip()!r} is not an integer.") from None
-
-
-def _fields(line: str) -> tuple[str, list[str]]:
-    """(first field, data fields) of one physical line: 8 data fields (small, free), 4 (large)."""
-    if "," in line:
-        parts = line.rstrip("\n").split(",")
-        data = [x.strip() for x in parts[1:9]]
-        return parts[0].strip(), data + [""] * (8 - len(data))
-    line = line.rstrip("\n").expandtabs(8)
-    first = line[:8].strip()
-    if first.endswith("*") or first.startswith("*"):
-        return first, [line[8 + 16 * k: 24 + 16 * k].strip() for k in range(4)]
-    return first, [line[8 + 8 * k: 16 + 8 * k].strip() for k in range(8)]
-
-
-def bulk_cards(text: str, names: tuple[str, ...] = ("DMIG",)) -> list[tuple[int, list[str]]]:
-    """(line number, fields) of every card named in ``names``: the card name first, continuations joined.
-
-    Bulk data after ``BEGIN BULK`` (or the whole text, as a punch file has no executive part)
-    up to ``ENDDATA``; comments (``$``) skipped; small, large and free field.
-    """
-    lines = text.splitlines()
-    start = next((k + 1 for k, line in enumerate(lines) if line.strip().upper().startswith("BEGIN BULK")), 0)
-    cards: list[tuple[int, list[str]]] = []
-    current: list[str] | None = None
-    for k in range(start, len(lines)):
-        line = lines[k]
-        stripped = line.split("$", 1)[0]
-        if not stripped.strip():
-            continue
-        if stripped.strip().upper().startswith("ENDDATA"):
-            break
-        first, data = _fields(stripped)
-        is_continuation = first == "" or first[0] in "+*"
-        if is_continuation:
-            if current is not None:
-                current.extend(data)
-            continue
-        current = None
-        card = first.upper().rstrip("*")
-        if card in names:
-            current = [card, *data]
-            cards.append((k + 1, current))
-    return cards
 
 
 def read_dmig(path: str | Path) -> dict[str, LabelledMatrix]:
@@ -136,7 +71,7 @@ def read_dmig(path: str | Path) -> dict[str, LabelledMatrix]:
         if not name:
             raise InputError(f"{where}: a DMIG card without a matrix name.")
         if card[2].strip() == "0":
-            ifo, tin = _int(card[3], f"{where} (IFO)"), _int(card[4], f"{where} (TIN)")
+            ifo, tin = field_int(card[3], f"{where} (IFO)"), field_int(card[4], f"{where} (TIN)")
             if ifo not in (1, 2, 6, 9):
                 raise InputError(f"{where}: DMIG {name} has IFO={ifo}; known: 1 (square), 6 (symmetric), "
                                  "2 or 9 (rectangular).")
@@ -149,14 +84,14 @@ def read_dmig(path: str | Path) -> dict[str, LabelledMatrix]:
             continue
         if name not in headers:
             raise InputError(f"{where}: a DMIG {name} column before its header card (NAME, 0, IFO, TIN, ...).")
-        gj, cj = _int(card[2], f"{where} (GJ)"), _int(card[3], f"{where} (CJ)", blank=0)
+        gj, cj = field_int(card[2], f"{where} (GJ)"), field_int(card[3], f"{where} (CJ)", blank=0)
         rest = card[5:]
         for k in range(0, len(rest), 4):
             group = rest[k:k + 4] + [""] * max(0, 4 - len(rest[k:k + 4]))
             if not any(x.strip() for x in group):
                 continue
-            gi, ci = _int(group[0], f"{where} (G)"), _int(group[1], f"{where} (C)", blank=0)
-            entries[name].append((gi, ci, gj, cj, _real(group[2], f"{where} (A)")))
+            gi, ci = field_int(group[0], f"{where} (G)"), field_int(group[1], f"{where} (C)", blank=0)
+            entries[name].append((gi, ci, gj, cj, field_real(group[2], f"{where} (A)")))
     if not headers:
         raise InputError(f"{p.name}: no DMIG header card (DMIG, NAME, 0, IFO, TIN, ...).")
     out = {}

@@ -1,0 +1,54 @@
+"""Numerical engines of the FE side, without analysis vocabulary.
+
+- :mod:`~squealkit.solvers.lu`: the pluggable sparse LU (SuperLU by default, a dense LAPACK LU,
+  any backend registered or passed per call);
+- :mod:`~squealkit.solvers.band`: eigenvalues of ``lambda^2 M + lambda C + K``, all of them
+  (dense) or in a frequency band (shift-invert block Krylov-Schur walks, one LU per shift);
+- :mod:`~squealkit.solvers.reduction`: modal and POD bases, projection, reduced solves with
+  full-model backward errors;
+- :mod:`~squealkit.solvers.mac`: mode tracking by MAC.
+
+The analyses built on them (stability maps, onset, modes of FE models) are in
+:mod:`squealkit.stability`.
+"""
+
+from .band import BAND_HZ, DENSE_MAX_DOF, EigenSolution, backward_errors, band_eigs, dense_eigs, dense_parts
+from .lu import (
+    LU_BACKENDS,
+    DenseLU,
+    PermutedLU,
+    factorize,
+    fill_reducing_order,
+    get_lu_backend,
+    lu_backend,
+    register_lu_backend,
+    set_lu_backend,
+    use_lu_backend,
+)
+from .reduction import ReducedModel, modal_basis, pod_basis, reduce, reduced_eigs, reduced_sweep
+
+__all__ = [
+    "BAND_HZ",
+    "DENSE_MAX_DOF",
+    "LU_BACKENDS",
+    "DenseLU",
+    "EigenSolution",
+    "PermutedLU",
+    "ReducedModel",
+    "backward_errors",
+    "band_eigs",
+    "dense_eigs",
+    "dense_parts",
+    "factorize",
+    "fill_reducing_order",
+    "get_lu_backend",
+    "lu_backend",
+    "modal_basis",
+    "pod_basis",
+    "reduce",
+    "reduced_eigs",
+    "reduced_sweep",
+    "register_lu_backend",
+    "set_lu_backend",
+    "use_lu_backend",
+]
