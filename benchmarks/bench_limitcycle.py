@@ -62,7 +62,7 @@ def main() -> None:
     ok = np.flatnonzero((mu_b >= args.mu_min) & ds.stable.values)
     pick = ok[np.linspace(0, ok.size - 1, args.runs).round().astype(int)]
     mus = mu_b[pick]
-    sigma = eigenvalues(model, mus, 0.0, damped=True).real.max(axis=-1)
+    sigma = eigenvalues(model, mus, tan_theta=0.0, damped=True).real.max(axis=-1)
     amp = ds.amplitude.values[pick]
     duration = float(np.max(np.log(amp.max(axis=1) / 1e-9) / sigma)) + 0.5
     simulate_batch(model, mu=mus[:1], duration=0.001, contact=contact)  # load the compiled kernel
@@ -114,7 +114,7 @@ def main() -> None:
     # durations the branch's other points need, at the throughput just measured.
     rate = t_tr / (mus.size * duration)  # wall seconds per simulated second and run
     above = mu_b > ds.attrs["hopf_mu"] + 0.005
-    sig_all = eigenvalues(model, mu_b[above], 0.0, damped=True).real.max(axis=-1)
+    sig_all = eigenvalues(model, mu_b[above], tan_theta=0.0, damped=True).real.max(axis=-1)
     need = np.log(ds.amplitude.values[above].max(axis=1) / 1e-9) / sig_all + 0.5
     print(f"all {above.sum()} branch points with mu > mu_crit + 0.005 need {need.sum():.0f} s simulated in total "
           f"(longest {need.max():.1f} s): ~{need.sum() * rate:.0f} s at that throughput, "

@@ -59,10 +59,10 @@ def main() -> None:
     t_ref, c_ref = time.perf_counter() - t0, time.process_time() - c0
     del A
 
-    t_eig, c_eig = min(_timed(lambda: eigenvalues(model, MU, T, damped=True)) for _ in range(args.repeat))
+    t_eig, c_eig = min(_timed(lambda: eigenvalues(model, MU, tan_theta=T, damped=True)) for _ in range(args.repeat))
     t_map, c_map = min(_timed(lambda: stability_map(model, mu, theta, damped=True)) for _ in range(args.repeat))
 
-    ours = eigenvalues(model, MU, T, damped=True).reshape(-1, 3)
+    ours = eigenvalues(model, MU, tan_theta=T, damped=True).reshape(-1, 3)
     ref = ref.reshape(-1, 6)
     ref_up = np.sort_complex(np.where(ref.imag >= 0, ref, np.nan + 0j))  # 3 upper-half roots per point
     ref_up = ref_up[:, :3]

@@ -82,7 +82,7 @@ def main() -> None:
     # compile / load every kernel once, on both thread counts
     for n in (1, pool):
         with limit_threads(n):
-            eigenvalues(model, np.linspace(0, 0.8, 64), 0.0, damped=True)
+            eigenvalues(model, np.linspace(0, 0.8, 64), tan_theta=0.0, damped=True)
             simulate(model, mu=0.4, duration=1e-3)
     hogs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(args.load)]
     try:
@@ -95,7 +95,7 @@ def main() -> None:
 
             def job(mu=mu, reps=reps):
                 for _ in range(reps):
-                    eigenvalues(model, mu, 0.0, damped=True)
+                    eigenvalues(model, mu, tan_theta=0.0, damped=True)
 
             tp, ta, t1 = (t / reps * 1e3 for t in three_ways(job, args.repeat))
             print(f"{points:>18} {tp:>12.3f} {ta:>10.3f} {t1:>10.3f} {tp / t1:>14.2f}")

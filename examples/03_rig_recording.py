@@ -1,6 +1,10 @@
-"""Analyse a rig recording as the paper's §5 does (here a SYNTHETIC one with known truth).
+"""
+A rig recording
+===============
 
-Run:  python examples/03_rig_recording.py [OUTPUT_DIR]
+Analyse a rig recording as the paper's §5 does (here a SYNTHETIC one with known truth).
+
+Run it with ``python examples/03_rig_recording.py [OUTPUT_DIR]``: it writes its results and figures there.
 """
 
 import sys

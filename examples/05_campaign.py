@@ -1,10 +1,14 @@
-"""A brake noise campaign as SAE J2521 counts it (here a SYNTHETIC one with known truth).
+"""
+A noise campaign
+================
+
+A brake noise campaign as SAE J2521 counts it (here a SYNTHETIC one with known truth).
 
 Writes a test matrix of brake applications (drags and decelerating stops, each recording with
 a tacho), analyses every application into a DuckDB database, and compares the occurrence per
 1/3-octave band with the truth.
 
-Run:  python examples/05_campaign.py [OUTPUT_DIR]
+Run it with ``python examples/05_campaign.py [OUTPUT_DIR]``: it writes its results and figures there.
 """
 
 import shutil

@@ -226,7 +226,7 @@ def test_config_api_wrong_types(call, words):
 def test_fe_demo_mesh_reaches_modes_vtk(run, tmp_path):
     meshio = pytest.importorskip("meshio")
     out = tmp_path / "b"
-    r = run("fe-demo", "--size", "8", "--out", str(out))  # the smallest demo (738 DOFs)
+    r = run("fe-demo", "--size", "8", "--out-dir", str(out))  # the smallest demo (738 DOFs)
     assert r.exit_code == 0, r.output
     from squealkit.models.config import load_model
 
@@ -275,7 +275,7 @@ def test_bad_matrix_csv_refused_before_any_analysis(run, tmp_path, content, word
         read_matrix(m)
     _one_line(e, *words)
     out = tmp_path / "o"
-    r = run("campaign", str(m), "--out", str(out), "--mic", "mic", "--displacement", "displacement",
+    r = run("campaign", str(m), "--out-dir", str(out), "--mic", "mic", "--displacement", "displacement",
             "--radius", "0.05", "--rpm", "900", "--no-report")
     _cli_refuses(r, "m.csv")
     assert not out.exists()  # nothing written
@@ -380,7 +380,7 @@ def test_bad_store_cli_exit_2(run, tmp_path, good_store):
     m = tmp_path / "m.csv"
     (tmp_path / "r.nc").write_bytes(b"")
     m.write_text("application,file\nA1,r.nc\n")
-    r = run("campaign", str(m), "--out", str(out), "--mic", "mic", "--displacement", "displacement",
+    r = run("campaign", str(m), "--out-dir", str(out), "--mic", "mic", "--displacement", "displacement",
             "--radius", "0.05", "--rpm", "900", "--no-report")
     _cli_refuses(r, "campaign.duckdb", "did not write")
     assert _snapshot(out / "campaign.duckdb") == before

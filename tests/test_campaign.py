@@ -33,7 +33,7 @@ def camp(tmp_path_factory):
     (d / "recordings" / "cut.mf4").write_bytes(b[: len(b) // 3])
     with open(d / "matrix.csv", "a") as fh:
         fh.write("A0041,recordings/cut.mf4,S8,drag,10.0,100.0,50.0\n")
-    res = run(["campaign", str(d / "matrix.csv"), "--out", str(d / "out"), "--mic", "mic", "--displacement",
+    res = run(["campaign", str(d / "matrix.csv"), "--out-dir", str(d / "out"), "--mic", "mic", "--displacement",
                "displacement", "--radius", "0.05", "--tacho", "tacho", "--json"])
     assert res.exit_code == 1, res.output  # 1: some application failed (issue #15)
     (d / "stderr.txt").write_text(res.stderr)
@@ -140,7 +140,7 @@ def test_no_application_analysed_has_no_occurrence(tmp_path):
     synthetic_campaign(tmp_path, n_applications=2, duration=0.5, seed=1)
     for f in (tmp_path / "recordings").glob("*.nc"):
         f.unlink()
-    res = run(["campaign", str(tmp_path / "matrix.csv"), "--out", str(tmp_path / "out"), "--mic", "mic",
+    res = run(["campaign", str(tmp_path / "matrix.csv"), "--out-dir", str(tmp_path / "out"), "--mic", "mic",
                "--displacement", "displacement", "--radius", "0.05", "--rpm", "900"])
     assert res.exit_code == 1 and "no application could be analysed (2 failed)" in res.output
     s = json.loads((tmp_path / "out" / "summary.json").read_text())
@@ -157,7 +157,7 @@ def test_no_application_analysed_has_no_occurrence(tmp_path):
 ])
 def test_bad_matrix_exit_2(tmp_path, text, match):
     (tmp_path / "m.csv").write_text(text)
-    res = run(["campaign", str(tmp_path / "m.csv"), "--out", str(tmp_path / "o"), "--mic", "mic",
+    res = run(["campaign", str(tmp_path / "m.csv"), "--out-dir", str(tmp_path / "o"), "--mic", "mic",
                "--displacement", "displacement", "--radius", "0.05", "--rpm", "900"])
     assert res.exit_code == 2 and match in res.output
 
@@ -170,7 +170,7 @@ def test_third_octave_bands_are_iec_base_ten():
 
 def test_campaign_on_a_local_dask_cluster(tmp_path):
     truth = synthetic_campaign(tmp_path, n_applications=4, duration=0.5, seed=2)
-    res = run(["campaign", str(tmp_path / "matrix.csv"), "--out", str(tmp_path / "out"), "--mic", "mic",
+    res = run(["campaign", str(tmp_path / "matrix.csv"), "--out-dir", str(tmp_path / "out"), "--mic", "mic",
                "--displacement", "displacement", "--radius", "0.05", "--tacho", "tacho", "--scheduler", "local",
                "--json", "--no-report"])
     assert res.exit_code == 0, res.output
@@ -189,7 +189,7 @@ def test_conditions_taken_from_channels(tmp_path):
     truth = synthetic_campaign(tmp_path, n_applications=4, duration=0.5, seed=4, condition_channels=True,
                                suffix=".tdms")
     assert np.isnan(read_matrix(tmp_path / "matrix.csv")[0].temperature_c)  # not in the matrix
-    res = run(["campaign", str(tmp_path / "matrix.csv"), "--out", str(tmp_path / "out"), "--mic", "mic",
+    res = run(["campaign", str(tmp_path / "matrix.csv"), "--out-dir", str(tmp_path / "out"), "--mic", "mic",
                "--displacement", "displacement", "--radius", "0.05", "--tacho", "tacho", "--no-report",
                "--pressure-channel", "pressure", "--temperature-channel", "temperature", "--json"])
     assert res.exit_code == 0, res.output
@@ -218,7 +218,7 @@ def test_unreadable_files_are_reported_and_the_rest_analysed(tmp_path, monkeypat
         return real(path, **kw)
 
     monkeypatch.setattr(measurement, "analyze_recording", flaky)
-    args = ["campaign", str(tmp_path / "matrix.csv"), "--out", str(tmp_path / "out"), "--mic", "mic",
+    args = ["campaign", str(tmp_path / "matrix.csv"), "--out-dir", str(tmp_path / "out"), "--mic", "mic",
             "--displacement", "displacement", "--radius", "0.05", "--tacho", "tacho", "--no-report"]
     res = run(args)
     assert res.exit_code == 1 and isinstance(res.exception, SystemExit | None), res.output

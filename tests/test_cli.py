@@ -200,7 +200,7 @@ def test_critical_and_tolerance_write_dataset_and_figure(run, tmp_path):
 def test_analyze_plot_takes_a_file_like_every_other_plot(run, tmp_path):
     # issue 15: `analyze --plot` took a folder where every other --plot takes a file
     rec = tmp_path / "r.nc"
-    assert run("synth", str(rec), "--duration", "0.3").exit_code == 0
+    assert run("synth", "--out", str(rec), "--duration", "0.3").exit_code == 0
     args = ["analyze", str(rec), "--mic", "mic", "--displacement", "displacement", "--rpm", "900", "--radius", "0.05"]
     r = run(*args, "--plot", str(tmp_path / "figs.svg"))
     assert r.exit_code == 0, r.output

@@ -20,13 +20,13 @@ def invoke(args):
 def files(tmp_path_factory):
     d = tmp_path_factory.mktemp("rec")
     for name, mode in (("rising", "rising"), ("quiet", "none")):
-        res = invoke(["synth", str(d / f"{name}.nc"), "--seed", "1", "--duration", "1", "--squeal-on", mode])
+        res = invoke(["synth", "--out", str(d / f"{name}.nc"), "--seed", "1", "--duration", "1", "--squeal-on", mode])
         assert res.exit_code == 0, res.output
     return d
 
 
 def test_synth_reports_truth(tmp_path):
-    res = invoke(["synth", str(tmp_path / "r.nc"), "--duration", "0.5", "--json"])
+    res = invoke(["synth", "--out", str(tmp_path / "r.nc"), "--duration", "0.5", "--json"])
     assert res.exit_code == 0
     out = json.loads(res.output)
     assert out["synthetic"] is True and out["truth"]["frequency_hz"] == 2388.0
@@ -172,7 +172,7 @@ def test_wav_with_scale_and_unit_and_out(tmp_path):
 
 def test_decelerating_stop_with_tacho_and_probe_settings(tmp_path):
     path = tmp_path / "stop.nc"
-    res = invoke(["synth", str(path), "--duration", "2", "--rpm-end", "300", "--probe-offset-deg", "10",
+    res = invoke(["synth", "--out", str(path), "--duration", "2", "--rpm-end", "300", "--probe-offset-deg", "10",
                   "--polarity", "-1"])
     assert res.exit_code == 0, res.output
     args = ["analyze", str(path), "--mic", "mic", "--displacement", "displacement", "--radius", "0.05",
@@ -187,7 +187,7 @@ def test_decelerating_stop_with_tacho_and_probe_settings(tmp_path):
 @pytest.mark.parametrize("suffix", [".wav", ".tdms", ".mf4", ".uff"])
 def test_synth_writes_every_daq_format_and_analyze_reads_it(tmp_path, suffix):
     path = tmp_path / f"r{suffix}"
-    assert invoke(["synth", str(path), "--duration", "1"]).exit_code == 0
+    assert invoke(["synth", "--out", str(path), "--duration", "1"]).exit_code == 0
     mic, disp = ("0", "1") if suffix == ".wav" else ("mic", "displacement")
     res = invoke(["analyze", str(path), "--mic", mic, "--displacement", disp, "--rpm", "900", "--radius", "0.05",
                   "--json"])

@@ -102,6 +102,6 @@ def test_streamed_out_gives_the_in_memory_summary(tmp_path):
 def test_synth_squeal_above_half_the_sample_rate_is_one_line(tmp_path):
     from squealkit.cli.main import cli
 
-    r = CliRunner().invoke(cli, ["synth", str(tmp_path / "r.nc"), "--fs", "1000", "--duration", "0.1"])
+    r = CliRunner().invoke(cli, ["synth", "--out", str(tmp_path / "r.nc"), "--fs", "1000", "--duration", "0.1"])
     assert r.exit_code == 2 and "fs/2 = 500 Hz" in r.stderr and len(r.stderr.strip().splitlines()) == 1
     assert list(tmp_path.iterdir()) == []

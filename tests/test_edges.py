@@ -146,7 +146,7 @@ def test_one_way_coupled_doublet_eigenvalues_are_the_closed_form():
     expected = np.sort(np.stack([f_d, f_d, f_3], axis=1), axis=1)
     assert np.allclose(freq, expected, rtol=1e-6)  # main: 0 Hz for two modes at 109 of these 200 points
     ds = stability_map(ONE_WAY, mus)
-    assert np.allclose(np.sort(ds["frequency"].values.reshape(mus.size, -1), axis=1), expected, rtol=1e-6)
+    assert np.allclose(np.sort(ds["frequency_hz"].values.reshape(mus.size, -1), axis=1), expected, rtol=1e-6)
     assert set(stability_verdict(ONE_WAY, mus).tolist()) == {"stable"}
 
 

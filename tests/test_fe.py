@@ -19,7 +19,14 @@ from squealkit._validation import InputError
 from squealkit.data import nlevp_path
 from squealkit.models import FEModel, MatrixModel, load_fe_model, load_model
 from squealkit.solvers.band import band_eigs, dense_eigs
-from squealkit.stability import eigenvalues, fe_critical_friction, fe_modes, fe_stability_map, stability_map
+from squealkit.stability import (
+    ONSET_STATUS,
+    eigenvalues,
+    fe_critical_friction,
+    fe_modes,
+    fe_stability_map,
+    stability_map,
+)
 
 # -- the NLEVP problem and its dense reference -------------------------------------------------
 
@@ -139,7 +146,7 @@ def test_two_dof_critical_friction_closed_form():
     fe, _, mu_c = two_dof()
     ds = fe_critical_friction(fe, [100.0, 1000.0], mu_max=1.0)
     np.testing.assert_allclose(ds.mu_critical.values, mu_c, atol=2e-6)
-    assert list(ds.status.values) == ["onset", "onset"]
+    assert list(ds.status.values) == [ONSET_STATUS.index("onset")] * 2
     # the run-out slope acts as friction: mu_e = mu + tan(theta)
     t = math.radians(3.0)
     ds = fe_critical_friction(fe, [100.0], mu_max=1.0, theta=t, mu_operating=0.1)
@@ -223,7 +230,7 @@ def test_sparse_sweep_tracks_band_modes():
     de_ds = fe_stability_map(fe, [100.0, 200.0], np.linspace(0.0, 1.0, 6), method="dense", band=band)
     np.testing.assert_array_equal(sp_ds.any_unstable.values, de_ds.any_unstable.values)
     assert sp_ds.any_unstable.values[:, -1].all() and not sp_ds.any_unstable.values[:, 0].any()
-    np.testing.assert_allclose(np.sort(sp_ds.frequency.values, axis=-1), np.sort(de_ds.frequency.values, axis=-1),
+    np.testing.assert_allclose(np.sort(sp_ds.frequency_hz.values, axis=-1), np.sort(de_ds.frequency_hz.values, axis=-1),
                                rtol=1e-10)
     np.testing.assert_allclose(sp_ds.max_growth_rate.values, de_ds.max_growth_rate.values, rtol=1e-8, atol=1e-9)
 
@@ -411,7 +418,7 @@ def test_cli_critical_modes_tolerance_fe(run, brake_toml):
     assert r.exit_code == 0, r.output
     out = json.loads(r.stdout)
     assert out["status"] == ["onset", "onset"] and 0.0 < out["mu_critical"][0] < 0.5
-    r = run("modes", "--config", str(brake_toml), "--rpm", "60", "--band", "0.3:0.4", "--json")
+    r = run("modes", "--config", str(brake_toml), "--rpm", "60", "--eigen-band", "0.3:0.4", "--json")
     assert r.exit_code == 0, r.output
     modes = json.loads(r.stdout)["modes"]
     assert modes and all(0.3 <= m["frequency_hz"] <= 0.4 and m["residual"] < 1e-12 for m in modes)
@@ -428,10 +435,11 @@ def test_cli_critical_modes_tolerance_fe(run, brake_toml):
         (("stability", "--CONFIG"), None),
         (("critical", "--config", "{toml}"), "needs disc speeds"),
         (("stability", "--config", "{toml}", "--rpm", "-60:60:3"), "must be > 0 rpm"),
-        (("stability", "--config", "{toml}", "--rpm", "60", "--band", "16000"), "--band '16000' must be LO:HI"),
+        (("stability", "--config", "{toml}", "--rpm", "60", "--eigen-band", "16000"),
+         "--eigen-band '16000' must be LO:HI"),
         (("stability", "--config", "{toml}", "--rpm", "60", "--theta", "-8:8:3"), "one angle"),
         (("modes", "--config", "{toml}", "--rpm", "60:120:2"), "one disc speed"),
-        (("report", "--config", "{toml}", "--out", "r"), "FE models (model = \"fe\") work with stability"),
+        (("report", "--config", "{toml}", "--out-dir", "r"), "FE models (model = \"fe\") work with stability"),
         (("simulate", "--config", "{toml}"), "work with stability, critical, modes, tolerance only"),
     ],
 )

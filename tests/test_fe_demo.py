@@ -132,11 +132,11 @@ def test_write_fe_demo_round_trip(brake, tmp_path):
 def test_cli_fe_demo_writes_a_model_folder(run, tmp_path):
     import json
 
-    r = run("fe-demo", "--size", "16", "--out", str(tmp_path / "brake"), "--json")
+    r = run("fe-demo", "--size", "16", "--out-dir", str(tmp_path / "brake"), "--json")
     assert r.exit_code == 0, r.output
     info = json.loads(r.output)
     assert info["n_dofs"] > 1000 and "brake.toml" in info["files"] and "KR.mtx" in info["files"]
-    r = run("fe-demo", "--size", "15", "--out", str(tmp_path / "b2"))
+    r = run("fe-demo", "--size", "15", "--out-dir", str(tmp_path / "b2"))
     assert r.exit_code == 2
 
 

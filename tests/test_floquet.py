@@ -50,7 +50,7 @@ def test_monodromy_against_dop853():
 
 def test_flat_disc_is_the_eigenvalue():
     r = floquet(LV, mu=0.5, amplitude=0.0, wavelength=1e-3, speed=0.02)
-    sigma = float(eigenvalues(LV, 0.5, 0.0, damped=True).real.max())
+    sigma = float(eigenvalues(LV, 0.5, tan_theta=0.0, damped=True).real.max())
     assert r.floquet_exponent == pytest.approx(sigma, rel=1e-6)
     assert r.frozen_mean == pytest.approx(sigma, rel=1e-12)
 

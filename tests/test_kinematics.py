@@ -97,12 +97,12 @@ def test_frictionless_consistent_contact_never_flutters():
     paper = get_preset("lv2013")
     consistent = paper.replace(kinematics="consistent")
     t = 0.5
-    assert stability_verdict(paper, 0.0, t).item() == "flutter"
-    assert stability_verdict(consistent, 0.0, t).item() == "stable"
+    assert stability_verdict(paper, 0.0, tan_theta=t).item() == "flutter"
+    assert stability_verdict(consistent, 0.0, tan_theta=t).item() == "stable"
     assert critical_friction(paper, math.atan(t)).status == "unstable_at_start"
     assert critical_friction(consistent, math.atan(t)).status != "unstable_at_start"
     slopes = np.linspace(-0.8, 0.8, 33)
-    assert np.all(stability_verdict(consistent, 0.0, slopes) == "stable")
+    assert np.all(stability_verdict(consistent, 0.0, tan_theta=slopes) == "stable")
 
 
 @pytest.mark.parametrize(("theta_deg", "kin", "expected"), [

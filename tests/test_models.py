@@ -102,8 +102,8 @@ def test_stiffness_matrix_is_eq_4_as_printed():
 def test_reversed_sliding_equals_mirrored_pin_incline():
     # sliding = -1 gives the eigenvalues of eq. (4) with alpha -> -alpha (the mirror image).
     mu = np.linspace(0, 0.8, 9)
-    a = eigenvalues(PinOnDisc3DOF(sliding=-1), mu, 0.05)
-    b = eigenvalues(PinOnDisc3DOF(sliding=1, alpha=-math.radians(2.0)), mu, 0.05)
+    a = eigenvalues(PinOnDisc3DOF(sliding=-1), mu, tan_theta=0.05)
+    b = eigenvalues(PinOnDisc3DOF(sliding=1, alpha=-math.radians(2.0)), mu, tan_theta=0.05)
     np.testing.assert_allclose(a, b, rtol=1e-10)
 
 

@@ -94,7 +94,7 @@ def test_preset_eigenvectors_solve_the_quadratic_problem(mu, damped):
     right, left = relative_residuals(ds, LV, damped)
     assert right.max() < 1e-10 and left.max() < 1e-10
     # one mode per pair: the same eigenvalues as the stability engine (LAPACK-level agreement)
-    ref = eigenvalues(LV, mu, math.tan(math.radians(2.0)), damped=damped)
+    ref = eigenvalues(LV, mu, tan_theta=math.tan(math.radians(2.0)), damped=damped)
     lam = ds.growth_rate.values + 1j * ds.omega.values
     np.testing.assert_allclose(np.sort(lam.imag), np.sort(ref.imag), rtol=1e-10)
     assert np.abs(lam[:, None] - ref[None, :]).min(axis=1).max() < 1e-9 * np.abs(ref).max()

@@ -161,3 +161,85 @@ def test_every_rename_points_at_a_real_parameter():
         params = inspect.signature(obj).parameters
         for old, new in obj.__renamed_kwargs__.items():
             assert new in params and old not in params, (name, old, new)
+
+
+# -- CLI options: one name, one type, one meaning (cli/_options.py OPTIONS) -------------------------
+
+
+def _cli_commands():
+    import click
+
+    from squealkit.cli.main import cli
+
+    ctx = click.Context(cli)
+    for name in cli.list_commands(ctx):
+        cmd = cli.get_command(ctx, name)
+        assert not isinstance(cmd, click.Group), name  # no nested groups yet; walk them when there are
+        yield name, cmd
+
+
+def cli_option_problems(commands) -> list[str]:
+    """How the options of ``commands`` ((name, click command) pairs) break the one vocabulary:
+    an option not declared in OPTIONS, or with another type, repeatability or unit than declared;
+    a hidden option that is not a declared deprecated alias of an option of the same command."""
+    import click
+
+    from squealkit.cli._options import DEPRECATED_OPTIONS, OPTIONS, option_type
+
+    problems = []
+    for cmd_name, cmd in commands:
+        names = {o for p in cmd.params if isinstance(p, click.Option) and not p.hidden for o in p.opts}
+        for p in cmd.params:
+            if not isinstance(p, click.Option):
+                continue
+            for opt in p.opts:
+                where = f"{cmd_name} {opt}"
+                if p.hidden:
+                    new = DEPRECATED_OPTIONS.get((cmd_name, opt))
+                    if new is None or new not in names:
+                        problems.append(f"{where}: hidden, but not a declared deprecated alias of an option here")
+                    continue
+                term = OPTIONS.get(opt)
+                if term is None:
+                    problems.append(f"{where}: not declared in cli/_options.py OPTIONS")
+                    continue
+                if option_type(p) != term.type:
+                    problems.append(f"{where}: type {option_type(p)}, declared {term.type} ({term.meaning})")
+                if bool(p.multiple) != term.multiple:
+                    problems.append(f"{where}: multiple={p.multiple}, declared {term.multiple}")
+                if term.unit and term.unit not in (p.help or ""):
+                    problems.append(f"{where}: the help must state {term.unit!r}: {(p.help or '')[:70]!r}")
+    return problems
+
+
+def test_cli_options_have_one_type_and_meaning_everywhere():
+    """Every option of every command is declared once in cli/_options.py, with one type (a number,
+    a range, a file, a folder...) and the unit its help states: ``--rpm`` is a disc speed [rpm]
+    that takes a number or a range everywhere (commands needing one value refuse a range),
+    ``--band`` the squeal band (the FE eigenvalue band is ``--eigen-band``), ``--out``/``--plot``
+    files (folders are ``--out-dir``), one tacho option ``--pulses-per-rev``."""
+    from squealkit.cli._options import DEPRECATED_OPTIONS, OPTIONS
+
+    commands = list(_cli_commands())
+    assert not cli_option_problems(commands), "\n".join(cli_option_problems(commands))
+    used = {o for _, cmd in commands for p in cmd.params for o in getattr(p, "opts", ()) if not getattr(p, "hidden", 0)}
+    assert set(OPTIONS) - used == set(), "declared but used by no command"
+    assert {(c, o) for c, cmd in commands for p in cmd.params if getattr(p, "hidden", False) for o in p.opts} \
+        == set(DEPRECATED_OPTIONS)
+
+
+def test_the_cli_option_check_catches_a_breach():
+    import click
+
+    @click.command()
+    @click.option("--rpm", type=float, help="Disc speed [rpm].")  # a number where --rpm is a number or a range
+    @click.option("--band", default=None, help="Eigenvalue band.")  # the unit [Hz] not stated
+    @click.option("--tacho-ppr", type=int, default=1)  # not declared: the name is --pulses-per-rev
+    @click.option("--out", "out_dir", type=click.Path(file_okay=False))  # a folder: --out-dir
+    @click.option("--old", hidden=True)  # a hidden option that is no declared alias
+    def c(**kw):
+        pass
+
+    problems = cli_option_problems([("demo", c)])
+    assert [p.split(":")[0] for p in problems] == ["demo --rpm", "demo --band", "demo --tacho-ppr", "demo --out",
+                                                  "demo --old"], problems

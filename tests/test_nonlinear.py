@@ -108,7 +108,7 @@ def test_branch_of_the_paper_model_starts_at_the_damped_critical_friction():
     # the contact law is piecewise linear about steady sliding: no cubic term, l1 = 0, and the
     # onset type comes from the branch (it leaves towards higher friction, stable: soft onset)
     assert ds.attrs["lyapunov_coefficient"] == 0.0
-    assert (ds.attrs["kind"], ds.attrs["kind_from"]) == ("supercritical", "branch")
+    assert (ds.attrs["hopf_kind"], ds.attrs["hopf_kind_from"]) == ("supercritical", "branch")
     above = ds.mu.values > crit.mu_critical + 0.05
     assert above.any() and ds.stable.values[above].all()
     assert (ds.contact_loss_fraction.values[above] > 0).all()  # bounded by loss of contact
@@ -215,7 +215,7 @@ def test_subcritical_branch_fold_stability_and_hysteresis():
     assert not ds.stable.values[inner].any() and ds.stable.values[outer].all()
     lo, hi = ds.attrs["hysteresis_mu"]
     assert lo == pytest.approx(-0.125, abs=0.125 * 2 * eps) and abs(hi) < 1e-9
-    assert ds.attrs["kind"] == "subcritical"
+    assert ds.attrs["hopf_kind"] == "subcritical"
 
 
 def test_branch_over_the_run_out_slope_starts_where_mu_is_critical():
@@ -247,7 +247,7 @@ def test_stribeck_friction_gives_a_hard_onset_with_hysteresis_that_transients_co
     model, contact = get_preset("lv2013"), Contact.nonlinear(mu_static=0.6, v_stribeck=0.01)
     ds = limit_cycle_branch(model, (0.1, 0.8), contact=contact, harmonics=10, n_points=21, n_floquet=512,
                             check_harmonics=False)
-    assert ds.attrs["lyapunov_coefficient"] > 0 and ds.attrs["kind"] == "subcritical"
+    assert ds.attrs["lyapunov_coefficient"] > 0 and ds.attrs["hopf_kind"] == "subcritical"
     assert ds.sizes["fold"] == 1
     lo, hi = ds.attrs["hysteresis_mu"]
     assert lo == pytest.approx(ds.fold_mu.values[0]) and hi == pytest.approx(ds.attrs["hopf_mu"])

@@ -81,7 +81,7 @@ def test_fedemo_onto_a_file_is_refused(run, tmp_path):
     for name in ("r.nc", "b"):
         (tmp_path / name).write_text("the user's recording")
         before = _tree(tmp_path)
-        r = run("fe-demo", "--size", "16", "--out", str(tmp_path / name))
+        r = run("fe-demo", "--size", "16", "--out-dir", str(tmp_path / name))
         assert r.exit_code == 2 and "is a file" in _one_line(r)
         assert _tree(tmp_path) == before
 
@@ -148,7 +148,7 @@ def test_a_zarr_marker_does_not_make_a_folder_squealkits(run, tmp_path):
     (out / "zarr.json").write_text("{}")
     (out / "thesis.txt").write_text("thesis draft")
     before = _tree(tmp_path)
-    r = run("reproduce", "--quick", "--out", str(out))
+    r = run("reproduce", "--quick", "--out-dir", str(out))
     assert r.exit_code == 2 and "did not write" in _one_line(r)
     assert _tree(tmp_path) == before
 
@@ -176,7 +176,7 @@ def test_force_never_replaces_a_users_file_of_the_same_name(run, tmp_path):
     (out / "report.html").write_text("<html>my own report</html>")
     (out / "figures" / "fig2.png").write_text("mine")
     before = _tree(tmp_path)
-    r = run("reproduce", "--quick", "--force", "--out", str(out))
+    r = run("reproduce", "--quick", "--force", "--out-dir", str(out))
     assert r.exit_code == 2 and "report.html" in _one_line(r) and "does not replace" in r.stderr
     assert _tree(tmp_path) == before
 
@@ -203,7 +203,7 @@ def test_campaign_refuses_a_folder_of_the_users_files(run, tmp_path, small_campa
     (out / "report.html").write_text("<html>mine</html>")
     (out / "notes.txt").write_text("notes")
     before = _tree(tmp_path)
-    r = run("campaign", str(small_campaign / "matrix.csv"), "--out", str(out), *CAMPAIGN_OPTS)
+    r = run("campaign", str(small_campaign / "matrix.csv"), "--out-dir", str(out), *CAMPAIGN_OPTS)
     assert r.exit_code == 2 and "did not write" in _one_line(r)
     assert _tree(tmp_path) == before
 
@@ -218,7 +218,7 @@ def test_campaign_never_takes_the_users_database_as_its_store(run, tmp_path, sma
     con.execute("CREATE TABLE mine AS SELECT 42 AS answer")
     con.close()
     before = (out / "campaign.duckdb").read_bytes()
-    r = run("campaign", str(small_campaign / "matrix.csv"), "--out", str(out), *CAMPAIGN_OPTS)
+    r = run("campaign", str(small_campaign / "matrix.csv"), "--out-dir", str(out), *CAMPAIGN_OPTS)
     assert r.exit_code == 2 and "campaign.duckdb" in _one_line(r)
     assert (out / "campaign.duckdb").read_bytes() == before
     assert sorted(os.listdir(out)) == ["campaign.duckdb"]
@@ -228,7 +228,7 @@ def test_campaign_folder_is_squealkits_and_runs_again(run, tmp_path, small_campa
     # the campaign's folder carries a manifest: a second run resumes it; --no-report drops the old report
     out = tmp_path / "o"
     for extra in ([], ["--no-report"]):
-        r = run("campaign", str(small_campaign / "matrix.csv"), "--out", str(out), *CAMPAIGN_OPTS, *extra)
+        r = run("campaign", str(small_campaign / "matrix.csv"), "--out-dir", str(out), *CAMPAIGN_OPTS, *extra)
         assert r.exit_code == 0, r.output
     listed = json.loads((out / MANIFEST).read_text())["files"]
     assert "campaign.duckdb" in listed and "summary.json" in listed and "report.html" not in listed
@@ -242,7 +242,7 @@ def test_synth_campaign_refuses_a_folder_of_the_users_files(run, tmp_path):
     (out / "notes.txt").write_text("notes")
     (out / "matrix.csv").write_text("application,file\n")
     before = _tree(tmp_path)
-    r = run("synth", str(out), "--campaign", "2", "--duration", "0.2")
+    r = run("synth", "--out-dir", str(out), "--campaign", "2", "--duration", "0.2")
     assert r.exit_code == 2 and "did not write" in _one_line(r)
     assert _tree(tmp_path) == before
 
@@ -320,7 +320,8 @@ def _interrupt(tmp_path: Path, args: list[str], ready: str, signals: tuple[int, 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGQUIT])
 def test_interrupted_synthetic_campaign_leaves_no_recordings(tmp_path, sig):
     # sig-synth-campaign-int-0, sig2-synth-campaign-term-*: camp2/recordings/A0001-A0006.nc stayed, no matrix.csv
-    code, err, cwd = _interrupt(tmp_path, ["synth", "camp", "--campaign", "40", "--duration", "0.5", "--json"],
+    code, err, cwd = _interrupt(tmp_path, ["synth", "--out-dir", "camp", "--campaign", "40", "--duration", "0.5",
+                                           "--json"],
                                 ".camp.*/recordings/A0002.nc", (sig,))
     assert code == 128 + sig, err
     assert os.listdir(cwd) == []
@@ -375,7 +376,7 @@ def test_a_second_signal_does_not_break_off_the_cleanup(tmp_path, monkeypatch):
 
 def test_campaign_interrupted_in_its_report_writes_no_summary(tmp_path, small_campaign):
     # sig2-campaign-int-1: summary.json and 2 of 5 figures were written, no report.html
-    code, err, cwd = _interrupt(tmp_path, ["campaign", str(small_campaign / "matrix.csv"), "--out", "o",
+    code, err, cwd = _interrupt(tmp_path, ["campaign", str(small_campaign / "matrix.csv"), "--out-dir", "o",
                                            *CAMPAIGN_OPTS, "--json"], "o/.squealkit-stage.*/figures/*.png",
                                 (signal.SIGINT,))
     assert code == 130, err
@@ -402,8 +403,8 @@ def tiny_disk(tmp_path_factory):
     ["stability", "--mu", "0:0.8:401", "--theta", "-8:8:401", "--out", "{d}/m.nc"],  # full-stab-nc
     ["simulate", "--duration", "3", "--out", "{d}/s.nc", "--json"],  # full-sim-nc: streamed, block by block
     ["simulate", "--duration", "3", "--out", "{d}/s.zarr", "--json"],  # full-sim-zarr: '.part/zarr.json' stayed
-    ["synth", "{d}/r.uff", "--duration", "5"],  # full-synth-uff: pyuff's raw traceback
-    ["synth", "{d}/camp", "--campaign", "30", "--duration", "1", "--json"],  # full-synth-campaign
+    ["synth", "--out", "{d}/r.uff", "--duration", "5"],  # full-synth-uff: pyuff's raw traceback
+    ["synth", "--out-dir", "{d}/camp", "--campaign", "30", "--duration", "1", "--json"],  # full-synth-campaign
 ], ids=["stability-nc", "simulate-nc", "simulate-zarr", "synth-uff", "synth-campaign"])
 def test_a_full_disk_is_one_line_and_leaves_nothing(tiny_disk, args):
     for p in tiny_disk.iterdir():
@@ -422,7 +423,7 @@ def test_a_full_disk_is_one_line_and_leaves_nothing(tiny_disk, args):
 
 @pytest.mark.parametrize("args", [
     ["stability", "--mu", "0:0.8:3", "--theta", "0", "--out", "same.zarr"],  # race-stab-zarr
-    ["campaign", "{camp}/matrix.csv", "--out", "same.zarr", *CAMPAIGN_OPTS, "--no-report"],  # race-campaign
+    ["campaign", "{camp}/matrix.csv", "--out-dir", "same.zarr", *CAMPAIGN_OPTS, "--no-report"],  # race-campaign
 ], ids=["stability", "campaign"])
 def test_an_output_being_written_is_refused_to_a_second_run(tmp_path, small_campaign, args):
     # the first run holds same.zarr (staged, as a run holds it from its check to its end)

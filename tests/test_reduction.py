@@ -167,8 +167,8 @@ def test_reduced_residual_is_the_full_model_backward_error(brake, pod):
 
 def test_reduced_sweep_dataset(pod):
     ds = reduced_sweep(pod, [20.0, 50.0], [0.0, 0.3, 0.6], band=BAND)
-    assert ds.growth_rate.dims == ("omega", "mu", "mode")
-    assert ds.sizes["omega"] == 2 and ds.sizes["mu"] == 3
+    assert ds.growth_rate.dims == ("rpm", "mu", "mode")  # the disc speed is rpm / disc_speed, never omega
+    assert ds.sizes["rpm"] == 2 and ds.sizes["mu"] == 3
     np.testing.assert_allclose(ds.rpm, np.array([20.0, 50.0]) * 60 / (2 * math.pi))
     assert not ds.any_unstable.sel(mu=0.0).any()
     assert ds.any_unstable.sel(mu=0.6).all()

@@ -61,11 +61,12 @@ HUGE = [
     ("sim-dur-1e300-out", ["simulate", "--duration", "1e300", "--out", "{tmp}/x.nc"],
      ["1e+300 s", "SQUEALKIT_MAX_HOURS"]),
     ("sim-rk4-long", ["simulate", "--method", "rk4", "--duration", "1e6", "--fs", "1"], ["1e+06 s", "h"]),
-    ("synth-campaign-huge", ["synth", "{tmp}/camp", "--campaign", "1000000000"], ["1000000000 applications"]),
-    ("synth-huge-dur", ["synth", "{tmp}/r.nc", "--duration", "1e300"], ["1e+300 s"]),
-    ("synth-huge-fs", ["synth", "{tmp}/r.nc", "--fs", "1e300"], ["1e+300 Hz"]),
-    ("fedemo-nz-huge", ["fe-demo", "--size", "16", "--n-z", "100000", "--out", "{tmp}/b"], ["elements", "memory"]),
-    ("fedemo-size-huge", ["fe-demo", "--size", "100000", "--out", "{tmp}/b"], ["elements", "memory"]),
+    ("synth-campaign-huge", ["synth", "--out-dir", "{tmp}/camp", "--campaign", "1000000000"],
+     ["1000000000 applications"]),
+    ("synth-huge-dur", ["synth", "--out", "{tmp}/r.nc", "--duration", "1e300"], ["1e+300 s"]),
+    ("synth-huge-fs", ["synth", "--out", "{tmp}/r.nc", "--fs", "1e300"], ["1e+300 Hz"]),
+    ("fedemo-nz-huge", ["fe-demo", "--size", "16", "--n-z", "100000", "--out-dir", "{tmp}/b"], ["elements", "memory"]),
+    ("fedemo-size-huge", ["fe-demo", "--size", "100000", "--out-dir", "{tmp}/b"], ["elements", "memory"]),
     ("floq-map-huge", ["floquet", "--mu", "0:1:100000", "--sro-amplitude", "0:1e-4:100000"], ["100000 x 100000"]),
     ("floq-speed-1e-300", ["floquet", "--speed", "1e-300"], ["steps per period"]),
     ("floq-wl-1e300", ["floquet", "--sro-wavelength", "1e300"], ["steps per period"]),
@@ -137,8 +138,8 @@ EXTREME = [
     ("crit-mumax-1e300", ["critical", "--mu-max", "1e300", "--json"], ["mu_max=1e+300", "[0, 100]"]),
     ("modes-mu-1e300", ["modes", "--mu", "1e300", "--json"], ["1e+300", "1e+30 N/m"]),
     ("floq-amp-huge", ["floquet", "--sro-amplitude", "1", "--json"], ["amplitude=1.0 m", "[0, 0.01] m"]),
-    ("synth-level-huge", ["synth", "{tmp}/r.nc", "--level-dba", "1e300"], ["level_dba=1e+300", "[-50, 200]"]),
-    ("synth-level-nan", ["synth", "{tmp}/r.nc", "--level-dba", "nan"], ["level_dba=nan", "finite"]),
+    ("synth-level-huge", ["synth", "--out", "{tmp}/r.nc", "--level-dba", "1e300"], ["level_dba=1e+300", "[-50, 200]"]),
+    ("synth-level-nan", ["synth", "--out", "{tmp}/r.nc", "--level-dba", "nan"], ["level_dba=nan", "finite"]),
     ("sim-speed-1e300", ["simulate", "--speed", "1e300", "--duration", "0.001", "--json"],
      ["speed=1e+300 m/s", "[0, 1000] m/s"]),
     ("an-rpm-tiny", ["analyze", "{rec}", "--mic", "mic", "--displacement", "displacement", "--rpm", "1e-6",
@@ -216,9 +217,9 @@ def test_campaign_options_checked_before_anything_is_written(run, tmp_path, reco
     matrix = tmp_path / "matrix.csv"
     matrix.write_text(f"application,file\nA1,{recording}\n")
     common = ["campaign", str(matrix), "--mic", "mic", "--displacement", "displacement"]
-    _refused(run(*common, "--radius", "0", "--rpm", "900", "--out", str(tmp_path / "o1")), "radius=0.0")
+    _refused(run(*common, "--radius", "0", "--rpm", "900", "--out-dir", str(tmp_path / "o1")), "radius=0.0")
     _refused(run(*common, "--radius", "0.05", "--tacho", "tacho", "--pulses-per-rev", "0",
-                 "--out", str(tmp_path / "o2")), "pulses_per_rev=0")
+                 "--out-dir", str(tmp_path / "o2")), "pulses_per_rev=0")
     with pytest.raises(InputError, match="radius=-1"):
         run_campaign(matrix, tmp_path / "o3", mic="mic", displacement="displacement", radius=-1, rpm=900,
                      report=False)
@@ -227,13 +228,14 @@ def test_campaign_options_checked_before_anything_is_written(run, tmp_path, reco
 
 IGNORED = [
     ("tol-mumax-nonfe", ["tolerance", "--mu", "0.3", "--mu-max", "0.5"], ["--mu-max", "FE models only"]),
-    ("report-radius-no-rec", ["report", "--quick", "--radius", "0.05", "--out", "{tmp}/r"],
+    ("report-radius-no-rec", ["report", "--quick", "--radius", "0.05", "--out-dir", "{tmp}/r"],
      ["--radius", "--recording"]),
-    ("report-rpm-no-rec", ["report", "--quick", "--rpm", "900", "--out", "{tmp}/r"], ["--rpm", "--recording"]),
+    ("report-rpm-no-rec", ["report", "--quick", "--rpm", "900", "--out-dir", "{tmp}/r"], ["--rpm", "--recording"]),
     ("tol-damped-fe", ["tolerance", "--config", "{fe}", "--mu", "0.3", "--rpm", "60", "--damped"],
      ["--damped", "small models"]),
-    ("synth-rpm-campaign", ["synth", "{tmp}/c", "--campaign", "2", "--rpm", "900"], ["--rpm", "--campaign"]),
-    ("synth-format-one", ["synth", "{tmp}/r.nc", "--format", ".csv"], ["--format", "--campaign only"]),
+    ("synth-rpm-campaign", ["synth", "--out-dir", "{tmp}/c", "--campaign", "2", "--rpm", "900"],
+     ["--rpm", "--campaign"]),
+    ("synth-format-one", ["synth", "--out", "{tmp}/r.nc", "--format", ".csv"], ["--format", "--campaign only"]),
 ]
 
 

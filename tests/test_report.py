@@ -152,7 +152,7 @@ def test_cli_reproduce_quick_json(tmp_path, monkeypatch, paper):
         return paper
 
     monkeypatch.setattr(squealkit.report, "reproduce", fake)
-    r = CliRunner().invoke(cli, ["reproduce", "--quick", "--out", str(tmp_path / "r"), "--json"])
+    r = CliRunner().invoke(cli, ["reproduce", "--quick", "--out-dir", str(tmp_path / "r"), "--json"])
     assert r.exit_code == 0, r.output
     (out_dir, kwargs), = calls
     assert out_dir == tmp_path / "r" and kwargs["quick"] is True and kwargs["model"] is None
@@ -171,7 +171,7 @@ def _text(html: str) -> str:
 def rec2844(tmp_path_factory):
     # issue 15's case: squeal at 2844 Hz on a disc turning at 600 rpm (a SYNTHETIC recording, 6 revolutions)
     rec = tmp_path_factory.mktemp("rec") / "run1.nc"
-    r = CliRunner().invoke(cli, ["synth", str(rec), "--freq", "2844", "--rpm", "600", "--duration", "0.6",
+    r = CliRunner().invoke(cli, ["synth", "--out", str(rec), "--freq", "2844", "--rpm", "600", "--duration", "0.6",
                                  "--seed", "3"])
     assert r.exit_code == 0, r.output
     return rec
@@ -188,7 +188,7 @@ def own_rig(tmp_path_factory, rec2844):
     cfg = d / "myrig.toml"
     cfg.write_text((Path(__file__).parents[1] / "examples" / "myrig.toml").read_text())
     r = CliRunner().invoke(cli, ["report", "--config", str(cfg), "--quick", "--recording", str(rec2844),
-                                 "--rpm", "600", "--radius", "0.05", "--out", str(d / "mine"), "--json"])
+                                 "--rpm", "600", "--radius", "0.05", "--out-dir", str(d / "mine"), "--json"])
     assert r.exit_code == 0, r.output
     html = (d / "mine" / "report.html").read_text()
     return SimpleNamespace(numbers=json.loads(r.stdout)["numbers"], html=html, text=_text(html), out=d / "mine")
@@ -250,9 +250,9 @@ def test_cli_report_bad_input(tmp_path):
     assert r.exit_code == 2 and "does not exist" in r.stderr and len(r.stderr.strip().splitlines()) == 1
     f = tmp_path / "file"
     f.write_text("x")
-    r = CliRunner().invoke(cli, ["reproduce", "--out", str(f)])
+    r = CliRunner().invoke(cli, ["reproduce", "--out-dir", str(f)])
     assert r.exit_code == 2 and "is a file" in r.stderr
-    r = CliRunner().invoke(cli, ["reproduce", "--out", str(tmp_path / "no" / "such")])
+    r = CliRunner().invoke(cli, ["reproduce", "--out-dir", str(tmp_path / "no" / "such")])
     assert r.exit_code == 2 and "does not exist" in r.stderr and len(r.stderr.strip().splitlines()) == 1
 
 
@@ -266,7 +266,7 @@ def test_report_for_a_matrix_model(tmp_path):
     cfg = tmp_path / "mat.toml"
     cfg.write_text('model = "matrix"\n[matrices]\nM = [[1.0, 0.0], [0.0, 1.0]]\nK0 = [[1e6, 0.0], [0.0, 1.2e6]]\n'
                    'Kn = [[0.0, 0.0], [0.0, 0.0]]\nKf = [[0.0, 2e5], [-2e5, 0.0]]\n')
-    r = CliRunner().invoke(cli, ["report", "--config", str(cfg), "--quick", "--out", str(tmp_path / "m")])
+    r = CliRunner().invoke(cli, ["report", "--config", str(cfg), "--quick", "--out-dir", str(tmp_path / "m")])
     assert r.exit_code == 0, r.output
     text = _text((tmp_path / "m" / "report.html").read_text())
     assert "model: matrix, from mat.toml" in text

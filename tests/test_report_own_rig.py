@@ -44,7 +44,7 @@ def _text(html: str) -> str:
 def _run_report(d: Path, toml: str, *extra: str) -> SimpleNamespace:
     cfg = d / "rig.toml"
     cfg.write_text(toml)
-    r = CliRunner().invoke(cli, ["report", "--config", str(cfg), "--quick", "--out", str(d / "out"), "--json",
+    r = CliRunner().invoke(cli, ["report", "--config", str(cfg), "--quick", "--out-dir", str(d / "out"), "--json",
                                  *extra])
     assert r.exit_code == 0, (r.output, r.stderr)
     html = (d / "out" / "report.html").read_text()

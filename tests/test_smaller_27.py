@@ -252,7 +252,7 @@ def _campaign(d, out, *extra):
 
     from squealkit.cli.main import cli
 
-    res = CliRunner().invoke(cli, ["campaign", str(d / "matrix.csv"), "--out", str(d / out), "--mic", "mic",
+    res = CliRunner().invoke(cli, ["campaign", str(d / "matrix.csv"), "--out-dir", str(d / out), "--mic", "mic",
                                    "--displacement", "displacement", "--radius", "0.05", "--no-report", "--json",
                                    *extra])
     return res, json.loads(res.stdout) if res.stdout.strip() else None

@@ -72,7 +72,7 @@ def test_fig2_real_parts_split_into_two_branches(fig2):
 
 def test_undamped_without_friction_is_purely_imaginary():
     for model in (get_preset("lv2013"), Hoffmann2002()):
-        lam = eigenvalues(model, 0.0, 0.0)
+        lam = eigenvalues(model, 0.0, tan_theta=0.0)
         assert np.all(np.abs(lam.real) < 1e-12 * np.abs(lam))
         # and equals sqrt of the symmetric generalised eigenproblem K x = w^2 M x
         K = model.stiffness_matrix(0.0, 0.0)
@@ -86,7 +86,7 @@ def test_kernel_agrees_with_lapack_on_grid(damped):
     model = get_preset("lv2013")
     mu = np.linspace(0, 0.8, 61)[:, None]
     t = np.tan(np.radians(np.linspace(-8, 8, 41)))[None, :]
-    ours = eigenvalues(model, mu, t, damped=damped)
+    ours = eigenvalues(model, mu, tan_theta=t, damped=damped)
     ref = lapack_eigvals(model, *np.broadcast_arrays(mu, t), damped)
     assert max_rel_mismatch(ours, ref) < 1e-7
 
@@ -131,8 +131,8 @@ def test_mu_e_critical_nearly_constant_over_theta():
 def test_critical_friction_is_on_the_boundary():
     m = get_preset("lv2013")
     c = critical_friction(m, math.radians(3.0))
-    lam_below = eigenvalues(m, c.mu_critical - 1e-6, math.tan(math.radians(3.0)))
-    lam_above = eigenvalues(m, c.mu_critical + 1e-6, math.tan(math.radians(3.0)))
+    lam_below = eigenvalues(m, c.mu_critical - 1e-6, tan_theta=math.tan(math.radians(3.0)))
+    lam_above = eigenvalues(m, c.mu_critical + 1e-6, tan_theta=math.tan(math.radians(3.0)))
     assert lam_below.real.max() < 1e-9 * np.abs(lam_below).max()
     assert lam_above.real.max() > 1e-9 * np.abs(lam_above).max()
 
@@ -149,8 +149,8 @@ def test_runout_tolerance_closes_the_loop():
     tol = runout_tolerance(m, mu, wavelength=lam)
     assert tol.limiting_side == "rising"
     # stable just below the slope limit, unstable just above (root-finding to 1e-6)
-    assert eigenvalues(m, mu, tol.tan_theta_max * (1 - 1e-6)).real.max() < 1e-3
-    assert eigenvalues(m, mu, tol.tan_theta_max * (1 + 1e-6)).real.max() > 1e-3
+    assert eigenvalues(m, mu, tan_theta=tol.tan_theta_max * (1 - 1e-6)).real.max() < 1e-3
+    assert eigenvalues(m, mu, tan_theta=tol.tan_theta_max * (1 + 1e-6)).real.max() > 1e-3
     # eq. 11: tan(theta) = 2 pi q0 / lambda
     assert tol.q0_max == pytest.approx(tol.tan_theta_max * lam / (2 * math.pi))
     assert mu + tol.tan_theta_max == pytest.approx(critical_friction(m).mu_e_critical, abs=2e-3)
@@ -266,7 +266,7 @@ def test_dataset_round_trip(tmp_path, fig2, suffix):
 def test_dataset_labels_and_units(fig2):
     assert fig2.growth_rate.attrs["units"] == "1/s"
     assert fig2.omega.attrs["units"] == "rad/s"
-    assert fig2.frequency.attrs["units"] == "Hz"
+    assert fig2.frequency_hz.attrs["units"] == "Hz"
     assert fig2.theta.attrs["units"] == "rad"
     np.testing.assert_allclose(fig2.mu_e.values, fig2.mu.values[:, None] + fig2.tan_theta.values[None, :])
 
@@ -292,7 +292,7 @@ def test_warm_start_through_a_double_root_finds_every_root():
     m = MatrixModel(M=np.eye(2), K0=np.diag([1.0e6, 0.5e6]), Kf=np.diag([0.0, 1.0e6]))
     for n in (101, 1001, 10007):
         mu = np.linspace(0, 1, n)
-        lam = eigenvalues(m, mu[None, :], 0.0)[0]  # one row: each point warm-started from the last
+        lam = eigenvalues(m, mu[None, :], tan_theta=0.0)[0]  # one row: each point warm-started from the last
         ref = np.sort(np.stack([np.sqrt(0.5e6 + 1e6 * mu), np.full_like(mu, 1e3)], axis=1), axis=1)
         # sqrt(eps)-level at the exact double root, as for any polynomial root finder
         np.testing.assert_allclose(np.sort(lam.imag, axis=1), ref, rtol=1e-8)

@@ -71,8 +71,8 @@ def test_preset_divergence_is_reported():
     # LAPACK on the state matrix of the paper's rig, damped, mu = 1.885, theta = 45 deg:
     # a real root of +933.8 1/s (issue #10, case 1)
     m = get_preset("lv2013")
-    assert stability_verdict(m, 1.885, 1.0, damped=True).tolist() == "divergence"
-    lam = eigenvalues(m, 1.885, 1.0, damped=True)
+    assert stability_verdict(m, 1.885, tan_theta=1.0, damped=True).tolist() == "divergence"
+    lam = eigenvalues(m, 1.885, tan_theta=1.0, damped=True)
     assert lam.real.max() == pytest.approx(933.8, abs=0.1)
     res = CliRunner().invoke(cli, ["stability", "--mu", "1.885:1.885:1", "--theta=45:45:1", "--damped", "--json"])
     assert res.exit_code == 0, res.output

@@ -171,8 +171,8 @@ def test_zero_slope_reduces_to_constant_friction_exactly():
     assert fast.attrs["speed"] == 1.0 and fast.attrs["mu_static"] == 0.6
     # At V = 40 v_stribeck the slope is ~1e-18 relative: every point has its own (tiny)
     # friction damping and is solved on its own, and still agrees to rounding.
-    lam = eigenvalues(model, mu[:, None], np.tan(theta)[None, :], damped=True, friction=law, speed=0.04)
-    lam0 = eigenvalues(model, mu[:, None], np.tan(theta)[None, :], damped=True)
+    lam = eigenvalues(model, mu[:, None], tan_theta=np.tan(theta)[None, :], damped=True, friction=law, speed=0.04)
+    lam0 = eigenvalues(model, mu[:, None], tan_theta=np.tan(theta)[None, :], damped=True)
     np.testing.assert_allclose(lam, lam0, rtol=1e-11, atol=1e-11 * np.abs(lam0).max())
 
 

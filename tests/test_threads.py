@@ -75,9 +75,9 @@ def test_serial_and_parallel_give_identical_eigenvalues(monkeypatch):
         one = stability_map(model, mu, theta, damped=True)
     np.testing.assert_array_equal(one.growth_rate.values, ref.growth_rate.values)
     np.testing.assert_array_equal(one.omega.values, ref.omega.values)
-    lam = eigenvalues(model, mu[:, None], np.tan(theta)[None, :])
+    lam = eigenvalues(model, mu[:, None], tan_theta=np.tan(theta)[None, :])
     with limit_threads(1):
-        np.testing.assert_array_equal(eigenvalues(model, mu[:, None], np.tan(theta)[None, :]), lam)
+        np.testing.assert_array_equal(eigenvalues(model, mu[:, None], tan_theta=np.tan(theta)[None, :]), lam)
 
 
 @pytest.fixture()

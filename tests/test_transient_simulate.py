@@ -58,7 +58,7 @@ def test_growth_rate_matches_stability_engine():
     from squealkit.stability.eigen import eigenvalues
 
     ds = simulate(LV, mu=0.4, profile=FIG4, duration=0.003, fs=10_000)
-    lam = eigenvalues(LV, 0.4, ds.tan_theta.values, damped=True)
+    lam = eigenvalues(LV, 0.4, tan_theta=ds.tan_theta.values, damped=True)
     assert np.allclose(ds.growth_rate, lam.real.max(-1))
     # Rising SRO (tan theta > 0) destabilises (paper section 4, Fig. 4).
     assert ds.growth_rate[0] > 0

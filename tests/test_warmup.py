@@ -31,7 +31,7 @@ def test_lapack_stand_in_gives_the_eigenvalues():
 
     model = get_preset("lv2013")
     got = _warmup._lapack_eigenvalues(model, [0.2, 0.5], 0.05, damped=True)
-    want = eigenvalues(model, [0.2, 0.5], 0.05, damped=True)
+    want = eigenvalues(model, [0.2, 0.5], tan_theta=0.05, damped=True)
     for g, w in zip(got, want, strict=True):
         assert np.sort_complex(g) == pytest.approx(np.sort_complex(w), rel=1e-9)
 

@@ -5,10 +5,11 @@ packages import it, so every result they return has it. It imports only xarray: 
 module (and so matplotlib) is imported when :meth:`SquealAccessor.plot` is called, never before,
 so computation stays free of plotting (python-control's ``result.plot()`` does the same).
 
-The kind of result is read from what the Dataset holds (its variables and dimensions), which a
-result keeps when it is saved and loaded back (:func:`squealkit.io.save_dataset`), so a file from
-disk plots the same. (The attribute ``kind`` is taken: a limit-cycle branch's says whether its
-onset is ``supercritical`` or ``subcritical``.)
+The kind of result is its attribute ``kind`` (one of :data:`RESULT_KINDS`, set by every engine and
+kept when the result is saved and loaded back with :func:`squealkit.io.save_dataset`), never a guess
+from its variable names. A file saved by an older squealkit has no ``kind`` (and older names:
+``frequency`` for ``frequency_hz``, ``omega_disc`` for ``disc_speed``); for those alone the kind is
+recognised from what the Dataset holds and :func:`upgrade_result` gives the current names.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import xarray as xr
 
 from ._validation import InputError
 
-__all__ = ["PLOTS", "SquealAccessor", "result_kind"]
+__all__ = ["PLOTS", "RESULT_KINDS", "SquealAccessor", "result_kind", "upgrade_result"]
 
 #: Plot name -> (module in squealkit.plotting, function, whether it draws into an ``ax`` or a ``fig``).
 PLOTS: dict[str, tuple[str, str, str]] = {
@@ -47,7 +48,8 @@ def _is_simulation(ds: xr.Dataset) -> bool:
     return "time" in ds.dims and "run" not in ds.dims and {"tan_theta", "growth_rate", "q"} <= set(ds.data_vars)
 
 
-#: Result kind -> (how to recognise it, the plots that draw it; the first is the default).
+#: Result kind -> (how to recognise it in a file saved before results carried ``kind``, the plots
+#: that draw it; the first is the default).
 _RESULTS: dict[str, tuple[Callable[[xr.Dataset], bool], tuple[str, ...]]] = {
     # squealkit.transient.floquet.floquet_map
     "floquet_map": (lambda ds: "floquet_exponent" in ds.data_vars, ("floquet",)),
@@ -59,9 +61,11 @@ _RESULTS: dict[str, tuple[Callable[[xr.Dataset], bool], tuple[str, ...]]] = {
                       ("stability_map", "fig2", "root_locus")),
     # critical_friction_curve results stacked along "kinematics"
     "kinematics": (lambda ds: "mu_critical" in ds.data_vars and "kinematics" in ds.dims, ("kinematics",)),
-    # squealkit.stability.modes, onset_modes, fe_modes
+    # squealkit.stability.modes, onset_modes (and fe_modes, saved before results carried their kind)
     "modes": (lambda ds: {"mode", "dof"} <= set(ds.dims) and {"shape_real", "shape_imag"} <= set(ds.data_vars),
               ("modes",)),
+    # squealkit.stability.fe_modes
+    "fe_modes": (lambda ds: False, ("modes",)),
     # squealkit.transient.simulate (one run)
     "simulation": (_is_simulation, ("fig4", "fig3", "envelope")),
     # squealkit.nonlinear.limit_cycle_branch (and _slope)
@@ -74,8 +78,57 @@ _RESULTS: dict[str, tuple[Callable[[xr.Dataset], bool], tuple[str, ...]]] = {
 }
 
 
+#: Results without a figure of their own (``kind`` attribute -> the function that returns them).
+_UNPLOTTED: dict[str, str] = {
+    "critical_friction": "squealkit.stability.critical_friction_curve (and CriticalFriction.to_dataset)",
+    "fe_critical_friction": "squealkit.stability.fe_critical_friction",
+    "eigenvalue_sensitivity": "squealkit.stability.eigenvalue_sensitivity",
+    "reduced_sweep": "squealkit.stability.reduction.reduced_sweep",
+    "simulation_batch": "squealkit.transient.simulate_batch",
+}
+
+#: Every value of a result's ``kind`` attribute.
+RESULT_KINDS: tuple[str, ...] = (*_RESULTS, *_UNPLOTTED)
+
+#: Variables renamed since results carried ``kind``: old name -> current name.
+RENAMED_VARIABLES: dict[str, str] = {"frequency": "frequency_hz", "omega_disc": "disc_speed"}
+
+
+def upgrade_result(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` with the current names and a ``kind`` attribute, for a file saved by an older squealkit.
+
+    A current result is returned unchanged (the same object). An older one gets its renamed
+    variables (:data:`RENAMED_VARIABLES`) under their new names and ``kind`` recognised from what it
+    holds; a limit-cycle branch's onset kind moves from ``kind`` to ``hopf_kind``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A squealkit result, e.g. loaded from a file.
+
+    Returns
+    -------
+    xarray.Dataset
+    """
+    if ds.attrs.get("kind") in RESULT_KINDS and not (RENAMED_VARIABLES.keys() & set(ds.variables)):
+        return ds
+    renames = {old: new for old, new in RENAMED_VARIABLES.items() if old in ds.variables and new not in ds.variables}
+    out = ds.rename(renames) if renames else ds.copy()
+    if out.attrs.get("kind") not in RESULT_KINDS:
+        if "kind" in out.attrs and "hopf_kind" not in out.attrs:  # a limit-cycle branch: its onset's kind
+            out.attrs["hopf_kind"] = out.attrs.pop("kind")
+            out.attrs["hopf_kind_from"] = out.attrs.pop("kind_from", "")
+        kind = next((k for k, (test, _) in _RESULTS.items() if test(out)), None)
+        if kind is not None:
+            out.attrs["kind"] = kind
+    return out
+
+
 def result_kind(ds: xr.Dataset) -> str | None:
-    """Which squealkit result ``ds`` is (a key of the table above), or None.
+    """Which squealkit result ``ds`` is (its ``kind`` attribute, one of :data:`RESULT_KINDS`), or None.
+
+    A Dataset without a known ``kind`` (a file saved by an older squealkit) is recognised from
+    what it holds (see :func:`upgrade_result`).
 
     Parameters
     ----------
@@ -86,10 +139,13 @@ def result_kind(ds: xr.Dataset) -> str | None:
     -------
     str or None
         ``"stability_map"``, ``"fe_stability_map"``, ``"kinematics"``, ``"modes"``,
-        ``"simulation"``, ``"floquet_map"``, ``"limit_cycle_branch"`` or ``"propensity"``;
-        None for anything else.
+        ``"simulation"``, ``"floquet_map"``, ``"limit_cycle_branch"``, ``"propensity"`` or
+        one without a figure (``"fe_modes"``, ``"critical_friction"``, ...); None for anything else.
     """
-    return next((kind for kind, (test, _) in _RESULTS.items() if test(ds)), None)
+    kind = ds.attrs.get("kind")
+    if kind in RESULT_KINDS:
+        return kind
+    return upgrade_result(ds).attrs.get("kind")
 
 
 @xr.register_dataset_accessor("squeal")
@@ -128,7 +184,7 @@ class SquealAccessor:
     def plots(self) -> tuple[str, ...]:
         """Names of the plots that draw this result, the default first (empty if none)."""
         kind = self.result
-        return () if kind is None else _RESULTS[kind][1]
+        return () if kind is None or kind in _UNPLOTTED else _RESULTS[kind][1]
 
     def _default_plot(self) -> str:
         plots = self.plots
@@ -181,4 +237,4 @@ class SquealAccessor:
         import importlib
 
         plot = getattr(importlib.import_module(f"squealkit.plotting.{module}"), func)
-        return plot(self._ds, **kwargs)
+        return plot(upgrade_result(self._ds), **kwargs)

@@ -14,7 +14,7 @@ import warnings
 from collections.abc import Callable
 from typing import Any, TypeVar
 
-__all__ = ["renamed_kwargs"]
+__all__ = ["keyword_only", "renamed_kwargs"]
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -58,6 +58,69 @@ def renamed_kwargs(**renames: str) -> Callable[[F], F]:
             return func(*args, **kwargs)
 
         wrapper.__renamed_kwargs__ = dict(renames)  # type: ignore[attr-defined]
+        return wrapper  # type: ignore[return-value]
+
+    return decorate
+
+
+def keyword_only(*names: str, why: str = "") -> Callable[[F], F]:
+    """Make the parameters ``names`` keyword-only, still accepting them by position for one release.
+
+    The decorated function declares ``names`` after ``*``; a call that passes them by position
+    still works, with a :class:`DeprecationWarning` naming the keyword (attributed to the caller).
+
+    Parameters
+    ----------
+    *names : str
+        The parameters, in their former positional order, that follow the positional ones.
+    why : str
+        Why the keyword matters, added to the warning (e.g. what a positional value is mistaken for).
+
+    Returns
+    -------
+    callable
+        A decorator; the function gets ``__keyword_only__ = names``.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> @keyword_only("tan_theta")
+    ... def f(mu, *, tan_theta=0.0):
+    ...     return mu + tan_theta
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     f(0.4, 0.1), str(w[0].message)
+    (0.5, 'f(..., tan_theta) by position is deprecated; use tan_theta=... (same meaning).')
+    """
+
+    def decorate(func: F) -> F:
+        import inspect
+
+        params = inspect.signature(func).parameters.values()
+        n_positional = sum(p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) for p in params)
+        if any(p.kind is p.VAR_POSITIONAL for p in params):
+            raise TypeError(f"{func.__name__} takes *args: keyword_only cannot tell its positions apart.")
+        keyword = {p.name for p in params if p.kind is p.KEYWORD_ONLY}
+        if not set(names) <= keyword:
+            raise TypeError(f"{func.__name__}: declare {', '.join(names)} after '*' (keyword-only).")
+
+        @functools.wraps(func)
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            if len(args) > n_positional:
+                extra = args[n_positional:]
+                if len(extra) > len(names):
+                    raise TypeError(f"{func.__name__}() takes at most {n_positional + len(names)} positional "
+                                    f"arguments ({len(args)} given).")
+                for name, value in zip(names, extra, strict=False):
+                    if name in kwargs:
+                        raise TypeError(f"{func.__name__}() got {name} both by position and as {name}=.")
+                    warnings.warn(f"{func.__name__}(..., {name}) by position is deprecated; use {name}=... "
+                                  f"(same meaning{'; ' + why if why else ''}).", DeprecationWarning, stacklevel=2)
+                    kwargs[name] = value
+                args = args[:n_positional]
+            return func(*args, **kwargs)
+
+        wrapper.__keyword_only__ = tuple(names)  # type: ignore[attr-defined]
         return wrapper  # type: ignore[return-value]
 
     return decorate

@@ -359,8 +359,8 @@ def _evaluate(task: tuple) -> tuple[NDArray[np.bool_], NDArray[np.float64], NDAr
 
     model, names, values, mu, tan_theta, damped = task
     ens = ModelEnsemble.from_models(_sample_models(model, names, values), damped=damped)
-    unstable = ensemble_unstable(ens, mu, tan_theta)
-    mu_c, status = ensemble_onset(ens, mu, tan_theta)
+    unstable = ensemble_unstable(ens, mu, tan_theta=tan_theta)
+    mu_c, status = ensemble_onset(ens, mu, tan_theta=tan_theta)
     return unstable, mu_c, status
 
 
@@ -574,8 +574,8 @@ def squeal_propensity(
         count += unstable[: max(0, min(mc.size, samples - a))].sum(axis=0)
 
     nominal = ModelEnsemble.from_models([model], damped=damped)
-    nom_unstable = ensemble_unstable(nominal, mu_a, tan_t)
-    nom_mu_c, nom_status = ensemble_onset(nominal, mu_a, tan_t, rtol=0.0)  # one model: exactly
+    nom_unstable = ensemble_unstable(nominal, mu_a, tan_theta=tan_t)
+    nom_mu_c, nom_status = ensemble_onset(nominal, mu_a, tan_theta=tan_t, rtol=0.0)  # one model: exactly
     censored = int(np.sum(status[:samples] == 2))
     below = int(np.sum(status[:samples] == 1))
     if censored or below:
@@ -636,6 +636,7 @@ def squeal_propensity(
             "parameter_unit": ("parameter", np.array(units, dtype=object)),
         },
         attrs={
+            "kind": "propensity",
             "title": "Squeal propensity: probability of instability over friction (Monte Carlo)",
             "seed": seed,
             "samples": samples,

@@ -6,6 +6,7 @@ import json
 import math
 import sys
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -39,10 +40,57 @@ class Quantity(click.ParamType):
         return parse_quantity(name, value, self.unit, plausible=self.plausible, what=self.what)
 
 
+class NumberOrRange(click.ParamType):
+    """One CLI type for an axis a command may sweep (``--rpm``, ``--mu``, ``--theta``,
+    ``--sro-amplitude``): a number, or a range ``START:STOP:N`` (N points, ends included).
+
+    A command that sweeps takes the text (checked here, turned into values with
+    :func:`squealkit._validation.parse_range`); a command that needs one value declares
+    ``single=True``, gets a float, and refuses a range in one line. With ``unit`` a single value
+    may carry its own unit (``"80 um"``; see :class:`Quantity`).
+    """
+
+    name = "number_or_range"
+
+    def __init__(self, *, single: bool = False, unit: str | None = None, plausible: tuple[float, float] | None = None,
+                 what: str | None = None, needs: str = "one value") -> None:
+        self.single, self.unit, self.plausible, self.what, self.needs = single, unit, plausible, what, needs
+
+    def get_metavar(self, param: click.Parameter, *args: Any, **kwargs: Any) -> str:
+        return "NUMBER" if self.single else "NUMBER|START:STOP:N"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        from .._validation import _RANGE_RE, parse_range
+
+        name = param.opts[0] if param is not None and param.opts else "value"
+        if isinstance(value, float) and self.single:
+            return value  # a default
+        text = str(value).strip()
+        if _RANGE_RE.match(text):
+            if self.single:
+                command = f"squealkit {ctx.info_name}" if ctx is not None else "this command"
+                raise InputError(f"{name} {text!r} is a range; {command} takes {self.needs}: give one number.")
+            parse_range(name, text)  # START, STOP and N are numbers
+            return text
+        if self.unit is None:
+            number = float(parse_range(name, text)[0])
+            return number if self.single else text
+        from .._units import parse_quantity
+
+        number = parse_quantity(name, text, self.unit, plausible=self.plausible, what=self.what)
+        return number if self.single else repr(number)
+
+
 #: The probe's radius on the disc (analyze, report, campaign, synth): a lab disc is 5 mm to 1 m.
 PROBE_RADIUS = Quantity("m", plausible=(5e-3, 1.0), what="the probe radius on the disc")
 #: A disc surface run-out amplitude (sine q0, or RMS of roughness): micrometres to 2 mm.
 RUNOUT_AMPLITUDE = Quantity("m", plausible=(1e-8, 2e-3), what="a disc run-out amplitude")
+#: --sro-amplitude: a run-out amplitude [m] (a single value may carry its unit), or a range of them
+#: (the Floquet map checks their range itself: up to 10 mm).
+SRO_AMPLITUDE = NumberOrRange(unit="m")
+#: --sro-amplitude where a command takes one amplitude.
+SRO_AMPLITUDE_ONE = NumberOrRange(single=True, unit="m", plausible=RUNOUT_AMPLITUDE.plausible,
+                                  what=RUNOUT_AMPLITUDE.what, needs="one run-out amplitude")
 #: A run-out wavelength along the disc: 10 um to 2 m.
 RUNOUT_WAVELENGTH = Quantity("m", plausible=(1e-5, 2.0), what="a run-out wavelength")
 
@@ -321,9 +369,13 @@ def criteria_from_options(setup: str | None, band: str | None, threshold_dba: fl
                            min_duration=min_duration)
 
 
-def fe_options(*, band: bool = True, rpm_help: str = "Disc speeds in rpm (omega = 2 pi rpm/60): N points from "
-               "START to STOP, or one number. FE models only.") -> Callable[[F], F]:
-    """--rpm, --band, --method and --modes: the disc speed axis and the solver of FE models."""
+def fe_options(*, band: bool = True, rpm_help: str = "Disc speed [rpm] (disc_speed = 2 pi rpm/60): one number, "
+               "or N points from START to STOP. FE models only.", single_rpm: bool = False) -> Callable[[F], F]:
+    """--rpm, --eigen-band, --method and --modes: the disc speed axis and the solver of FE models.
+
+    ``--band`` is the squeal band of the recording commands; here it is a deprecated alias of
+    ``--eigen-band`` for one release.
+    """
 
     def deco(f: F) -> F:
         f = click.option("--modes", "n_modes", type=int, default=None, metavar="N",
@@ -335,9 +387,12 @@ def fe_options(*, band: bool = True, rpm_help: str = "Disc speeds in rpm (omega 
                          "real modes: the fast path for large sweeps); reduced eigenpairs are each checked in the "
                          "full model; auto = dense up to 1000 DOFs.")(f)
         if band:
-            f = click.option("--band", "band_spec", default=None, metavar="LO:HI",
-                             help="Frequency band in Hz (FE models; sparse default 1000:16000, others all modes).")(f)
-        f = click.option("--rpm", "rpm_spec", default=None, metavar="START:STOP:N", help=rpm_help)(f)
+            f = deprecated_alias("--band", "--eigen-band", "band_spec", metavar="LO:HI")(f)
+            f = click.option("--eigen-band", "band_spec", default=None, metavar="LO:HI",
+                             help="FE models: the frequency band [Hz] the eigenvalue solvers search (sparse default "
+                             "1000:16000, others all modes).")(f)
+        f = click.option("--rpm", "rpm_spec", type=NumberOrRange(single=single_rpm, needs="one disc speed"),
+                         default=None, help=rpm_help)(f)
         return f
 
     return deco
@@ -351,7 +406,8 @@ def fe_kwargs_from_options(model: Any, rpm_spec: str | None, band_spec: str | No
     from ..models import FEModel
 
     if not isinstance(model, FEModel):
-        given = [o for o, v in (("--rpm", rpm_spec), ("--band", band_spec), ("--modes", n_modes)) if v is not None]
+        given = [o for o, v in (("--rpm", rpm_spec), ("--eigen-band", band_spec), ("--modes", n_modes))
+                 if v is not None]
         if method != "auto":
             given.append("--method")
         if given:
@@ -361,7 +417,7 @@ def fe_kwargs_from_options(model: Any, rpm_spec: str | None, band_spec: str | No
         raise InputError("An FE model needs disc speeds: --rpm START:STOP:N (rpm).")
     out: dict[str, Any] = {"method": method, "n_modes": n_modes}
     if rpm_spec is not None:
-        rpm = parse_range("--rpm", rpm_spec)
+        rpm = parse_range("--rpm", rpm_spec) if isinstance(rpm_spec, str) else np.array([float(rpm_spec)])
         if np.any(rpm <= 0):
             raise InputError(f"--rpm {rpm_spec!r}: disc speeds must be > 0 rpm.")
         out["rpm"] = rpm
@@ -370,9 +426,9 @@ def fe_kwargs_from_options(model: Any, rpm_spec: str | None, band_spec: str | No
         try:
             out["band"] = (float(lo), float(hi))
         except ValueError:
-            raise InputError(f"--band {band_spec!r} must be LO:HI in Hz, e.g. 1000:16000.") from None
+            raise InputError(f"--eigen-band {band_spec!r} must be LO:HI in Hz, e.g. 1000:16000.") from None
         if not sep:
-            raise InputError(f"--band {band_spec!r} must be LO:HI in Hz, e.g. 1000:16000.")
+            raise InputError(f"--eigen-band {band_spec!r} must be LO:HI in Hz, e.g. 1000:16000.")
     else:
         out["band"] = None
     if n_modes is not None and n_modes < 1:
@@ -394,7 +450,8 @@ def recording_options(*, required: bool = True) -> Callable[[F], F]:
     options = [
         click.option("--mic", help="Microphone channel [Pa]: name or 0-based index.", **mic),
         click.option("--displacement", help="Eddy-current probe channel [m]: name or index.", **disp),
-        click.option("--rpm", type=float, default=None, help="Disc speed [rpm] (constant; or give --tacho)."),
+        click.option("--rpm", type=NumberOrRange(single=True, needs="one disc speed"), default=None,
+                     help="Disc speed [rpm] (constant; or give --tacho)."),
         click.option("--radius", type=PROBE_RADIUS, help="Probe radius on the disc [m], or with a unit: '60 mm'.",
                      **radius),
         click.option("--tacho", default=None, help="Tacho channel (name or index): disc angle and speed from it."),
@@ -461,3 +518,169 @@ def recording_kwargs_from_options(*, rpm: float | None, tacho: str | None, tacho
         raise InputError("Give the disc speed --rpm, or a --tacho channel.")
     scale_map = {k: validate_finite(f"--scale {k}", v) for k, v in channel_pairs("--scale", scales).items()}
     return kw, scale_map, channel_pairs("--unit", units)
+
+
+# -- one vocabulary: every option name, its type and its meaning (tests/test_naming.py) -------------
+
+
+@dataclass(frozen=True)
+class Term:
+    """What an option name means in every command that has it.
+
+    ``type`` is the kind of value (:func:`option_type` of the click parameter): ``flag``,
+    ``number``, ``int``, ``text``, ``choice`` (the choices may differ by command: the options of
+    the command's engine), ``file``, ``folder``, ``number_or_range`` (one :class:`NumberOrRange`
+    type; commands that need one value refuse a range) or ``quantity[UNIT]``; ``unit`` is what
+    its help must state (e.g. ``[rpm]``, ``DEGREES``); ``multiple`` for a repeatable option.
+    """
+
+    type: str
+    meaning: str
+    unit: str = ""
+    multiple: bool = False
+
+
+#: Option name -> its one meaning. A new option is declared here first; the naming test fails
+#: for an option not declared, or declared with another type or unit than a command gives it.
+OPTIONS: dict[str, Term] = {
+    "--acoustic-delay": Term("number", "delay of the sound from the pin to the microphone", "[s]"),
+    "--at-onset": Term("flag", "take the critical friction at --theta instead of --mu"),
+    "--band": Term("text", "the squeal band LOWER:UPPER (SAE J2521 criteria), instead of the --setup's", "[Hz]"),
+    "--campaign": Term("int", "write a synthetic campaign of N applications"),
+    "--condition-channels": Term("flag", "a synthetic campaign records pressure and temperature as channels"),
+    "--confidence": Term("number", "level of the confidence band and intervals"),
+    "--config": Term("file", "model file (TOML) describing a rig or model"),
+    "--contact": Term("choice", "contact law (linear, nonlinear)"),
+    "--damped": Term("flag", "use the model's damping matrix (--undamped leaves it out)"),
+    "--displacement": Term("text", "eddy-current probe channel: name or index", "[m]"),
+    "--duration": Term("number", "length of the simulated or synthetic signal", "[s]"),
+    "--eigen-band": Term("text", "FE models: the frequency band LO:HI the eigenvalue solvers search", "[Hz]"),
+    "--force": Term("flag", "write into an output folder that holds other files"),
+    "--format": Term("choice", "file format of the recordings written"),
+    "--freq": Term("number", "squeal frequency of a synthetic recording", "[Hz]"),
+    "--fs": Term("number", "sample rate", "[Hz]"),
+    "--harmonics": Term("int", "harmonics H of a harmonic-balance cycle"),
+    "--harmonics-tol": Term("number", "adapt H until the amplitudes change by at most this (relative)"),
+    "--json": Term("flag", "print a machine-readable result on stdout"),
+    "--level-dba": Term("number", "saturated squeal level", "[dB(A)]"),
+    "--level-dof": Term("text", "DOF whose velocity radiates"),
+    "--method": Term("choice", "the numerical method of the command's engine (FE solver, time integrator)"),
+    "--mic": Term("text", "microphone channel: name or index", "[Pa]"),
+    "--min-duration": Term("number", "shortest tonal event", "[s]"),
+    "--min-tnr-db": Term("number", "tone-to-noise ratio a squeal component needs", "[dB]"),
+    "--modes": Term("int", "FE models: reduced basis size for --method modal|pod"),
+    "--mu": Term("number_or_range", "friction coefficient(s): a number or START:STOP:N"),
+    "--mu-max": Term("number", "search friction up to this value"),
+    "--n-z": Term("int", "elements through the disc thickness"),
+    "--no-report": Term("flag", "skip the HTML report"),
+    "--no-sensitivity": Term("flag", "skip the Sobol' indices"),
+    "--out": Term("file", "write the result to this file (.nc, .zarr, or the command's format)"),
+    "--out-dir": Term("folder", "write the command's outputs into this folder"),
+    "--perturbation": Term("number", "RMS of a random initial displacement", "[m]"),
+    "--plot": Term("file", "write the figure(s) to this file (.png, .svg or .pdf; analyze: one file per figure "
+                   "from this name)"),
+    "--plot-map": Term("file", "also write a stability map figure to this file"),
+    "--polarity": Term("choice", "-1 when the probe reads the run-out reversed"),
+    "--preset": Term("text", "built-in model"),
+    "--pressure-channel": Term("text", "channel giving an application's pressure", "[bar]"),
+    "--probe-offset-deg": Term("number", "probe position upstream of the pin", "[deg]"),
+    "--pulses-per-rev": Term("int", "tacho pulses per revolution"),
+    "--quick": Term("flag", "coarser grids and shorter runs: a preview"),
+    "--radiation-factor": Term("number", "sound pressure per unit velocity at the listener", "[Pa/(m/s)]"),
+    "--radius": Term("quantity[m]", "probe radius on the disc", "[m]"),
+    "--recording": Term("file", "a rig recording to analyse"),
+    "--rpm": Term("number_or_range", "disc speed: a number, or START:STOP:N where the command sweeps it", "[rpm]"),
+    "--rpm-end": Term("number", "disc speed at the end of a synthetic stop", "[rpm]"),
+    "--rtol": Term("number", "relative tolerance of the time integrator"),
+    "--samples": Term("int", "Monte Carlo samples"),
+    "--scale": Term("text", "file value -> physical unit factor of a channel, CHANNEL=FACTOR", multiple=True),
+    "--scheduler": Term("text", "run on a Dask cluster: a scheduler address or 'local'"),
+    "--seed": Term("int", "seed of the random numbers"),
+    "--sensitivity": Term("flag", "also report the sensitivities of the critical friction"),
+    "--set": Term("text", "override a model parameter, NAME=VALUE", multiple=True),
+    "--setup": Term("choice", "SAE J2521 setup (component, corner)"),
+    "--size": Term("int", "elements around the demo disc"),
+    "--speed": Term("number", "sliding speed", "[m/s]"),
+    "--squeal-on": Term("choice", "run-out stage on which a synthetic squeal grows"),
+    "--sro": Term("choice", "disc surface run-out profile"),
+    "--sro-amplitude": Term("number_or_range", "sine run-out amplitude q0 (or RMS of roughness)", "[m]"),
+    "--sro-file": Term("file", "run-out profile file"),
+    "--sro-wavelength": Term("quantity[m]", "run-out wavelength", "[m]"),
+    "--stability": Term("choice", "how the stability of a limit cycle is computed"),
+    "--stribeck": Term("text", "Stribeck friction MU_STATIC,V_STRIBECK"),
+    "--summary": Term("file", "write the campaign summary (CSV) to this file"),
+    "--tacho": Term("text", "tacho channel: name or index"),
+    "--tacho-kind": Term("choice", "tacho channel kind (pulses, angle)"),
+    "--temperature-channel": Term("text", "channel giving an application's temperature", "[C]"),
+    "--theta": Term("number_or_range", "run-out incline: a number or START:STOP:N", "DEGREES"),
+    "--threshold-dba": Term("number", "squeal threshold", "[dB(A)]"),
+    "--time-weighting": Term("choice", "IEC 61672-1 time weighting (fast, slow)"),
+    "--transfer": Term("file", "measured transfer p/v against frequency (CSV)"),
+    "--uncertain": Term("file", "TOML file with the [uncertain] table"),
+    "--unit": Term("text", "unit of a channel, CHANNEL=UNIT", multiple=True),
+    "--vtk": Term("file", "write mode shapes with the mesh (.vtu)"),
+    "--wavelength": Term("number", "run-out wavelength of the amplitude tolerance", "METRES"),
+}
+
+#: Old spellings kept for one release: (command, old option) -> the option that now says it. Each
+#: is a hidden alias that prints one deprecation line on stderr (:func:`deprecated_alias`).
+DEPRECATED_OPTIONS: dict[tuple[str, str], str] = {
+    **{(c, "--band"): "--eigen-band" for c in ("stability", "critical", "modes", "tolerance")},
+    ("synth", "--tacho-ppr"): "--pulses-per-rev",
+    **{(c, "--out"): "--out-dir" for c in ("campaign", "fe-demo", "report", "reproduce")},
+}
+
+
+def option_type(param: click.Parameter) -> str:
+    """The :class:`Term` type of a click parameter (what the naming test compares across commands)."""
+    t = param.type
+    if getattr(param, "is_flag", False):
+        return "flag"
+    if isinstance(t, NumberOrRange):
+        return "number_or_range"
+    if isinstance(t, Quantity):
+        return f"quantity[{t.unit}]"
+    if isinstance(t, click.Choice):
+        return "choice"
+    if isinstance(t, click.Path):
+        return "folder" if not t.file_okay else "file"
+    if isinstance(t, click.types.FloatParamType | click.FloatRange):
+        return "number"
+    if isinstance(t, click.types.IntParamType | click.IntRange):
+        return "int"
+    return "text"
+
+
+def deprecated_alias(old: str, new: str, dest: str, *, callback: Callable[..., Any] | None = None,
+                     **kwargs: Any) -> Callable[[F], F]:
+    """A hidden option ``old`` that gives its value to the option ``new`` (parameter ``dest``),
+    with one line on stderr after the command succeeded (:data:`PENDING_NOTES`, so an error stays
+    one line): ``squealkit: warning: OLD is deprecated in 'squealkit CMD'; use NEW (its meaning).``
+
+    Declare it beside ``new`` with the same ``type`` (``kwargs``) and ``callback``; listed in
+    :data:`DEPRECATED_OPTIONS`. Giving both is refused.
+    """
+
+    def take(ctx: click.Context, param: click.Parameter, value: Any) -> Any:
+        if value is None or ctx.resilient_parsing:
+            return value
+        if ctx.get_parameter_source(dest) == click.core.ParameterSource.COMMANDLINE:
+            raise InputError(f"{old} is the deprecated spelling of {new}: give {new} only.")
+        if callback is not None:
+            value = callback(ctx, param, value)
+        PENDING_NOTES.append(f"squealkit: warning: {old} is deprecated in 'squealkit {ctx.info_name}'; use {new} "
+                             f"({OPTIONS[new].meaning}).")
+        ctx.params[dest] = value
+        ctx.set_parameter_source(dest, click.core.ParameterSource.COMMANDLINE)
+        return value
+
+    return click.option(old, f"{dest}__deprecated_{old.lstrip('-').replace('-', '_')}", default=None, hidden=True,
+                        expose_value=False, callback=take, **kwargs)
+
+
+def required(value: Any, option: str) -> Any:
+    """``value``, or click's usage error for a missing ``option``: for an option that a deprecated
+    alias may give instead (click's ``required=True`` would refuse the alias alone)."""
+    if value is None:
+        raise click.UsageError(f"Missing option '{option}'.", ctx=click.get_current_context())
+    return value

@@ -77,7 +77,7 @@ def analyze(files: tuple[Path, ...], mic: str, displacement: str, rpm: float | N
 
     \b
     Example:
-      squealkit synth rec.nc --seed 1
+      squealkit synth --out rec.nc --seed 1
       squealkit analyze rec.nc --mic mic --displacement displacement --rpm 900 --radius 0.05
       squealkit analyze a.tdms b.tdms --mic Mic --displacement Probe --rpm 900 --radius 0.05 \\
           --summary campaign.csv

@@ -8,25 +8,30 @@ import click
 
 from ._options import (
     PROBE_RADIUS,
+    NumberOrRange,
     criteria_from_options,
     criteria_options,
+    deprecated_alias,
     emit_json,
     progress_callback,
+    required,
     scheduler_option,
 )
 
 
 @click.command()
 @click.argument("matrix", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output folder: campaign.duckdb, summary.json, report.html, figures/.")
+@click.option("--out-dir", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output folder (required): campaign.duckdb, summary.json, report.html, figures/.")
+@deprecated_alias("--out", "--out-dir", "out_dir", type=click.Path(file_okay=False, path_type=Path))
 @click.option("--mic", required=True, help="Microphone channel [Pa]: name or 0-based index.")
 @click.option("--displacement", required=True, help="Eddy-current probe channel [m]: name or index.")
 @click.option("--radius", type=PROBE_RADIUS, required=True,
               help="Probe radius on the disc [m], or with a unit: '60 mm'.")
 @click.option("--tacho", default=None, help="Tacho channel (name or index); else --rpm or the matrix's rpm column.")
 @click.option("--pulses-per-rev", type=int, default=1, show_default=True, help="Tacho pulses per revolution.")
-@click.option("--rpm", type=float, default=None, help="Disc speed [rpm] where there is no tacho nor rpm column.")
+@click.option("--rpm", type=NumberOrRange(single=True, needs="one disc speed"), default=None,
+              help="Disc speed [rpm] where there is no tacho nor rpm column.")
 @click.option("--probe-offset-deg", type=float, default=0.0, show_default=True,
               help="The probe sits this far upstream of the pin [deg].")
 @click.option("--polarity", type=click.Choice(["1", "-1"]), default="1", show_default=True,
@@ -48,9 +53,9 @@ def campaign(matrix: Path, out_dir: Path, mic: str, displacement: str, radius: f
 
     MATRIX is a CSV with one row per application: application, file (relative to the
     matrix), and optionally section, mode (drag|stop), pressure_bar, temperature_c,
-    speed_kmh, rpm. Events and applications go into OUT/campaign.duckdb (query it with SQL:
-    the view 'squeal' joins events and conditions); OUT/summary.json holds the occurrence,
-    overall and per 1/3-octave band; OUT/report.html the figures. Re-running skips the
+    speed_kmh, rpm. Events and applications go into OUT_DIR/campaign.duckdb (query it with SQL:
+    the view 'squeal' joins events and conditions); OUT_DIR/summary.json holds the occurrence,
+    overall and per 1/3-octave band; OUT_DIR/report.html the figures. Re-running skips the
     applications already analysed with the same criteria (a killed run resumes).
 
     A recording that cannot be analysed (missing, unreadable, damaged, a bad channel) does
@@ -64,14 +69,16 @@ def campaign(matrix: Path, out_dir: Path, mic: str, displacement: str, radius: f
 
     \b
     Example:
-      squealkit synth camp --campaign 100
-      squealkit campaign camp/matrix.csv --out camp/out --mic mic --displacement displacement \\
+      squealkit synth --campaign 100 --out-dir camp
+      squealkit campaign camp/matrix.csv --out-dir camp/out --mic mic --displacement displacement \\
           --tacho tacho --radius 0.05
       duckdb camp/out/campaign.duckdb "SELECT * FROM squeal WHERE peak_dba > 75 AND \\
           frequency_hz BETWEEN 6000 AND 8000 AND temperature_c > 150"
     """
     from ..campaign import run_campaign
     from ..scale import cluster_client
+
+    out_dir = required(out_dir, "--out-dir")
 
     crit = criteria_from_options(setup, band, threshold_dba, time_weighting, min_duration)
     kw = dict(mic=mic, displacement=displacement, radius=radius, rpm=rpm, setup=crit.setup if crit.setup != "user"

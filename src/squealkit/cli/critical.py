@@ -7,6 +7,7 @@ import math
 import click
 
 from ._options import (
+    NumberOrRange,
     build_model_from_options,
     check_output_suffix,
     damping_option,
@@ -35,7 +36,7 @@ def no_onset_text(status: str, mu_max: float) -> str:
 
 @click.command()
 @model_options
-@click.option("--theta", "theta_spec", default="0", show_default=True, metavar="DEG|START:STOP:N",
+@click.option("--theta", "theta_spec", default="0", show_default=True, type=NumberOrRange(),
               help="Run-out incline in DEGREES, or a range for a curve mu_crit(theta).")
 @damping_option
 @friction_options
@@ -220,13 +221,13 @@ def _echo_written(out_path, plot_path) -> None:
 
 def _critical_fe(model, fe, theta_deg: float, mu_max: float, as_json: bool) -> None:
     """``squealkit critical`` on an FE model: mu_crit at each disc speed."""
-    from ..stability import fe_critical_friction
+    from ..stability import ONSET_STATUS, fe_critical_friction
 
     ds = fe_critical_friction(model, fe["rpm"], mu_max=mu_max, theta=math.radians(theta_deg), method=fe["method"],
                               band=fe["band"], n_modes=fe["n_modes"])
     out = {
         "rpm": ds.rpm.values, "mu_critical": ds.mu_critical.values, "mu_e_critical": ds.mu_e_critical.values,
-        "frequency_hz": ds.frequency_hz.values, "status": [str(s) for s in ds.status.values],
+        "frequency_hz": ds.frequency_hz.values, "status": [ONSET_STATUS[int(s)] for s in ds.status.values],
         "theta_deg": theta_deg, "mu_max": mu_max, "method": ds.attrs["method"],
     }
     if as_json:

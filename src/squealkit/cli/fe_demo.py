@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ._options import emit_json
+from ._options import deprecated_alias, emit_json, required
 
 
 @click.command("fe-demo")
@@ -15,20 +15,22 @@ from ._options import emit_json
                    "176 -> ~1.2e5.")
 @click.option("--n-z", type=click.IntRange(min=1), default=1, show_default=True,
               help="Elements through the disc thickness.")
-@click.option("--out", "out", type=click.Path(path_type=Path), required=True,
-              help="Folder to write (replaced only when complete).")
+@click.option("--out-dir", "out", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Folder to write (required; replaced only when complete).")
+@deprecated_alias("--out", "--out-dir", "out", type=click.Path(file_okay=False, path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="Print what was written as JSON.")
 def fe_demo(n_theta: int, n_z: int, out: Path, as_json: bool) -> None:
     """Build the FE disc + pad model and write M, D1, DG, K1, KR, KGeo (.mtx), brake.toml, mesh.vtu.
 
     \b
     Example:
-      squealkit fe-demo --size 48 --out brake
+      squealkit fe-demo --size 48 --out-dir brake
     """
     from .._validation import InputError
     from ..fe.demo import build_fe_demo, write_fe_demo
     from ..io import check_output, written_path
 
+    out = required(out, "--out-dir")
     if n_theta % 2:
         raise InputError(f"--size={n_theta} must be even.")
     check_output(out, directory=True)  # before the work: a new folder, or one squealkit wrote

@@ -9,6 +9,8 @@ import click
 from .._validation import InputError
 from ._options import (
     RUNOUT_WAVELENGTH,
+    SRO_AMPLITUDE,
+    NumberOrRange,
     build_model_from_options,
     check_output_suffix,
     damping_option,
@@ -20,10 +22,10 @@ from ._options import (
 
 @click.command()
 @model_options
-@click.option("--mu", "mu_spec", default="0.4", show_default=True, metavar="MU|START:STOP:N",
+@click.option("--mu", "mu_spec", default="0.4", show_default=True, type=NumberOrRange(),
               help="Friction coefficient(s).")
-@click.option("--sro-amplitude", "amp_spec", default="8e-5", show_default=True, metavar="Q0|START:STOP:N",
-              help="Sine run-out amplitude q0 in METRES (a range makes a map).")
+@click.option("--sro-amplitude", "amp_spec", default="8e-5", show_default=True, type=SRO_AMPLITUDE,
+              help="Sine run-out amplitude q0 [m], or with a unit: '80 um' (a range START:STOP:N makes a map).")
 @click.option("--sro-wavelength", type=RUNOUT_WAVELENGTH, default=1e-3, show_default=True,
               help="Run-out wavelength [m].")
 @click.option("--speed", type=float, default=0.02, show_default=True, help="Sliding speed v [m/s].")

@@ -7,15 +7,22 @@ from pathlib import Path
 
 import click
 
-from ._options import build_model_from_options, check_output_suffix, emit_json, model_options, output_options
+from ._options import (
+    NumberOrRange,
+    build_model_from_options,
+    check_output_suffix,
+    emit_json,
+    model_options,
+    output_options,
+)
 
 
 @click.command()
 @model_options
-@click.option("--mu", "mu_spec", default=None, metavar="START:STOP:N | MU",
+@click.option("--mu", "mu_spec", default=None, type=NumberOrRange(),
               help="Friction range followed by the branch (N sets the nominal step (STOP - START)/(N - 1)); "
                    "one value with a --theta range.  [default: 0.3:0.8:51, or 0.5 with a --theta range]")
-@click.option("--theta", "theta_spec", default="0", show_default=True, metavar="DEG | START:STOP:N",
+@click.option("--theta", "theta_spec", default="0", show_default=True, type=NumberOrRange(),
               help="Run-out incline in DEGREES (a frozen slope tan(theta)); a range START:STOP:N follows the "
                    "branch over theta at the one --mu value instead (mu_e = mu + tan(theta) acts like friction).")
 @click.option("--harmonics", type=click.IntRange(min=1, max=200), default=10, show_default=True,

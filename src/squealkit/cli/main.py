@@ -198,7 +198,7 @@ def cli(ctx: click.Context, threads: int | None) -> None:
       squealkit modes --at-onset --plot mode.png       # shape of the squealing mode
       squealkit tolerance --mu 0.3 --wavelength 1e-3   # allowed run-out
       squealkit simulate --sro sine --plot fig4.png    # paper Fig. 4
-      squealkit synth rec.nc                           # a SYNTHETIC rig recording
+      squealkit synth --out rec.nc                     # a SYNTHETIC rig recording
       squealkit analyze rec.nc --mic mic --displacement displacement --rpm 900 --radius 0.05
       squealkit presets                        # built-in models
 

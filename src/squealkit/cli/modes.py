@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from ._options import (
+    NumberOrRange,
     build_model_from_options,
     check_output_suffix,
     damping_option,
@@ -22,13 +23,14 @@ from ._options import (
 
 @click.command()
 @model_options
-@click.option("--mu", type=float, default=None, help="Friction coefficient (or use --at-onset).")
-@click.option("--theta", "theta_deg", default=0.0, show_default=True, type=float, metavar="DEG",
-              help="Run-out incline in DEGREES.")
+@click.option("--mu", type=NumberOrRange(single=True, needs="one friction coefficient"), default=None,
+              help="Friction coefficient (or use --at-onset).")
+@click.option("--theta", "theta_deg", default=0.0, show_default=True,
+              type=NumberOrRange(single=True, needs="one run-out incline"), help="Run-out incline in DEGREES.")
 @damping_option
 @click.option("--at-onset", is_flag=True,
               help="Use the critical friction at this theta instead of --mu, and mark the mode that loses stability.")
-@fe_options(rpm_help="Disc speed in rpm (one value). FE models only.")
+@fe_options(rpm_help="Disc speed [rpm] (one value). FE models only.", single_rpm=True)
 @click.option("--vtk", "vtk_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="FE models with a mesh: write the unstable mode shapes with the mesh (.vtu, needs meshio).")
 @output_options()
@@ -60,7 +62,7 @@ def modes(preset, config, sets, mu, theta_deg, damped, at_onset, rpm_spec, band_
 
     \b
     FE models (model = "fe" in --config): the modes at one disc speed --rpm and
-    --mu (default mu_ref; or --at-onset: mu_crit at that speed) in --band, with
+    --mu (default mu_ref; or --at-onset: mu_crit at that speed) in --eigen-band, with
     their backward errors; the table lists the 12 least stable. --json keys: rpm,
     mu, theta_deg, verdict, method, n_dof, and modes (eigenvalue [re, im],
     frequency_hz, growth_rate, damping_ratio, unstable, residual); the shapes go
@@ -147,8 +149,9 @@ def _modes_fe(model, fe, mu, theta, at_onset, vtk_path, as_json, out_path, plot_
     kw = {"method": fe["method"], "band": fe["band"], "n_modes": fe["n_modes"]}
     if at_onset:
         crit = fe_critical_friction(model, [rpm], theta=theta, **kw)
-        if str(crit.status.values[0]) != "onset":
-            raise InputError(f"No onset at {rpm:g} rpm: {crit.status.values[0]} for mu in [0, 2 mu_ref].")
+        status = crit.status.attrs["flag_meanings"].split()[int(crit.status.values[0])]
+        if status != "onset":
+            raise InputError(f"No onset at {rpm:g} rpm: {status} for mu in [0, 2 mu_ref].")
         mu = float(crit.mu_critical.values[0])
     mu = model.mu_ref if mu is None else validate_finite("--mu", mu)
     ds = fe_modes(model, rpm, mu, theta, **kw)
@@ -157,7 +160,7 @@ def _modes_fe(model, fe, mu, theta, at_onset, vtk_path, as_json, out_path, plot_
     if vtk_path is not None:
         modes_to_vtk(ds.isel(mode=np.flatnonzero(ds.unstable.values)), model, vtk_path)
     rows = [{"mode": int(k), "eigenvalue": [float(ds.eigenvalue_real[k]), float(ds.eigenvalue_imag[k])],
-             "frequency_hz": float(ds.frequency[k]), "growth_rate": float(ds.growth_rate[k]),
+             "frequency_hz": float(ds.frequency_hz[k]), "growth_rate": float(ds.growth_rate[k]),
              "damping_ratio": float(ds.damping_ratio[k]), "unstable": bool(ds.unstable[k]),
              "residual": float(ds.residual[k])} for k in range(ds.sizes["mode"])]
     if as_json:

@@ -9,6 +9,7 @@ import click
 import numpy as np
 
 from ._options import (
+    NumberOrRange,
     build_model_from_options,
     check_output_suffix,
     damping_option,
@@ -30,9 +31,10 @@ _TABLE_ROWS = 21
               help="TOML file with the [uncertain] table (default: the --config file).")
 @click.option("--samples", default=4096, show_default=True, type=int,
               help="Monte Carlo samples (a power of two uses them all for the Sobol' indices).")
-@click.option("--mu", "mu_spec", default="0:0.8:81", show_default=True, metavar="START:STOP:N",
+@click.option("--mu", "mu_spec", default="0:0.8:81", show_default=True, type=NumberOrRange(),
               help="Friction coefficients: N points from START to STOP (increasing).")
-@click.option("--theta", "theta_deg", default=0.0, show_default=True, type=float, metavar="DEG",
+@click.option("--theta", "theta_deg", default=0.0, show_default=True,
+              type=NumberOrRange(single=True, needs="one run-out incline"),
               help="Run-out incline in DEGREES.")
 @damping_option
 @click.option("--seed", default=0, show_default=True, type=int, help="Seed of the draw: same seed, same numbers.")

@@ -6,7 +6,13 @@ from pathlib import Path
 
 import click
 
-from ._options import emit_json, model_options, recording_kwargs_from_options, recording_options
+from ._options import (
+    deprecated_alias,
+    emit_json,
+    model_options,
+    recording_kwargs_from_options,
+    recording_options,
+)
 
 
 def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = False, as_json: bool,
@@ -40,9 +46,10 @@ def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = F
 
 
 @click.command()
-@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=Path("squealkit-report"),
-              show_default=True, help="Output folder (replaced as a whole when the run succeeds; a folder "
-              "holding files squealkit did not write is refused).")
+@click.option("--out-dir", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+              default=Path("squealkit-report"), show_default=True, help="Output folder (replaced as a whole when the "
+              "run succeeds; a folder holding files squealkit did not write is refused).")
+@deprecated_alias("--out", "--out-dir", "out_dir", type=click.Path(file_okay=False, path_type=Path))
 @click.option("--force", is_flag=True, help="Write into a folder that holds other files, leaving them alone (a file of "
               "the same name as one the report writes is refused, never replaced).")
 @click.option("--quick", is_flag=True, help="Coarser grids and shorter runs: a preview in seconds.")
@@ -60,7 +67,7 @@ def reproduce(out_dir: Path, force: bool, quick: bool, as_json: bool) -> None:
 
     \b
     Example:
-      squealkit reproduce --out paper
+      squealkit reproduce --out-dir paper
       xdg-open paper/report.html
 
     \b
@@ -72,9 +79,10 @@ def reproduce(out_dir: Path, force: bool, quick: bool, as_json: bool) -> None:
 
 @click.command()
 @model_options
-@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=Path("squealkit-report"),
-              show_default=True, help="Output folder (replaced as a whole when the run succeeds; a folder "
-              "holding files squealkit did not write is refused).")
+@click.option("--out-dir", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+              default=Path("squealkit-report"), show_default=True, help="Output folder (replaced as a whole when the "
+              "run succeeds; a folder holding files squealkit did not write is refused).")
+@deprecated_alias("--out", "--out-dir", "out_dir", type=click.Path(file_okay=False, path_type=Path))
 @click.option("--force", is_flag=True, help="Write into a folder that holds other files, leaving them alone (a file of "
               "the same name as one the report writes is refused, never replaced).")
 @click.option("--recording", type=click.Path(dir_okay=False, path_type=Path), default=None,
@@ -99,8 +107,8 @@ def report(ctx: click.Context, preset, config, sets, out_dir: Path, force: bool,
 
     \b
     Example:
-      squealkit report --config myrig.toml --out myrig-report
-      squealkit report --set alpha_deg=3 --set kc=3e7 --out stiffer-pin
+      squealkit report --config myrig.toml --out-dir myrig-report
+      squealkit report --set alpha_deg=3 --set kc=3e7 --out-dir stiffer-pin
       squealkit report --config myrig.toml --recording run1.tdms \
           --mic mic --displacement probe --rpm 900 --radius 0.05
       squealkit report --config myrig.toml --recording run1.wav --mic 0 \

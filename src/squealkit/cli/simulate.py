@@ -9,8 +9,9 @@ import xarray as xr
 
 from .._validation import InputError, parse_range
 from ._options import (
-    RUNOUT_AMPLITUDE,
     RUNOUT_WAVELENGTH,
+    SRO_AMPLITUDE_ONE,
+    NumberOrRange,
     build_model_from_options,
     check_output_suffix,
     emit_json,
@@ -25,14 +26,14 @@ from ._options import (
 
 @click.command()
 @model_options
-@click.option("--mu", "mu_spec", default="0.4", show_default=True, metavar="MU|START:STOP:N",
+@click.option("--mu", "mu_spec", default="0.4", show_default=True, type=NumberOrRange(),
               help="Friction coefficient; START:STOP:N runs a batch of N runs (needs --out).")
 @click.option(
     "--sro", type=click.Choice(["sine", "file", "random", "none"]), default="sine", show_default=True,
     help="Disc surface run-out profile.",
 )
-@click.option("--sro-amplitude", type=RUNOUT_AMPLITUDE, default=0.08e-3, show_default=True,
-              help="Sine amplitude q0, or RMS of random roughness [m].")
+@click.option("--sro-amplitude", type=SRO_AMPLITUDE_ONE, default=0.08e-3, show_default=True,
+              help="Sine amplitude q0, or RMS of random roughness [m], or with a unit: '80 um'.")
 @click.option("--sro-wavelength", type=RUNOUT_WAVELENGTH, default=1e-3, show_default=True,
               help="Sine wavelength lambda, or longest random wavelength [m].")
 @click.option("--sro-file", type=click.Path(dir_okay=False, path_type=Path), default=None,

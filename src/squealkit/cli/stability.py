@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from ._options import (
+    NumberOrRange,
     build_model_from_options,
     check_output_suffix,
     damping_option,
@@ -28,9 +29,9 @@ from ._options import (
 
 @click.command()
 @model_options
-@click.option("--mu", "mu_spec", default="0:0.8:81", show_default=True, metavar="START:STOP:N",
+@click.option("--mu", "mu_spec", default="0:0.8:81", show_default=True, type=NumberOrRange(),
               help="Friction coefficients: N points from START to STOP, or one number.")
-@click.option("--theta", "theta_spec", default="-8:8:81", show_default=True, metavar="START:STOP:N",
+@click.option("--theta", "theta_spec", default="-8:8:81", show_default=True, type=NumberOrRange(),
               help="Run-out incline angles in DEGREES: N points from START to STOP, or one number.")
 @damping_option
 @friction_options
@@ -75,7 +76,7 @@ def stability(ctx, preset, config, sets, mu_spec, theta_spec, damped, stribeck_s
     FE models (model = "fe" in --config): the grid is disc speed --rpm x friction --mu
     (default: the model's mu_ref) at one --theta (default 0; mu_e = mu + tan theta);
     damping is always included. --method dense|sparse|modal|pod (auto: dense up to
-    1000 DOFs), --band LO:HI in Hz (sparse default 1000:16000), --modes N for the
+    1000 DOFs), --eigen-band LO:HI in Hz (sparse default 1000:16000), --modes N for the
     reduced bases. --plot draws growth rate against frequency of every mode in the
     band per speed (unstable ones marked), --plot-map the speed x friction map.
     --scheduler solves the rpm rows on a Dask cluster (same numbers); the map is

@@ -7,6 +7,7 @@ import math
 import click
 
 from ._options import (
+    NumberOrRange,
     build_model_from_options,
     check_output_suffix,
     damping_option,
@@ -70,7 +71,7 @@ def _state_text(tol) -> str:
 
 @click.command()
 @model_options
-@click.option("--mu", "mu_spec", required=True, metavar="MU|START:STOP:N", help="Friction coefficient(s).")
+@click.option("--mu", "mu_spec", required=True, type=NumberOrRange(), help="Friction coefficient(s).")
 @click.option("--wavelength", type=float, default=None,
               help="Run-out wavelength lambda in METRES; gives the amplitude tolerance q0 (eq. 11).")
 @damping_option

@@ -417,7 +417,7 @@ def limit_cycle_branch(
         ``amplitude`` [m] (half peak-to-peak over one period), ``mean`` [m],
         ``contact_loss_fraction``, ``stable``, ``floquet_max`` (largest non-trivial
         multiplier modulus), ``fold``; over ``fold``: ``fold_mu`` (mu of each fold); attrs: ``hopf_mu``,
-        ``hopf_frequency_hz``, ``lyapunov_coefficient``, ``kind``, ``kind_from``,
+        ``hopf_frequency_hz``, ``lyapunov_coefficient``, ``hopf_kind``, ``hopf_kind_from``,
         ``hysteresis_mu`` (the range of mu where a quiet and a squealing state coexist,
         NaN if none), ``harmonics``, ``harmonics_change``, ``stop_reason``, units.
     """
@@ -618,6 +618,7 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
         coords={"point": np.arange(p.size), "dof": list(system.dof_names),
                 "harmonic_row": np.arange(2 * harmonics + 1)},
         attrs={
+            "kind": "limit_cycle_branch",
             "title": "Limit-cycle branch by harmonic balance",
             "param": system.param,
             "system": system.description,
@@ -626,8 +627,8 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
             "lyapunov_coefficient": br.hopf.lyapunov_coefficient,
             "lyapunov_units": f"per length_scale^2, length_scale = {system.length_scale:.6g} m",
             "length_scale": system.length_scale,
-            "kind": kind,
-            "kind_from": kind_from,
+            "hopf_kind": kind,
+            "hopf_kind_from": kind_from,
             "hysteresis_mu": hyst,
             "harmonics": harmonics,
             "harmonics_change": change,
@@ -637,6 +638,11 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
         },
     )
     return ds.set_coords(system.param) if system.param in ds else ds
+
+
+def _old_or_new(attrs: dict, new: str, old: str) -> str:
+    """``attrs[new]``, or ``attrs[old]`` in a branch saved before the rename (``kind`` now names the result)."""
+    return str(attrs[new] if new in attrs else attrs[old])
 
 
 def limit_cycle_summary(ds: xr.Dataset) -> dict[str, object]:
@@ -681,8 +687,8 @@ def limit_cycle_summary(ds: xr.Dataset) -> dict[str, object]:
         out["theta_deg"] = float(a.get("theta_deg", 0.0))
     hopf = {"mu": float(a["mu"]) if over_theta else float(a["hopf_mu"]),
             "frequency_hz": float(a["hopf_frequency_hz"]),
-            "lyapunov_coefficient": float(a["lyapunov_coefficient"]), "kind": str(a["kind"]),
-            "kind_from": str(a["kind_from"])}
+            "lyapunov_coefficient": float(a["lyapunov_coefficient"]), "kind": _old_or_new(a, "hopf_kind", "kind"),
+            "kind_from": _old_or_new(a, "hopf_kind_from", "kind_from")}
     if over_theta:
         hopf["theta_deg"] = float(math.degrees(math.atan(float(a["hopf_mu"]))))
     out.update({

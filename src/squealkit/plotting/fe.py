@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .._accessor import upgrade_result
 from .stability import _axes, _figure
 
 __all__ = ["fe_growth_plot", "fe_map_plot"]
@@ -33,6 +34,7 @@ def fe_growth_plot(ds: xr.Dataset, *, max_panels: int = 4, fig=None):
     -------
     matplotlib.figure.Figure
     """
+    ds = upgrade_result(ds)  # frequency_hz, also in a file saved as "frequency"
     n_r = ds.sizes["rpm"]
     picks = np.unique(np.linspace(0, n_r - 1, min(n_r, max_panels)).round().astype(int))
     fig = fig or _figure(figsize=(7.5, 2.4 * len(picks) + 0.6), layout="constrained")
@@ -45,7 +47,7 @@ def fe_growth_plot(ds: xr.Dataset, *, max_panels: int = 4, fig=None):
     friction = f"mu {mus[0]:g}" if mus.size == 1 else f"colour: mu {mus.min():g} to {mus.max():g}"
     for ax, i in zip(axes, picks, strict=True):
         for j in range(ds.sizes["mu"]):
-            f = ds["frequency"].values[i, j]
+            f = ds["frequency_hz"].values[i, j]
             s = ds["growth_rate"].values[i, j]
             u = ds["unstable"].values[i, j]
             ax.scatter(f[~u], s[~u], s=9, color=cmap(norm_mu[j]), alpha=0.7, lw=0)

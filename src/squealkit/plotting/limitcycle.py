@@ -87,7 +87,7 @@ def limitcycle_plot(ds: xr.Dataset, *, fig=None):
         finite = lev[np.isfinite(lev)]
         if finite.size:
             ax_l.set_ylim(max(finite.min(), finite.max() - 60) - 2, finite.max() + 3)
-    kind = ds.attrs.get("kind", "")
+    kind = ds.attrs.get("hopf_kind", ds.attrs.get("kind", ""))  # "kind" in a branch saved before the rename
     ax_a.set_title(f"Limit cycles by harmonic balance (H = {ds.attrs.get('harmonics')}): "
                    f"Hopf at {'theta' if in_deg else param} = {mu_h:.4f}{' deg' if in_deg else ''}, "
                    f"{ds.attrs['hopf_frequency_hz']:.1f} Hz, {kind}", fontsize=10)

@@ -11,6 +11,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from .._accessor import upgrade_result
+
 __all__ = [
     "coupled_modes",
     "critical_plot",
@@ -170,11 +172,11 @@ def root_locus_plot(ds: xr.Dataset, *, theta_index: int | None = None, modes: li
     """
     fig, ax = _axes(ax, (7, 5))
     j = int(np.argmin(np.abs(ds.theta.values))) if theta_index is None else theta_index
-    col = ds.isel(theta=j)
+    col = upgrade_result(ds).isel(theta=j)  # frequency_hz, also in a file saved as "frequency"
     mu_e = col["mu_e"].values
     sc = None
     for k in coupled_modes(ds) if modes is None else modes:
-        sc = ax.scatter(col["growth_rate"].isel(mode=k), col["frequency"].isel(mode=k), c=mu_e, s=8,
+        sc = ax.scatter(col["growth_rate"].isel(mode=k), col["frequency_hz"].isel(mode=k), c=mu_e, s=8,
                         cmap="viridis", rasterized=True)
     if sc is not None:
         fig.colorbar(sc, ax=ax, label="mu_e = mu + tan(theta)")

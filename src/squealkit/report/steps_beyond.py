@@ -35,7 +35,7 @@ def _curves(models: dict[str, FrictionModel]) -> xr.Dataset:
     parts = [critical_friction_curve(m, np.radians(THETA_DEG), damped=False)[keep] for m in models.values()]
     ds = xr.concat(parts, dim="kinematics", combine_attrs="drop_conflicts")
     ds = ds.assign_coords(kinematics=("kinematics", list(models)))
-    ds.attrs.update(title="Critical friction over the run-out incline for two contact kinematics",
+    ds.attrs.update(kind="kinematics", title="Critical friction over the run-out incline for two contact kinematics",
                     reference="Lv, Zhang & Yu 2013, eqs. 2, 4-6; consistent gap: squealkit issue 12")
     return ds
 
@@ -130,7 +130,7 @@ def beyond_step(model: FrictionModel, figures: Path, data: Path, *,
     ds = _curves(models)
     save_dataset(ds, data / "critical_kinematics.nc")
     tol = {k: runout_tolerance(m, mu_design, wavelength=wavelength, damped=False) for k, m in models.items()}
-    frictionless = {k: str(stability_verdict(m, 0.0, FRICTIONLESS_SLOPE).item()) for k, m in models.items()}
+    frictionless = {k: str(stability_verdict(m, 0.0, tan_theta=FRICTIONLESS_SLOPE).item()) for k, m in models.items()}
 
     mu_c = {k: ds.mu_critical.sel(kinematics=k).values for k in models}
     mu_e = {k: ds.mu_e_critical.sel(kinematics=k).values for k in models}

@@ -171,9 +171,9 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
     l_05, l_hi = (_at(branch, "mu", m, "velocity_level_db") for m in (mu_1, mu_hi))
     loss_05, loss_hi = (_at(branch, "mu", m, "contact_loss_fraction") for m in (mu_1, mu_hi))
     f_hi = _at(branch, "mu", mu_hi, "frequency_hz")
-    kind = str(a["kind"])
+    kind = str(a["hopf_kind"])
     followed = math.isfinite(a_05) or math.isfinite(a_hi)
-    if not followed and a["kind_from"] == "branch":
+    if not followed and a["hopf_kind_from"] == "branch":
         kind = ""  # too short a branch to read the onset's type from
     onset = ("a soft (supercritical) onset: small stable cycles grow out of the quiet state beyond it"
              if kind == "supercritical" else
@@ -182,7 +182,7 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
     p1 = (f"On a flat disc (v = {speed:g} m/s, the model's own damping) squeal sets in at mu = {mu_c:.4f} "
           f"({f_c:.1f} Hz), {onset}"
           + (" (read from the branch: the contact law is piecewise linear about steady sliding, so the first "
-             "Lyapunov coefficient is 0)." if a["kind_from"] == "branch" and kind else
+             "Lyapunov coefficient is 0)." if a["hopf_kind_from"] == "branch" and kind else
              "." if not kind else f" (first Lyapunov coefficient {float(a['lyapunov_coefficient']):.3g}).")
           + (" " + _settle_text((mu_1, a_05, loss_05, l_05), (mu_hi, a_hi, loss_hi, l_hi), f_hi)
              + f" (Harmonic balance with H = {HARMONICS}; doubling H changes the amplitudes by "

@@ -153,8 +153,8 @@ def transient_step(model: FrictionModel, figures: Path, data: Path, *, quick: bo
     accels = [str(v) for v in sro.data_vars if str(v).endswith("_ddot")]
     var = "x1_ddot" if "x1_ddot" in accels else accels[0]
 
-    sigma_04 = float(eigenvalues(model, mu_first, 0.0, damped=True).real.max())
-    lam_06 = eigenvalues(model, mu_clear, 0.0, damped=True)
+    sigma_04 = float(eigenvalues(model, mu_first, tan_theta=0.0, damped=True).real.max())
+    lam_06 = eigenvalues(model, mu_clear, tan_theta=0.0, damped=True)
     k = int(np.argmax(lam_06.real))
     f_eig = abs(float(lam_06.imag[k] / (2 * math.pi)))
     # the paper high-passes at 1000 Hz (its squeal is near 2.4 kHz); a model vibrating lower gets half its frequency

@@ -86,9 +86,18 @@ class EigenSolution:
     covered_growth: float = math.inf
 
     @property
-    def frequency(self) -> NDArray[np.float64]:
+    def frequency_hz(self) -> NDArray[np.float64]:
         """Damped frequencies [Hz]."""
         return self.eigenvalues.imag / (2 * math.pi)
+
+    @property
+    def frequency(self) -> NDArray[np.float64]:
+        """Deprecated name of :attr:`frequency_hz` (kept one release)."""
+        import warnings
+
+        warnings.warn("EigenSolution.frequency is deprecated; use frequency_hz (same meaning).", DeprecationWarning,
+                      stacklevel=2)
+        return self.frequency_hz
 
 
 def validate_band(band: object) -> tuple[float, float]:

@@ -256,7 +256,7 @@ def _snapshot(fe, omega: float, mu: float, band: tuple[float, float], parts: Den
     if parts is None:
         return band_eigs(fe, omega, mu, band=band, workers=workers, tol=SNAPSHOT_TOL).vectors
     sol = dense_eigs(fe, omega, mu, parts=parts)
-    f = sol.frequency
+    f = sol.frequency_hz
     return sol.vectors[:, (f >= band[0]) & (f <= band[1])]
 
 
@@ -623,11 +623,12 @@ def reduced_sweep(
     Returns
     -------
     xarray.Dataset
-        Dims ``(omega, mu, mode)`` (``mode`` a tracked mode, NaN where it is outside the
+        Dims ``(rpm, mu, mode)`` (``mode`` a tracked mode, NaN where it is outside the
         band; or, without tracking, the eigenvalues in the band by frequency, padded with
         NaN): ``growth_rate`` [1/s], ``frequency_hz`` [Hz], ``residual`` (full-model
         backward error), ``trusted``; per point ``any_unstable`` (a trusted eigenvalue with
-        positive growth rate), ``max_growth_rate`` and ``all_trusted``; coordinate ``rpm``.
+        positive growth rate), ``max_growth_rate`` and ``all_trusted``; coordinates ``rpm``
+        and ``disc_speed`` [rad/s] (the disc speed, never ``omega``).
     """
     import xarray as xr
 
@@ -663,7 +664,7 @@ def reduced_sweep(
     valid = ~np.isnan(res)
     trusted = valid & (res <= eta_max)
     gr = lam_a.real
-    dims = ("omega", "mu", "mode")
+    dims = ("rpm", "mu", "mode")
     ds = xr.Dataset(
         {
             "growth_rate": (dims, gr, {"units": "1/s", "long_name": "growth rate (real part)"}),
@@ -675,13 +676,13 @@ def reduced_sweep(
             "all_trusted": (dims[:2], np.all(trusted | ~valid, axis=2)),
         },
         coords={
-            "omega": ("omega", omegas, {"units": "rad/s", "long_name": "disc speed"}),
-            "rpm": ("omega", omegas * 60 / (2 * math.pi), {"units": "1/min"}),
+            "rpm": ("rpm", omegas * 60 / (2 * math.pi), {"units": "1/min", "long_name": "disc speed"}),
+            "disc_speed": ("rpm", omegas, {"units": "rad/s", "long_name": "disc speed 2 pi rpm/60"}),
             "mu": ("mu", mus),
             "mode": ("mode", np.arange(m),
                      {"long_name": "mode index (tracked by MAC)" if track else "mode index (by frequency)"}),
         },
-        attrs={"band_hz": [lo, hi], "eta_max": eta_max, "n_reduced": reduced.n_reduced,
+        attrs={"kind": "reduced_sweep", "band_hz": [lo, hi], "eta_max": eta_max, "n_reduced": reduced.n_reduced,
                "n_full": reduced.V.shape[0], "tracked": int(track)},
     )
     return ds

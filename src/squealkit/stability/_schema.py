@@ -62,7 +62,7 @@ def eigen_variables(dims, sigma, omega, zeta, err, unstable, verdict, smax, any_
     return {
         "growth_rate": (dims, sigma, {"units": "1/s", "long_name": "growth rate sigma (real part)"}),
         "omega": (dims, omega, {"units": "rad/s", "long_name": "damped circular frequency omega_d"}),
-        "frequency": (dims, omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency"}),
+        "frequency_hz": (dims, omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency"}),
         "damping_ratio": (dims, zeta, {"units": "1", "long_name": "damping ratio -sigma/|lambda|"}),
         "growth_rate_error": (dims, err, {"units": "1/s", "long_name": err_name}),
         "unstable": (dims, unstable,

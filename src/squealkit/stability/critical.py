@@ -130,6 +130,45 @@ class CriticalFriction:
     def theta_deg(self) -> float:
         return math.degrees(self.theta)
 
+    def to_dataset(self) -> xr.Dataset:
+        """This result as a Dataset over ``theta`` (one point): the variables, units and status
+        flags of :func:`critical_friction_curve` and :func:`~squealkit.stability.fe_critical_friction`
+        (``mu_critical``, ``mu_e_critical``, ``omega_rad_s``, ``frequency_hz``, ``status``).
+
+        Examples
+        --------
+        >>> from squealkit.models import Hoffmann2002
+        >>> ds = critical_friction(Hoffmann2002()).to_dataset()
+        >>> ds.attrs["kind"], [str(s) for s in ds.status.attrs["flag_meanings"].split()][0]
+        ('critical_friction', 'onset')
+        """
+
+        def windows(w: tuple[tuple[float, float], ...]) -> NDArray[np.float64]:
+            return np.array(w, float).reshape(1, len(w), 2) if w else np.full((1, 1, 2), np.nan)
+
+        t = math.tan(self.theta)
+        return xr.Dataset(
+            {
+                "mu_critical": ("theta", [self.mu_critical],
+                                {"units": "1", "long_name": "critical friction coefficient"}),
+                "mu_e_critical": ("theta", [self.mu_e_critical],
+                                  {"units": "1", "long_name": "critical mu + tan(theta) (eq. 6)"}),
+                "omega_rad_s": ("theta", [self.omega_rad_s], {"units": "rad/s", "long_name": "frequency at onset"}),
+                "frequency_hz": ("theta", [self.frequency_hz], {"units": "Hz", "long_name": "frequency at onset"}),
+                "status": onset_status_variable("theta", np.array([ONSET_STATUS.index(self.status)], np.int8)),
+                "unstable_intervals": (("theta", "window", "bound"), windows(self.unstable_intervals),
+                                       {"units": "1", "long_name": "unstable friction windows [start, end]"}),
+                "indeterminate_intervals": (("theta", "indeterminate_window", "bound"),
+                                            windows(self.indeterminate_intervals),
+                                            {"units": "1", "long_name": "undecided friction windows [start, end]"}),
+            },
+            coords={"theta": ("theta", [self.theta], {"units": "rad"}),
+                    "theta_deg": ("theta", [self.theta_deg], {"units": "deg"}),
+                    "tan_theta": ("theta", [t], {"units": "1"}), "bound": ("bound", ["start", "end"])},
+            attrs={"kind": "critical_friction", "damped": int(self.damped), "mu_max": self.mu_max,
+                   "squealkit_version": __version__},
+        )
+
     def to_dict(self) -> dict[str, object]:
         d = dataclasses.asdict(self)
         d["theta_deg"] = self.theta_deg
@@ -249,9 +288,7 @@ def critical_friction_curve(
                               {"units": "1", "long_name": "critical mu + tan(theta) (eq. 6)"}),
             "omega_rad_s": ("theta", omega, {"units": "rad/s", "long_name": "frequency at onset"}),
             "frequency_hz": ("theta", omega / (2 * math.pi), {"units": "Hz", "long_name": "frequency at onset"}),
-            "status": ("theta", status,
-                       {"flag_values": " ".join(str(i) for i in range(len(ONSET_STATUS))),
-                        "flag_meanings": " ".join(ONSET_STATUS)}),
+            "status": onset_status_variable("theta", status),
             "unstable_intervals": (("theta", "window", "bound"), uns,
                                    {"units": "1", "long_name": "unstable friction windows [start, end]"}),
             "indeterminate_intervals": (("theta", "indeterminate_window", "bound"), ind,
@@ -263,13 +300,20 @@ def critical_friction_curve(
             "tan_theta": ("theta", t, {"units": "1"}),
             "bound": ("bound", ["start", "end"]),
         },
-        attrs={"model": model.to_json(), "damped": int(damped), "mu_max": mu_max,
+        attrs={"kind": "critical_friction", "model": model.to_json(), "damped": int(damped), "mu_max": mu_max,
                "squealkit_version": __version__},
     )
     if friction is not None:
         ds.attrs.update(friction=friction.describe(), mu_static=friction.mu_static, v_stribeck=friction.v_stribeck,
                         speed=speed, speed_units="m/s")
     return ds
+
+
+def onset_status_variable(dim: str, codes: ArrayLike) -> tuple[str, NDArray[np.int8], dict[str, str]]:
+    """The ``status`` variable of an onset search along ``dim``: indices into :data:`ONSET_STATUS`,
+    named by CF ``flag_values``/``flag_meanings`` (one encoding for every critical-friction result)."""
+    flags = {"flag_values": " ".join(str(i) for i in range(len(ONSET_STATUS))), "flag_meanings": " ".join(ONSET_STATUS)}
+    return dim, np.asarray(codes, np.int8), flags
 
 
 def _pairs(a: NDArray) -> tuple[tuple[float, float], ...]:

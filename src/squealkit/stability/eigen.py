@@ -18,6 +18,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from .. import __version__
+from .._deprecation import keyword_only
 from .._threads import honour_thread_limit, limit_threads, thread_limit, threads_for
 from .._validation import (
     InputError,
@@ -51,6 +52,8 @@ __all__ = [
 #: Largest n solved by the compiled characteristic-polynomial kernel; larger models use
 #: LAPACK on the 2n x 2n state matrix.
 _KERNEL_MAX_DOF = 4
+#: Why ``tan_theta`` is keyword-only: a third positional argument reads like stability_map's theta [rad].
+_TAN_THETA_WHY = "a third positional argument is easily taken for theta in radians, as in stability_map"
 _CHUNK = 4096
 #: Points per block between progress reports.
 _BLOCK = 1 << 18
@@ -313,12 +316,13 @@ def _solve_grid(model, mu, tan_theta, damped, progress=None, friction=None, spee
     return (lam.reshape((*shape, n)), err.reshape((*shape, n)), verdict.reshape(shape), thr.reshape(shape))
 
 
+@keyword_only("tan_theta", why=_TAN_THETA_WHY)
 @honour_thread_limit
 def eigenvalues(
     model: FrictionModel,
     mu: ArrayLike,
-    tan_theta: ArrayLike = 0.0,
     *,
+    tan_theta: ArrayLike = 0.0,
     damped: bool = False,
     friction: Stribeck | None = None,
     speed: float | None = None,
@@ -374,12 +378,13 @@ def eigenvalues(
     return _solve_grid(model, mu, tan_theta, damped, progress, friction, speed)[0]
 
 
+@keyword_only("tan_theta", why=_TAN_THETA_WHY)
 @honour_thread_limit
 def stability_verdict(
     model: FrictionModel,
     mu: ArrayLike,
-    tan_theta: ArrayLike = 0.0,
     *,
+    tan_theta: ArrayLike = 0.0,
     damped: bool = False,
     friction: Stribeck | None = None,
     speed: float | None = None,
@@ -503,7 +508,7 @@ def _stream_map(model, mu, theta, *, damped, track, lock_in_rtol, progress, stor
         rows = max(1, min(rows, -(-mu.size // (4 * threads))))
     # the first column, tracked along mu: each point is the cold first point of its row,
     # so these are the same numbers the tiles compute for their column 0
-    first = eigenvalues(model, mu[:, None], np.tan(theta[:1])[None, :], damped=damped, **fr)[:, 0]
+    first = eigenvalues(model, mu[:, None], tan_theta=np.tan(theta[:1])[None, :], damped=damped, **fr)[:, 0]
     first = track_column(first) if track else first
     sample = _tile((model, mu[:1], theta, first[:1], damped, track, lock_in_rtol, fr))
     template = lazy_template(sample, "mu", mu, rows)
@@ -532,6 +537,7 @@ def _dataset(model, mu, theta, sol, *, damped, tracked, lock_in_rtol, friction=N
             "mode": ("mode", np.arange(n), {"long_name": "mode index (tracked)" if tracked else "mode index"}),
         },
         attrs={
+            "kind": "stability_map",
             "title": "Complex eigenvalues over friction and run-out incline",
             "model": model.to_json(),
             "model_kind": model.kind,

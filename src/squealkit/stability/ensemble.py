@@ -16,12 +16,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._deprecation import keyword_only
 from .._threads import honour_thread_limit, limit_threads, threads_for
 from .._validation import InputError, validate_array_finite, validate_finite
 from ..models import FrictionModel
 from ._kernels import DIVERGENCE, FLUTTER, INDETERMINATE
 from ._windows import ONSET_STATUS, SCAN_POINTS, find_windows
-from .eigen import _solve_models, check_magnitudes
+from .eigen import _TAN_THETA_WHY, _solve_models, check_magnitudes
 
 #: Default relative width to which :func:`ensemble_onset` locates onsets that double
 #: precision cannot decide.
@@ -176,8 +177,9 @@ def _slope(tan_theta: float) -> float:
     return validate_finite("tan_theta", tan_theta)
 
 
+@keyword_only("tan_theta", why=_TAN_THETA_WHY)
 @honour_thread_limit
-def ensemble_unstable(ens: ModelEnsemble, mu: ArrayLike, tan_theta: float = 0.0) -> NDArray[np.bool_]:
+def ensemble_unstable(ens: ModelEnsemble, mu: ArrayLike, *, tan_theta: float = 0.0) -> NDArray[np.bool_]:
     """Which models are unstable at each friction coefficient (paper eqs. 7-8).
 
     The criterion is that of :func:`~squealkit.stability.eigenvalues` and
@@ -209,12 +211,13 @@ def ensemble_unstable(ens: ModelEnsemble, mu: ArrayLike, tan_theta: float = 0.0)
     return _unstable_rows(ens, np.broadcast_to(mu_a, (len(ens), mu_a.size)), t)
 
 
+@keyword_only("tan_theta", why=_TAN_THETA_WHY)
 @honour_thread_limit
 def ensemble_onset(
     ens: ModelEnsemble,
     mu: ArrayLike,
-    tan_theta: float = 0.0,
     *,
+    tan_theta: float = 0.0,
     rtol: float = ONSET_RTOL,
 ) -> tuple[NDArray[np.float64], NDArray[np.int8]]:
     """Critical friction of every model: the start of its first unstable window in the range.

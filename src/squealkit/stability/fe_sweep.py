@@ -227,11 +227,11 @@ def fe_stability_map(
     -------
     xarray.Dataset
         Dims ``(rpm, mu, mode)``, with the variables of
-        :func:`~squealkit.stability.stability_map` (``growth_rate``, ``omega``, ``frequency``,
+        :func:`~squealkit.stability.stability_map` (``growth_rate``, ``omega``, ``frequency_hz``,
         ``damping_ratio``, ``growth_rate_error``, ``unstable``, ``verdict``,
         ``max_growth_rate``, ``any_unstable``, ``lock_in``) and ``residual`` (backward error
         of each eigenpair; above ``residual_tol`` the reduced answer is not to be trusted),
-        ``trusted``. Coordinates ``rpm``, ``omega_disc`` [rad/s], ``mu``, ``mu_e``, scalar
+        ``trusted``. Coordinates ``rpm``, ``disc_speed`` [rad/s], ``mu``, ``mu_e``, scalar
         ``theta``, ``theta_deg``, ``tan_theta``. Modes are tracked across the grid by MAC
         on the right eigenvectors (first column along rpm, then each row along mu); a mode
         that enters the band gets a new index, and is NaN where it is outside.
@@ -397,7 +397,7 @@ def _fe_dataset(solver, rpm, omegas, mu, theta, t, results, n_slots, *, tracked:
         },
         coords={
             "rpm": ("rpm", rpm, {"units": "1/min", "long_name": "disc speed"}),
-            "omega_disc": ("rpm", omegas, {"units": "rad/s", "long_name": "disc speed omega = 2 pi rpm/60"}),
+            "disc_speed": ("rpm", omegas, {"units": "rad/s", "long_name": "disc speed 2 pi rpm/60"}),
             "mu": ("mu", mu, {"units": "1", "long_name": "friction coefficient"}),
             "mu_e": ("mu", mu + t, {"units": "1", "long_name": "equivalent friction mu + tan(theta)"}),
             "theta": ((), float(theta), {"units": "rad", "long_name": "run-out incline angle"}),
@@ -407,6 +407,7 @@ def _fe_dataset(solver, rpm, omegas, mu, theta, t, results, n_slots, *, tracked:
                      {"long_name": "mode index (tracked by MAC)" if tracked else "mode index (by frequency)"}),
         },
         attrs={
+            "kind": "fe_stability_map",
             "title": "Complex eigenvalues of an FE brake model over disc speed and friction",
             "model": model.to_json(),
             "model_kind": model.kind,
@@ -520,9 +521,12 @@ def fe_critical_friction(
     -------
     xarray.Dataset
         Over ``rpm``: ``mu_critical`` (NaN if stable in range), ``mu_e_critical``
-        (``mu_critical + tan(theta)``), ``frequency_hz`` of the mode that loses stability,
-        ``status`` (``onset``, ``unstable_at_start``, ``stable_in_range``) and, with
-        ``mu_operating``, ``tan_theta_max`` and ``theta_max_deg``.
+        (``mu_critical + tan(theta)``), ``omega_rad_s`` and ``frequency_hz`` of the mode that
+        loses stability, ``status`` (indices into ``ONSET_STATUS``, named by its
+        ``flag_meanings``: ``onset``, ``unstable_at_start``, ``stable_in_range``) and, with
+        ``mu_operating``, ``tan_theta_max`` and ``theta_max_deg``: the variables of
+        :func:`~squealkit.stability.critical_friction_curve` and of
+        :meth:`CriticalFriction.to_dataset() <squealkit.stability.CriticalFriction.to_dataset>`.
 
     Examples
     --------
@@ -545,18 +549,24 @@ def fe_critical_friction(
     samples = (omegas[[len(omegas) // 2]], np.array([0.0, mu_max / 2, mu_max]) + t) if method == "pod" else None
     solver = FESolver(model, method, band, n_modes, samples)
     grid = np.linspace(0.0, mu_max, int(n_scan))
+    from ._windows import ONSET_STATUS
+    from .critical import onset_status_variable
+
     with threadpool_limits(1, user_api="blas"):
         mu_c, freq, status = _onsets(solver, omegas, grid, t, xtol)
     ds = xr.Dataset(
         {
             "mu_critical": ("rpm", mu_c, {"units": "1", "long_name": "critical friction coefficient"}),
             "mu_e_critical": ("rpm", mu_c + t, {"units": "1", "long_name": "critical equivalent friction mu + tan"}),
-            "frequency_hz": ("rpm", freq, {"units": "Hz", "long_name": "frequency of the mode losing stability"}),
-            "status": ("rpm", np.array(status, dtype=object).astype(str)),
+            "omega_rad_s": ("rpm", 2 * math.pi * freq, {"units": "rad/s", "long_name": "frequency at onset"}),
+            "frequency_hz": ("rpm", freq, {"units": "Hz", "long_name": "frequency at onset"}),
+            "status": onset_status_variable("rpm", [ONSET_STATUS.index(s) for s in status]),
         },
-        coords={"rpm": ("rpm", rpm_a, {"units": "1/min"}), "omega_disc": ("rpm", omegas, {"units": "rad/s"}),
+        coords={"rpm": ("rpm", rpm_a, {"units": "1/min", "long_name": "disc speed"}),
+                "disc_speed": ("rpm", omegas, {"units": "rad/s", "long_name": "disc speed 2 pi rpm/60"}),
                 "theta": ((), float(theta), {"units": "rad"}), "tan_theta": ((), t)},
-        attrs={"method": solver.method, "mu_max": mu_max, "n_scan": int(n_scan), "xtol": xtol,
+        attrs={"kind": "fe_critical_friction", "method": solver.method, "mu_max": mu_max, "n_scan": int(n_scan),
+               "xtol": xtol,
                "model": model.to_json(), "model_kind": model.kind},
     )
     if mu_operating is not None:
@@ -604,7 +614,7 @@ def fe_modes(
     -------
     xarray.Dataset
         Over ``mode``: ``eigenvalue_real``, ``eigenvalue_imag`` [1/s], ``growth_rate``,
-        ``frequency`` [Hz], ``damping_ratio``, ``unstable``, ``residual``; over
+        ``frequency_hz`` [Hz], ``damping_ratio``, ``unstable``, ``residual``; over
         ``(dof, mode)``: ``shape_real``, ``shape_imag`` (largest amplitude 1, real there).
         Attributes ``verdict``, ``rpm``, ``mu``, ``theta``.
     """
@@ -630,7 +640,7 @@ def fe_modes(
             "eigenvalue_real": ("mode", lam.real, {"units": "1/s"}),
             "eigenvalue_imag": ("mode", lam.imag, {"units": "1/s"}),
             "growth_rate": ("mode", lam.real, {"units": "1/s"}),
-            "frequency": ("mode", lam.imag / (2 * math.pi), {"units": "Hz"}),
+            "frequency_hz": ("mode", lam.imag / (2 * math.pi), {"units": "Hz"}),
             "damping_ratio": ("mode", np.where(mag > 0, -lam.real / np.where(mag > 0, mag, 1), 0.0), {"units": "1"}),
             "unstable": ("mode", unstable),
             "residual": ("mode", res, {"long_name": "backward error in the full model"}),
@@ -639,7 +649,8 @@ def fe_modes(
             "shape_imag": (("dof", "mode"), X.imag),
         },
         coords={"mode": np.arange(lam.size), "dof": list(model.dof_names)},
-        attrs={"verdict": VERDICTS[int(verdict)], "rpm": rpm, "omega_disc": omega, "mu": mu, "theta": float(theta),
+        attrs={"kind": "fe_modes", "verdict": VERDICTS[int(verdict)], "rpm": rpm, "disc_speed": omega, "mu": mu,
+               "theta": float(theta),
                "tan_theta": t, "method": solver.method, "model": model.to_json(), "model_kind": model.kind},
     )
 

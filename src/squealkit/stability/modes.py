@@ -275,6 +275,7 @@ def modes(model: FrictionModel, mu: float, theta: float = 0.0, *, damped: bool |
             "dof_description": ("dof", np.array(_dof_descriptions(model, names), dtype=str)),
         },
         attrs={
+            "kind": "modes",
             "title": "Complex modes at one operating point",
             "mu": mu, "theta": theta, "theta_deg": math.degrees(theta), "tan_theta": t, "mu_e": mu + t,
             "damped": int(damped), "verdict": verdict, "unstable_threshold": thr,
@@ -597,6 +598,7 @@ def eigenvalue_sensitivity(
         },
         coords={"mode": ("mode", np.arange(lam.size))},
         attrs={
+            "kind": "eigenvalue_sensitivity",
             "parameter": parameter, "parameter_unit": unit, "parameter_value": value,
             "mu": mu, "theta": theta, "theta_deg": math.degrees(theta), "damped": int(damped),
             "model": model.to_json(), "squealkit_version": __version__,

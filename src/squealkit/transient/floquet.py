@@ -112,7 +112,7 @@ def _steps(model: FrictionModel, mu: np.ndarray, period: float, damped: bool, st
         if isinstance(steps, bool) or not isinstance(steps, int) or steps < 16:
             raise InputError(f"Parameter steps_per_period={steps!r} must be an integer >= 16.")
         return steps
-    wmax = float(np.abs(eigenvalues(model, np.unique(mu), 0.0, damped=damped)).max())
+    wmax = float(np.abs(eigenvalues(model, np.unique(mu), tan_theta=0.0, damped=damped)).max())
     need = period * wmax / _STEP_FACTOR
     return max(64, math.ceil(need)) if math.isfinite(need) else need  # infinite: refused by the work budget
 
@@ -148,7 +148,8 @@ def _exponents(model, mu, amplitude, wavelength, speed, damped, steps):
     rho = np.log(np.abs(mult[:, 0])) / period
     fz = np.arange(_FROZEN_SAMPLES) / _FROZEN_SAMPLES * wavelength
     slope1 = SineRunOut(1.0, wavelength).evaluate(fz)[1]
-    sig = eigenvalues(model, mu[:, None], amplitude[:, None] * slope1[None, :], damped=damped).real.max(axis=-1)
+    sig = eigenvalues(model, mu[:, None], tan_theta=amplitude[:, None] * slope1[None, :],
+                      damped=damped).real.max(axis=-1)
     return rho, mult, sig.mean(axis=-1), sig.max(axis=-1), n_steps, period
 
 
@@ -242,7 +243,8 @@ def floquet_map(model: FrictionModel, *, mu: ArrayLike, amplitude: ArrayLike, wa
             "max_slope": ("amplitude", 2 * math.pi * amp / wavelength,
                           {"units": "1", "long_name": "largest run-out slope 2 pi q0 / lambda (eq. 11)"}),
         },
-        attrs={"title": "Floquet exponent of a sine run-out", "model": model.to_json(), "wavelength": wavelength,
+        attrs={"kind": "floquet_map",
+               "title": "Floquet exponent of a sine run-out", "model": model.to_json(), "wavelength": wavelength,
                "speed": speed, "period": period, "steps_per_period": n_steps, "damped": int(damped),
                "reference": "Lv, Zhang & Yu 2013, eqs. 4, 9-11; Floquet theory of periodic linear systems",
                "squealkit_version": __version__},

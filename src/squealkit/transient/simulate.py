@@ -163,7 +163,7 @@ def _omega_max(runs: Sequence[_Run]) -> float:
     for run in runs:
         by_model.setdefault(id(run.model), (run.model, []))[1].append(run.mu)
     for model, mus in by_model.values():
-        lam = eigenvalues(model, np.unique(mus), 0.0, damped=True)
+        lam = eigenvalues(model, np.unique(mus), tan_theta=0.0, damped=True)
         wmax = max(wmax, float(np.abs(lam).max()))
     return wmax
 
@@ -543,7 +543,7 @@ def _run_dataset(run: _Run, raw: dict, i: int, n_keep: int) -> xr.Dataset:
     slopes, inverse = np.unique(np.round(tan_theta, 12), return_inverse=True)
     law = raw["contact"].friction_law
     fr = {"friction": law, "speed": run.speed} if law is not None and run.speed > 0 else {}
-    sigma = eigenvalues(model, run.mu, slopes, damped=True, **fr).real.max(axis=-1)[inverse.reshape(-1)]
+    sigma = eigenvalues(model, run.mu, tan_theta=slopes, damped=True, **fr).real.max(axis=-1)[inverse.reshape(-1)]
     data: dict[str, tuple] = {}
     for j, name in enumerate(model.dof_names):
         data[name] = ("time", raw["x"][i, :n_keep, j], {"units": "m", "long_name": f"displacement {name}"})
@@ -576,6 +576,7 @@ def _run_dataset(run: _Run, raw: dict, i: int, n_keep: int) -> xr.Dataset:
 
 def _attrs(run: _Run, raw: dict, status: str, t_stop: float, fs: float, i: int = 0) -> dict:
     return {
+        "kind": "simulation",
         "title": "squealkit transient simulation",
         "reference": "Lv, Zhang & Yu, J. Vibroeng. 15(2) 2013, eqs. 1-4 and 9-11",
         "model": run.model.to_json(),
@@ -1072,7 +1073,7 @@ def _batch_dataset(runs: Sequence[_Run], *, duration, fs, contact, x0, perturbat
     if raw["method"] == "rk4":
         integ["dt"] = float(raw["dt"])
     ds.attrs.update(
-        {"title": "squealkit transient simulation (batch)", "fs": float(fs), **integ,
+        {"kind": "simulation_batch", "title": "squealkit transient simulation (batch)", "fs": float(fs), **integ,
          "integrator": integ["integrator"].replace("(numba)", "(numba, parallel over runs)"),
          "contact": raw["contact"].describe()}
     )
