@@ -302,6 +302,18 @@ def test_demo_mesh_written_as_inp_carries_the_dof_map(demo, tmp_path):
     np.testing.assert_array_equal(point, demo["dof_node"])
 
 
+
+def test_fe_demo_writes_its_mesh_as_an_inp_deck(demo, demo_mm):
+    # write_fe_demo (fe-demo) writes brake.inp beside the matrices: the reference is demo_mesh,
+    # every scalar node a point labelled k + 1, read back through the .inp reader
+    _, folder = demo_mm
+    back = read_mesh(folder / "brake.inp")
+    mesh = demo_mesh(demo)
+    np.testing.assert_array_equal(back.node_labels, np.arange(1, len(demo["node_points"]) + 1))
+    np.testing.assert_array_equal(back.points, mesh.points)
+    assert [(k, c.tolist()) for k, c in back.cells] == [(k, c.tolist()) for k, c in mesh.cells]
+
+
 # ----------------------------------------------------------------------------- the CLI on Abaqus matrices + .inp
 
 
