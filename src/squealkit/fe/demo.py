@@ -58,8 +58,11 @@ import scipy.sparse as sp
 
 from .._deprecation import renamed_kwargs
 from .._validation import InputError, check_budget
+from .dofmap import DofMap
+from .mesh import FEMesh, abaqus_inp_text
 
-__all__ = ["FE_MATRIX_NAMES", "FEDemoGeometry", "build_fe_demo", "fe_demo_dofs", "write_fe_demo"]
+__all__ = ["FE_MATRIX_NAMES", "FEDemoGeometry", "build_fe_demo", "demo_dof_map", "demo_mesh", "fe_demo_dofs",
+           "write_fe_demo"]
 
 #: Matrix names of the exported form (absent ones are ``None``).
 FE_MATRIX_NAMES = ("M", "D1", "DG", "DR", "D4", "K1", "KR", "KGeo")
@@ -491,13 +494,32 @@ def _vtk_hex_order(t: np.ndarray) -> np.ndarray:
 # ----------------------------------------------------------------------------- export
 
 
+def demo_mesh(demo: Any) -> FEMesh:
+    """The mesh of the built-in FE brake (:func:`build_fe_demo`), nodes labelled 1..N.
+
+    Every scalar node of the quadratic elements is a point (``node_points``), labelled ``k + 1``
+    for the demo's node k, so a DOF ``node<k>.<x|y|z>`` is ``(k + 1, 1|2|3)`` in the DOF map
+    (:func:`demo_dof_map`); the elements are the 8-vertex hexahedra.
+    """
+    pts = np.asarray(demo["node_points"], dtype=np.float64)
+    hexes = np.asarray(demo["mesh"]["cells"]["hexahedron"], dtype=np.int64)
+    return FEMesh(pts, np.arange(1, len(pts) + 1), (("hexahedron", hexes),), source="built-in FE brake")
+
+
+def demo_dof_map(demo: Any) -> DofMap:
+    """The DOF map of the built-in FE brake: unknown i is ``(dof_node[i] + 1, dof_component[i] + 1)``."""
+    return DofMap(np.asarray(demo["dof_node"]) + 1, np.asarray(demo["dof_component"]) + 1)
+
+
 def write_fe_demo(model: Mapping[str, Any], out_dir: str | Path) -> Path:
-    """Write the matrices as Matrix Market files, a ``brake.toml`` and the mesh (VTU).
+    """Write the matrices as Matrix Market files, a ``brake.toml`` and the mesh (VTU, and Abaqus ``.inp``).
 
     The folder is staged and moved into place only when complete (:func:`squealkit.io.atomic_path`).
     The TOML reads ``model = "fe"`` with ``[fe] files = {M = "M.mtx", ...}``, ``disc_speed_ref``,
     ``mu_ref``, ``f_ref``, ``dof_names = "dof_names.txt"`` and (when meshio is installed)
-    ``mesh = "mesh.vtu"``, the element vertices for viewing mode shapes (``modes --vtk``).
+    ``mesh = "mesh.vtu"``, the element vertices for viewing mode shapes (``modes --vtk``). The
+    mesh is also written as an Abaqus input deck ``brake.inp`` (:func:`demo_mesh`: every node a
+    point, labelled ``k + 1``), for FE codes and for ``mesh = "brake.inp"``.
 
     Returns
     -------
@@ -543,5 +565,7 @@ def write_fe_demo(model: Mapping[str, Any], out_dir: str | Path) -> Path:
                                 cell_data={"disc": [mesh["disc"].astype(np.int8)]}),
                 )
                 toml += 'mesh = "mesh.vtu"  # element vertices, for modes --vtk\n'
+        if "node_points" in model and model.get("mesh") is not None:
+            (stage / "brake.inp").write_text(abaqus_inp_text(demo_mesh(model)))
         (stage / "brake.toml").write_text(toml)
     return out / "brake.toml"

@@ -157,9 +157,13 @@ class FEModel:
     dof_names : tuple of str, optional
         A name per DOF (e.g. ``node12.uz``); default ``q0, q1, ...``.
     mesh : object, optional
-        Mesh metadata (e.g. a ``meshio.Mesh`` whose points carry the DOFs), for mode shape export.
+        Mesh metadata (a :class:`~squealkit.fe.mesh.FEMesh`, or a ``meshio.Mesh`` whose points
+        carry the DOFs), for mode shape export.
     source : str, optional
         Where the matrices came from (a file name), recorded in results.
+    dof_map : DofMap, optional
+        The ``(node, DOF)`` label of each unknown (:class:`~squealkit.fe.dofmap.DofMap`), as read
+        from labelled files; it names the DOFs when ``dof_names`` is not given.
 
     Examples
     --------
@@ -186,6 +190,7 @@ class FEModel:
     dof_names: tuple[str, ...] | None = None
     mesh: Any = None
     source: str | None = None
+    dof_map: Any = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -210,6 +215,13 @@ class FEModel:
         _check_scale(self.M, self.K1)
         for name in ("disc_speed_ref", "mu_ref", "f_ref"):
             set_(self, name, validate_positive(name, getattr(self, name)))
+        if self.dof_map is not None:
+            from .dofmap import DofMap
+
+            if not isinstance(self.dof_map, DofMap) or self.dof_map.n_dof != n:
+                raise InputError(f"Parameter dof_map must be a DofMap of {n} DOFs, got {self.dof_map!r:.60}.")
+            if self.dof_names is None:
+                set_(self, "dof_names", self.dof_map.names)
         names = tuple(f"q{i}" for i in range(n)) if self.dof_names is None else tuple(map(str, self.dof_names))
         if len(names) != n:
             raise InputError(f"Parameter dof_names has {len(names)} entries for {n} DOFs.")
@@ -225,7 +237,8 @@ class FEModel:
     @classmethod
     @renamed_kwargs(omega_ref="disc_speed_ref")
     def from_matrices(cls, *, disc_speed_ref: float = 1.0, mu_ref: float = 1.0, f_ref: float = 1.0,
-                      dof_names: Any = None, mesh: Any = None, source: str | None = None, **mats: Any) -> FEModel:
+                      dof_names: Any = None, mesh: Any = None, source: str | None = None, dof_map: Any = None,
+                      **mats: Any) -> FEModel:
         """The model of the matrices given by name (``M=..., K1=..., KR=...``), validated.
 
         Parameters
@@ -239,6 +252,8 @@ class FEModel:
             Mesh metadata for mode shape export.
         source : str, optional
             Where the matrices came from.
+        dof_map : DofMap, optional
+            The ``(node, DOF)`` label of each DOF.
         **mats : array_like or sparse matrix
             The matrices by name (``M``, ``D1``, ``DG``, ``DR``, ``D4``, ``K1``, ``KR``, ``KGeo``).
 
@@ -258,7 +273,7 @@ class FEModel:
             if name not in FE_MATRICES:
                 raise InputError(f"Unknown FE matrix {name!r}; known: {', '.join(FE_MATRICES)}.")
         return cls(**mats, disc_speed_ref=disc_speed_ref, mu_ref=mu_ref, f_ref=f_ref, dof_names=dof_names, mesh=mesh,
-                   source=source)
+                   source=source, dof_map=dof_map)
 
     # -- size and parts ----------------------------------------------------------------
     @property

@@ -20,11 +20,11 @@ A model file (all sections optional; SI units, angles in rad or as ``*_deg`` in 
     M = [[1.0, 0.0], [0.0, 1.0]]
 
     [fe]                       # model = "fe": exported FE matrices (see squealkit/fe/)
-    file = "brake.mat"         # all matrices in one file (.mat v5/v7.3, .op4), or
+    file = "brake.mat"         # all matrices in one file (.mat v5/v7.3, .op4, Nastran DMIG .bdf/.pch), or
     # files = {M = "M.mtx", K1 = "K1.mtx", KR = "KR.mtx"}     # one file per matrix
     names = {M = "MAA"}        # the names in the file where they differ (optional)
     disc_speed_ref = 1.0       # rad/s (formerly omega_ref); mu_ref, f_ref likewise (defaults 1)
-    mesh = "mesh.vtu"          # optional: the mesh of the DOFs (meshio), for modes --vtk
+    mesh = "brake.inp"         # optional: the mesh (.inp, .bdf, .cdb or meshio's), for modes --vtk
     dof_names = "dof_names.txt"  # optional: one DOF name per line (node12.x: mesh point 12, x)
     omit = ["DG"]              # matrices read but left out of the assembly (optional)
 

@@ -680,16 +680,20 @@ def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any) -> None:
 
     if model.mesh is None:
         raise InputError("The model has no mesh: mode shapes can be exported only with one.")
-    mesh = model.mesh
+    from ..fe.mesh import FEMesh
+
+    fe_mesh = model.mesh if isinstance(model.mesh, FEMesh) else None
+    mesh = fe_mesh.to_meshio() if fe_mesh is not None else model.mesh
     n_pts = len(mesh.points)
-    place = _dofs_on_points(model.dof_names, n_pts)
+    place = (fe_mesh.dof_points(model.dof_map) if fe_mesh is not None and model.dof_map is not None
+             else _dofs_on_points(model.dof_names, n_pts))
     comp = model.n_dof // n_pts if n_pts and model.n_dof % n_pts == 0 else 0
     if place is None and comp not in (1, 2, 3):
         raise InputError(f"The model's {model.n_dof} DOFs do not map onto the mesh's {n_pts} points "
                          "(nor are they named node{k}.x/y/z).")
     import meshio
 
-    data = {}
+    data = {} if fe_mesh is None else {"node_label": fe_mesh.node_labels}  # the FE code's labels, for lookups
     for k in range(ds.sizes["mode"]):
         for part in ("real", "imag"):
             shape = ds[f"shape_{part}"].values[:, k]

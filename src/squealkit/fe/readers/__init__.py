@@ -7,6 +7,14 @@ matrices (``M, D1, DG, DR, D4, K1, KR, KGeo``) out of one file or one file per m
 names they have in the files if those differ, and builds the :class:`~squealkit.fe.model.FEModel`.
 Every failure is one :class:`InputError` line naming the file.
 
+Files whose entries carry node and DOF labels are told by their content, not their suffix (an
+Abaqus ``*_STIF1.mtx`` is no Matrix Market file): Abaqus ``*MATRIX OUTPUT`` (``abaqus``), Nastran
+DMIG bulk data or punch (``nastran``), ANSYS Harwell-Boeing with its ``.mapping`` and ``.full``
+(``ansys``), recognised in :mod:`~squealkit.fe.readers.labelled`. Their matrices are placed in one
+global :class:`~squealkit.fe.dofmap.DofMap` kept with the model (``FEModel.dof_map``), and a mesh
+(``.inp``, ``.bdf``, ``.cdb`` or meshio's) is read as a :class:`~squealkit.fe.mesh.FEMesh` whose node
+labels tie mode shapes to its points.
+
 A new format is one module here (``reader(path) -> {name: sparse matrix}``, raising
 :class:`InputError` naming the file) and one line in :data:`READERS` (or, from outside
 squealkit, :func:`register_reader`).
@@ -20,7 +28,9 @@ from typing import Any
 
 from ..._deprecation import renamed_kwargs
 from ..._validation import InputError
+from ..mesh import read_mesh
 from ..model import FE_MATRICES, FEModel
+from .labelled import LABELLED_FORMATS, place_labelled, read_labelled
 from .mat import read_mat
 from .mtx import read_mtx
 from .op4 import read_op4
@@ -60,10 +70,21 @@ def register_reader(suffix: str, reader: Reader) -> None:
     READERS[suffix.lower()] = reader
 
 
-def read_matrices(path: str | Path) -> dict[str, Any]:
-    """All matrices of a file, by the reader of its suffix (:data:`READERS`), as SciPy sparse matrices.
+#: squealkit's own readers: a suffix whose reader is another one (:func:`register_reader`) is read by it.
+_BUILT_IN = dict(READERS)
+#: Suffixes whose files are never labelled text (binary MATLAB, OP4): read by suffix at once.
+_NEVER_LABELLED = (".mat", ".op4")
 
-    They keep the form they were read in (COO, CSC); :class:`FEModel` checks them and makes them CSR.
+
+def read_matrices(path: str | Path) -> dict[str, Any]:
+    """All matrices of a file, as SciPy sparse matrices, or as labelled matrices for labelled formats.
+
+    A file in one of the labelled formats (:data:`~squealkit.fe.readers.labelled.LABELLED_FORMATS`)
+    is recognised from its content, whatever its suffix; any other file is read by the reader of
+    its suffix (:data:`READERS`); a suffix given a reader by :func:`register_reader` is always read
+    by that reader. Matrices keep the form they were read in (COO, CSC, or
+    :class:`~squealkit.fe.dofmap.LabelledMatrix`); :func:`load_fe_model` places labelled ones in one
+    DOF map, and :class:`FEModel` checks them and makes them CSR.
 
     Parameters
     ----------
@@ -78,14 +99,21 @@ def read_matrices(path: str | Path) -> dict[str, Any]:
     Raises
     ------
     InputError
-        If the file does not exist, its suffix has no reader, or it cannot be read.
+        If the file does not exist, is of no labelled format and its suffix has no reader, or it
+        cannot be read.
     """
     p = Path(path)
     if not p.is_file():
         raise InputError(f"Matrix file {str(p)!r} does not exist.")
     suffix = p.suffix.lower()
+    registered = suffix in READERS and READERS[suffix] is not _BUILT_IN.get(suffix)
+    if suffix not in _NEVER_LABELLED and not registered:
+        found = read_labelled(p)
+        if found is not None:
+            return found
     if suffix not in READERS:
-        raise InputError(f"Matrix file {p.name!r}: unknown format {suffix!r}; known: {', '.join(READERS)}.")
+        raise InputError(f"Matrix file {p.name!r}: unknown format {suffix!r}; known: {', '.join(READERS)}, "
+                         f"or by content: {', '.join(LABELLED_FORMATS)}.")
     return READERS[suffix](p)
 
 
@@ -118,7 +146,7 @@ def load_fe_model(
     Parameters
     ----------
     file : path, optional
-        One file holding all matrices (``.mat`` or ``.op4``).
+        One file holding all matrices (``.mat``, ``.op4``, Nastran DMIG ``.bdf``/``.pch``).
     files : mapping, optional
         One file per matrix, ``{"M": "M.mtx", "K1": "K1.mtx", ...}`` (any format; a file with
         several matrices contributes the one of that name, or its only one).
@@ -130,8 +158,10 @@ def load_fe_model(
     base_dir : path, optional
         Folder relative paths start from (the model file's folder).
     mesh : path, optional
-        The mesh the DOFs live on (any format meshio reads, e.g. ``mesh.vtu``), for mode shape
-        export (:func:`~squealkit.stability.fe_sweep.modes_to_vtk`); needs meshio.
+        The mesh the DOFs live on, for mode shape export
+        (:func:`~squealkit.stability.fe_sweep.modes_to_vtk`): an input deck (Abaqus ``.inp``,
+        Nastran ``.bdf``, ANSYS ``.cdb``), whose node labels place labelled DOFs on their points,
+        or any format meshio reads (e.g. ``mesh.vtu``); see :func:`~squealkit.fe.mesh.read_mesh`.
     dof_names : path, optional
         A text file with one DOF name per line (``node12.x`` puts that DOF on mesh point 12).
     omit : sequence of str, optional
@@ -201,27 +231,14 @@ def load_fe_model(
         mats.pop(key, None)
     if omit:
         source += f" (without {', '.join(omit)})"
-    extra = {"mesh": _read_mesh(resolve(mesh)) if mesh is not None else None,
+    extra = {"mesh": read_mesh(resolve(mesh)) if mesh is not None else None,
              "dof_names": _read_dof_names(resolve(dof_names)) if dof_names is not None else None}
+    extra["dof_map"], mats = place_labelled(mats, mesh=extra["mesh"])
     try:
         return FEModel.from_matrices(**mats, disc_speed_ref=disc_speed_ref, mu_ref=mu_ref, f_ref=f_ref, source=source,
                                      **extra)
     except InputError as e:
         raise InputError(f"{source}: {e}") from e
-
-
-def _read_mesh(path: Path) -> Any:
-    """A mesh file through meshio, or one line saying why not."""
-    try:
-        import meshio
-    except ImportError:
-        raise InputError(f"{path.name}: reading a mesh needs meshio: pip install meshio.") from None
-    if not path.is_file():
-        raise InputError(f"Mesh file {str(path)!r} does not exist.")
-    try:
-        return meshio.read(path)
-    except Exception as e:  # meshio raises many kinds on a malformed or unknown file
-        raise InputError(f"{path.name}: not a readable mesh: {e}") from e
 
 
 def _read_dof_names(path: Path) -> tuple[str, ...]:
