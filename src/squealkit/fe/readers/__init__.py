@@ -61,7 +61,7 @@ def register_reader(suffix: str, reader: Reader) -> None:
 
 
 def read_matrices(path: str | Path) -> dict[str, Any]:
-    """All matrices of a file, by the reader of its suffix (:data:`READERS`), as SciPy sparse matrices.
+    """All matrices of a file, by the reader of its suffix (:data:`~squealkit.fe.readers.READERS`): SciPy sparse.
 
     They keep the form they were read in (COO, CSC); :class:`FEModel` checks them and makes them CSR.
 
