@@ -18,8 +18,8 @@ import pytest
 
 README = Path(__file__).parents[1] / "README.md"
 #: README's tour continues in the guide's pages, in this order (docs/guide/index.md): one text, one namespace.
-GUIDE = ("models", "stability", "fe-models", "uncertainty", "transient", "measurement", "scale", "fe-brake",
-         "command-line", "speed", "layout")
+GUIDE = ("models", "stability", "fe-models", "uncertainty", "transient", "measurement", "correlation", "scale",
+         "fe-brake", "command-line", "speed", "layout")
 TEXT = "\n".join(p.read_text(encoding="utf-8") for p in
                  (README, *(README.parent / "docs" / "guide" / f"{name}.md" for name in GUIDE)))
 
@@ -27,9 +27,10 @@ TEXT = "\n".join(p.read_text(encoding="utf-8") for p in
 # squeal_propensity (tests/test_uncertainty.py), limit_cycle_branch (tests/test_nonlinear.py),
 # the FE demo and its reduction (tests/test_fe_demo.py, tests/test_reduction.py), a Dask cluster.
 SLOW_PY = ("squeal_propensity(", "limit_cycle_branch(", "build_fe_demo", "reduced_sweep", "tcp://HOST")
-# CLI examples not run: a cluster or campaign, a shell pipe or variable, the whole report, limit cycles
+# CLI examples not run: a cluster or campaign, a correlation (it reads a campaign's results;
+# tests/test_correlate.py), a shell pipe or variable, the whole report, limit cycles
 # (tests/test_nonlinear.py), placeholders in brackets.
-SLOW_CLI = ("campaign", "reproduce", "limitcycle", "duckdb", "|", "=1 squealkit", "[")
+SLOW_CLI = ("campaign", "correlate", "reproduce", "limitcycle", "duckdb", "|", "=1 squealkit", "[")
 
 _NUM = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
 

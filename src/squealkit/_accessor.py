@@ -83,7 +83,7 @@ _UNPLOTTED: dict[str, str] = {
     "critical_friction": "squealkit.stability.critical_friction_curve (and CriticalFriction.to_dataset)",
     "fe_critical_friction": "squealkit.stability.fe_critical_friction",
     "eigenvalue_sensitivity": "squealkit.stability.eigenvalue_sensitivity",
-    "reduced_sweep": "squealkit.stability.reduction.reduced_sweep",
+    "reduced_sweep": "squealkit.solvers.reduced_sweep",
     "simulation_batch": "squealkit.transient.simulate_batch",
 }
 

@@ -265,7 +265,7 @@ def dense_eigs(model: FEModel, disc_speed: float, mu: float, *, tan_theta: float
 
     Examples
     --------
-    >>> from squealkit.models import FEModel
+    >>> from squealkit.fe import FEModel
     >>> m = FEModel.from_matrices(M=np.eye(1), K1=[[4.0]])
     >>> dense_eigs(m, 1.0, 0.0).eigenvalues     # x'' + 4 x = 0: lambda = 2j
     array([0.+2.j])

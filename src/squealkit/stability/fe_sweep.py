@@ -238,7 +238,7 @@ def fe_stability_map(
 
     Examples
     --------
-    >>> from squealkit.models import load_fe_model
+    >>> from squealkit.fe import load_fe_model
     >>> from squealkit.data import nlevp_path
     >>> ds = fe_stability_map(load_fe_model(nlevp_path()), rpm=[60.0, 120.0], mu=[0.5, 1.0])
     >>> sorted(ds.sizes.items())
@@ -530,7 +530,7 @@ def fe_critical_friction(
 
     Examples
     --------
-    >>> from squealkit.models import FEModel
+    >>> from squealkit.fe import FEModel
     >>> m = FEModel.from_matrices(M=np.eye(2), K1=np.diag([1.0, 1.2]), KR=[[0.0, 1.0], [-1.0, 0.0]])
     >>> float(fe_critical_friction(m, [60.0], mu_max=1.0).mu_critical[0].round(4))  # 2 |KR12| mu = 1.2 - 1
     0.1
