@@ -12,10 +12,10 @@ from squealkit._validation import InputError
 from squealkit.cli.main import cli
 from squealkit.models import Hoffmann2002, MatrixModel, get_preset
 from squealkit.models.friction import Stribeck, point_contact
+from squealkit.solvers import ode
 from squealkit.stability import critical_friction, eigenvalues, runout_tolerance, stability_map
 from squealkit.stability.eigen import stability_verdict
 from squealkit.transient import Contact, simulate
-from squealkit.transient import _kernels as transient_kernels
 
 
 def mass_on_belt(*, m=0.5, kx=2.0e5, ky=3.0e5, kc=1.0e6, c=4.0, P=5.0):
@@ -70,7 +70,7 @@ def test_slope_and_coefficient_of_the_law():
 
 @pytest.mark.parametrize("kinematics", ["paper", "consistent"])
 def test_linearised_friction_is_the_derivative_of_the_transient_force(kinematics):
-    # The transient kernel's force (transient/_kernels.py, _rhs) differentiated numerically
+    # The transient kernel's force (solvers/ode.py, _rhs) differentiated numerically
     # at the static equilibrium of steady sliding: d acc / d x' = -M^-1 (C + dmu/dv N0 D) and
     # d acc / d x = -M^-1 K(mu(V), tan_theta), with tan_theta != 0 to test the slope terms
     # (with consistent kinematics also the kernel's gap b_t.x against slope_parts).
@@ -87,10 +87,10 @@ def test_linearised_friction_is_the_derivative_of_the_transient_force(kinematics
 
     def acc(x, xd):
         out, work = np.empty(3), np.empty(3)
-        transient_kernels._rhs(x, xd, 0.0, t, mu, V, Minv @ pc.b, Minv @ pc.f, Minv @ model.damping_matrix(),
-                               Minv @ K0, Minv @ Kn, Minv @ Kf, Minv @ Knx, Minv @ Kfx, float(model.slope_coupled),
-                               Minv @ F0, Minv @ fn, Minv @ ff, pc.b, pc.f,
-                               pc.fhat, pc.kc, s, opts, work, out)
+        p = ode.Model(Minv @ pc.b, Minv @ pc.f, Minv @ model.damping_matrix(), Minv @ K0, Minv @ Kn, Minv @ Kf,
+                      Minv @ Knx, Minv @ Kfx, float(model.slope_coupled), Minv @ F0, Minv @ fn, Minv @ ff, pc.b,
+                      pc.f, pc.fhat, pc.kc, s, mu, V, opts)
+        ode._rhs(x, xd, 0.0, t, p, work, out)
         return out
 
     np.testing.assert_allclose(acc(x_s, np.zeros(3)), 0.0, atol=1e-9)  # an equilibrium

@@ -11,7 +11,7 @@ from squealkit import _warmup
 def test_transient_group_compiles_no_stability_kernel(monkeypatch):
     # The parent compiles the stability kernels while the child compiles the integrator: the
     # child's run must not call one (it would compile it a second time, on the other core).
-    from squealkit.stability import _kernels
+    from squealkit.solvers import small as _kernels
 
     def refuse(*args, **kwargs):
         raise AssertionError("the warm-up child called a stability kernel")

@@ -30,7 +30,7 @@ from .._validation import (
 from ..models import FEModel, FrictionModel
 from ..models._base import resolve_damped
 from ..models.friction import Stribeck, validate_friction
-from ._kernels import (
+from ..solvers.small import (
     charpoly_table,
     derived_quantities,
     permutations_table,
@@ -617,7 +617,7 @@ def _stream_map(model, mu, theta, *, damped, track, lock_in_rtol, progress, stor
 def _eigen_variables(dims, sigma, omega, zeta, err, unstable, verdict, smax, any_u, locked, lock_in_rtol,
                      err_name: str = "error radius of the eigenvalue") -> dict:
     """The per-mode and per-point variables of a stability map over ``dims`` (grid dims + ``mode``),
-    from :func:`~squealkit.stability._kernels.derived_quantities`: one builder for every map
+    from :func:`~squealkit.solvers.small.derived_quantities`: one builder for every map
     (small models here, FE models in :mod:`~squealkit.stability.fe_sweep`)."""
     point = dims[:-1]
     return {

@@ -35,8 +35,8 @@ from .._validation import (
     validate_positive,
 )
 from ..models.fe import FEModel, rpm_to_omega
+from ..solvers.small import derived_quantities
 from . import reduction
-from ._kernels import derived_quantities
 from ._solve import VERDICTS
 from .eigen import UNSTABLE_RTOL, _eigen_variables
 from .sparse import (

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
-from ._kernels import _REAL_RTOL, _locked_in
+from ..solvers.small import _REAL_RTOL, _locked_in
 
 __all__ = ["lock_in", "track_modes"]
 
