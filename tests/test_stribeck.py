@@ -12,7 +12,7 @@ from squealkit._validation import InputError
 from squealkit.cli.main import cli
 from squealkit.models import Hoffmann2002, MatrixModel, get_preset
 from squealkit.models.friction import Stribeck, point_contact
-from squealkit.solvers import ode
+from squealkit.solvers import ode as transient_kernels
 from squealkit.stability import critical_friction, eigenvalues, runout_tolerance, stability_map
 from squealkit.stability.eigen import stability_verdict
 from squealkit.transient import Contact, simulate
@@ -87,10 +87,10 @@ def test_linearised_friction_is_the_derivative_of_the_transient_force(kinematics
 
     def acc(x, xd):
         out, work = np.empty(3), np.empty(3)
-        p = ode.Model(Minv @ pc.b, Minv @ pc.f, Minv @ model.damping_matrix(), Minv @ K0, Minv @ Kn, Minv @ Kf,
-                      Minv @ Knx, Minv @ Kfx, float(model.slope_coupled), Minv @ F0, Minv @ fn, Minv @ ff, pc.b,
-                      pc.f, pc.fhat, pc.kc, s, mu, V, opts)
-        ode._rhs(x, xd, 0.0, t, p, work, out)
+        transient_kernels._rhs(x, xd, 0.0, t, mu, V, Minv @ pc.b, Minv @ pc.f, Minv @ model.damping_matrix(),
+                               Minv @ K0, Minv @ Kn, Minv @ Kf, Minv @ Knx, Minv @ Kfx, float(model.slope_coupled),
+                               Minv @ F0, Minv @ fn, Minv @ ff, pc.b, pc.f,
+                               pc.fhat, pc.kc, s, opts, work, out)
         return out
 
     np.testing.assert_allclose(acc(x_s, np.zeros(3)), 0.0, atol=1e-9)  # an equilibrium

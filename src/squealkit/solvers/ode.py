@@ -1,27 +1,14 @@
 """Compiled integration of M x'' + C x' + f(x, x', q, tan_theta) = F0, and the monodromy matrix.
 
-Kernels: ``integrate_chunk`` (fixed-step classical RK4), ``integrate_adaptive`` (Dormand-Prince
-5(4) with error control, dense output and event location), ``integrate_rosenbrock`` (Rodas4,
-linearly implicit with the analytic Jacobian, for stiff friction laws) and ``monodromy_rk4``
-(the monodromy matrix of a periodic linear system, for Floquet's exponents of the transient's
-run-out and of the limit cycles).
-
-The two error-controlled methods share one driver loop (:func:`_drive`: step-size control,
-event location, dense output, output bookkeeping); a method is its tableau (a namedtuple:
-:data:`DP5`, :data:`Rodas4`), its step, its dense output and what it keeps after an accepted
-step, passed to the driver as functions. The driver and the method's parts are inlined into
-each method's kernel (numba's ``inline="always"``: a call through a function argument would
-cost each step a call with some forty arrays, twice the run time), so numba compiles the loop
-once per method and only for the method a run uses; a single run takes the serial kernel
-(``integrate_adaptive``), a batch the parallel one (``integrate_adaptive_batch``), compiled
-only when a batch is run.
+Kernels: ``integrate_chunk`` (fixed-step classical RK4), ``integrate_adaptive``
+(Dormand-Prince 5(4) with error control, dense output and event location),
+``integrate_rosenbrock`` (Rodas4, linearly implicit with the analytic Jacobian, for stiff
+friction laws) and ``monodromy_rk4``, the one RK4 monodromy matrix of a periodic linear system,
+used by ``monodromy`` (Floquet: the transient model on a periodic run-out) and by the limit
+cycles' Floquet multipliers (:func:`squealkit.nonlinear.continuation.floquet_multipliers`).
 
 All matrices and load vectors arrive premultiplied by M^-1 (``K0 = M^-1 K0`` and so on; ``bM``
 and ``fM`` are M^-1 b and M^-1 f), so the right-hand side is the acceleration directly.
-The arguments come bundled: :data:`Model` (the runs' arrays, leading axis the run),
-:data:`Forcing` (run-out samples), :data:`Window` (time and output samples of the call),
-:data:`Control` (tolerances, step bounds, divergence limit), :data:`State` (what carries over
-between calls and the per-run counters) and :data:`Output` (the output buffers).
 
 Private: :mod:`squealkit.transient.simulate` prepares the arrays. Each call advances a
 batch of R independent runs by one chunk of steps, in parallel over runs (``prange``).
@@ -41,49 +28,15 @@ Flags (``opts``): [structured, separation, sign_friction, stribeck, v_reg, mu_st
 from __future__ import annotations
 
 import math
-from collections import namedtuple
 
 import numpy as np
 from numba import njit, prange
 
-#: The runs' model, premultiplied by M^-1: arrays with a leading run axis (``opts`` shared).
-Model = namedtuple("Model", "bM fM C K0 Kn Kf Knx Kfx kin F0 fn ff b f fhat kc s mu v opts")
-#: Run-out samples q (``q``) and tan(theta) (``tan_theta``), (R, G), at times ``t0 + j h``.
-Forcing = namedtuple("Forcing", "t0 h q tan_theta")
-#: The call integrates [t_a, t_b] and writes output samples o_first..o_last (times o / fs) at
-#: rows ``o - o_base`` of the output buffers.
-Window = namedtuple("Window", "t_a t_b fs o_first o_last o_base")
-#: Relative tolerance, absolute tolerance per run and state component (R, 2n), largest step per
-#: run (R,), and the divergence limit on |x|.
-Control = namedtuple("Control", "rtol atol h_max limit")
-#: Carried between calls: state X, V (R, n), step size H (R,); per run: status (1 diverged,
-#: 2 step size underflow), counts [accepted, rejected, rhs calls, smallest step], events.
-State = namedtuple("State", "X V H status counts ev_t ev_k n_ev")
-#: Output buffers x, v, a (R, S, n), nc, me (R, S), and the number of valid samples per run.
-Output = namedtuple("Output", "x v a nc me n_valid")
-#: Dormand-Prince 5(4): tableau A, weights B, nodes C, error weights E, dense output P; the step
-#: controller's exponent and largest growth.
-DP5 = namedtuple("DP5", "A B C E P exponent grow")
-#: Rodas4 (see the notes above its step): a_ij, c_ij, alpha_i, d_i, m_j, dense output, gamma; the
-#: step controller's exponent and largest growth.
-Rodas4 = namedtuple("Rodas4", "A C alpha d m dense gamma exponent grow")
-
 
 @njit(cache=True, inline="always")
-def run_model(model, r):
-    """The per-run :data:`Model` of run ``r`` (views and scalars)."""
-    return Model(model.bM[r], model.fM[r], model.C[r], model.K0[r], model.Kn[r], model.Kf[r], model.Knx[r],
-                 model.Kfx[r], model.kin[r], model.F0[r], model.fn[r], model.ff[r], model.b[r], model.f[r],
-                 model.fhat[r], model.kc[r], model.s[r], model.mu[r], model.v[r], model.opts)
-
-
-@njit(cache=True, inline="always")
-def _rhs(x, xd, q, t, p, r, acc):
-    """Accelerations ``acc`` at state (x, xd) of the run with model ``p`` (:func:`run_model`);
-    returns (N cos theta, effective mu)."""
+def _rhs(x, xd, q, t, mu, v, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, opts, r, acc):
+    """Accelerations ``acc`` at state (x, xd); returns (N cos theta, effective mu)."""
     n = x.shape[0]
-    # the fields once, outside the loops (a field read in a loop costs a reference count each time)
-    mu, s, opts, kin, F0, K0, C = p.mu, p.s, p.opts, p.kin, p.F0, p.K0, p.C
     for i in range(n):
         ri = F0[i]
         for j in range(n):
@@ -92,7 +45,6 @@ def _rhs(x, xd, q, t, p, r, acc):
     nc = 0.0
     me = mu
     if opts[0] == 0.0:
-        fn, ff, Kn, Kf, Knx, Kfx = p.fn, p.ff, p.Kn, p.Kf, p.Knx, p.Kfx
         g = 1.0 - mu * t
         e = s * (mu + t)
         for i in range(n):
@@ -107,14 +59,13 @@ def _rhs(x, xd, q, t, p, r, acc):
                     kf += s * t * Kfx[i, j] * x[j]
             r[i] -= g * kn + e * kf
     else:
-        b, fhat, bM, fM = p.b, p.fhat, p.bM, p.fM
         d = -q
         for j in range(n):
             d += (b[j] + kin * s * t * fhat[j]) * x[j]
-        nc = -p.kc * d
+        nc = -kc * d
         if opts[1] != 0.0 and nc < 0.0:
             nc = 0.0
-        w = p.v
+        w = v
         for j in range(n):
             w -= s * fhat[j] * xd[j]
         mw = mu
@@ -133,105 +84,102 @@ def _rhs(x, xd, q, t, p, r, acc):
     return nc, me
 
 
-@njit(cache=True)
-def integrate_chunk(X, V, model, qh, th, dt, n_steps, stride, out, o_start, limit, status, o_base):
+@njit(cache=True, parallel=True)
+def integrate_chunk(
+    X, V, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+    qh, th, dt, n_steps, stride, out_x, out_v, out_a, out_nc, out_me, o_start, limit, status, n_valid,
+    o_base,
+):
     """Advance each run r by ``n_steps`` RK4 steps of ``dt``; record every ``stride`` steps.
 
-    ``model`` is a :data:`Model`, ``out`` an :data:`Output`. ``qh[r, 2k + j]``/``th[r, 2k + j]``
-    hold q and tan(theta) at ``t_k + j dt/2``. The state at step 0 of the chunk is recorded at
-    output index ``o_start``, stored at ``o_start - o_base`` of the buffers (which hold samples
-    ``o_base...``); ``status[r]`` turns 1 when a recorded displacement exceeds ``limit`` (or is
-    not finite) and the run then stops. The runs one after the other (one run;
-    :func:`integrate_chunk_batch` in parallel).
+    ``qh[r, 2k + j]``/``th[r, 2k + j]`` hold q and tan(theta) at ``t_k + j dt/2``. The state at
+    step 0 of the chunk is recorded at output index ``o_start``, stored at ``o_start - o_base`` of
+    the ``out_*`` buffers (which hold samples ``o_base...``); ``status[r]`` turns 1 when a
+    recorded displacement exceeds ``limit`` (or is not finite) and the run then stops.
     """
-    for r in range(X.shape[0]):
-        if status[r] == 0:
-            _rk4_run(X, V, run_model(model, r), qh[r], th[r], dt, n_steps, stride, out, o_start, limit, status,
-                     o_base, r)
-
-
-@njit(cache=True, parallel=True)
-def integrate_chunk_batch(X, V, model, qh, th, dt, n_steps, stride, out, o_start, limit, status, o_base):
-    """:func:`integrate_chunk` in parallel over runs (``prange``)."""
-    for r in prange(X.shape[0]):
-        if status[r] == 0:
-            _rk4_run(X, V, run_model(model, r), qh[r], th[r], dt, n_steps, stride, out, o_start, limit, status,
-                     o_base, r)
-
-
-@njit(cache=True)
-def _rk4_run(X, V, p, qh, th, dt, n_steps, stride, out, o_start, limit, status, o_base, r):
-    """:func:`integrate_chunk` for run ``r`` (model ``p``, its run-out samples ``qh``, ``th``)."""
+    R = X.shape[0]
     n = X.shape[1]
-    x = X[r].copy()
-    xd = V[r].copy()
-    xt = np.empty(n)
-    vt = np.empty(n)
-    k1x = np.empty(n)
-    k1v = np.empty(n)
-    k2x = np.empty(n)
-    k2v = np.empty(n)
-    k3x = np.empty(n)
-    k3v = np.empty(n)
-    k4v = np.empty(n)
-    work = np.empty(n)
-    o = o_start
-    out_x, out_v, out_a, out_nc, out_me, n_valid = out
-    for k in range(n_steps + 1):
-        i0 = 2 * k
-        if k % stride == 0 and (k < n_steps or n_steps == 0):
-            nc, me = _rhs(x, xd, qh[i0], th[i0], p, work, k1v)
-            bad = False
-            for i in range(n):
-                if not (abs(x[i]) <= limit):
-                    bad = True
-            if bad:
-                status[r] = 1
-                break
-            if o - o_base < out_x.shape[1]:
+    for r in prange(R):
+        if status[r] != 0:
+            continue
+        x = X[r].copy()
+        xd = V[r].copy()
+        xt = np.empty(n)
+        vt = np.empty(n)
+        k1x = np.empty(n)
+        k1v = np.empty(n)
+        k2x = np.empty(n)
+        k2v = np.empty(n)
+        k3x = np.empty(n)
+        k3v = np.empty(n)
+        k4v = np.empty(n)
+        work = np.empty(n)
+        o = o_start
+        mu_r, v_r, kc_r, s_r = mu[r], v[r], kc[r], s[r]
+        bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r = bM[r], fM[r], C[r], K0[r], Kn[r], Kf[r]
+        Knx_r, Kfx_r, kin_r = Knx[r], Kfx[r], kin[r]
+        F0_r, fn_r, ff_r, b_r, f_r, fhat_r = F0[r], fn[r], ff[r], b[r], f[r], fhat[r]
+        for k in range(n_steps + 1):
+            i0 = 2 * k
+            if k % stride == 0 and (k < n_steps or n_steps == 0):
+                nc, me = _rhs(x, xd, qh[r, i0], th[r, i0], mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+                              Knx_r, Kfx_r, kin_r,
+                 F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k1v)
+                bad = False
                 for i in range(n):
-                    out_x[r, o - o_base, i] = x[i]
-                    out_v[r, o - o_base, i] = xd[i]
-                    out_a[r, o - o_base, i] = k1v[i]
-                out_nc[r, o - o_base] = nc
-                out_me[r, o - o_base] = me
-                n_valid[r] = o + 1
-            o += 1
-        if k == n_steps:
-            break
-        q0, t0 = qh[i0], th[i0]
-        q1, t1 = qh[i0 + 1], th[i0 + 1]
-        q2, t2 = qh[i0 + 2], th[i0 + 2]
-        _rhs(x, xd, q0, t0, p, work, k1v)
+                    if not (abs(x[i]) <= limit):
+                        bad = True
+                if bad:
+                    status[r] = 1
+                    break
+                if o - o_base < out_x.shape[1]:
+                    for i in range(n):
+                        out_x[r, o - o_base, i] = x[i]
+                        out_v[r, o - o_base, i] = xd[i]
+                        out_a[r, o - o_base, i] = k1v[i]
+                    out_nc[r, o - o_base] = nc
+                    out_me[r, o - o_base] = me
+                    n_valid[r] = o + 1
+                o += 1
+            if k == n_steps:
+                break
+            q0, t0 = qh[r, i0], th[r, i0]
+            q1, t1 = qh[r, i0 + 1], th[r, i0 + 1]
+            q2, t2 = qh[r, i0 + 2], th[r, i0 + 2]
+            _rhs(x, xd, q0, t0, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
+                 F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k1v)
+            for i in range(n):
+                k1x[i] = xd[i]
+                xt[i] = x[i] + 0.5 * dt * k1x[i]
+                vt[i] = xd[i] + 0.5 * dt * k1v[i]
+            _rhs(xt, vt, q1, t1, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
+                 F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k2v)
+            for i in range(n):
+                k2x[i] = vt[i]
+                xt[i] = x[i] + 0.5 * dt * k2x[i]
+                vt[i] = xd[i] + 0.5 * dt * k2v[i]
+            _rhs(xt, vt, q1, t1, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
+                 F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k3v)
+            for i in range(n):
+                k3x[i] = vt[i]
+                xt[i] = x[i] + dt * k3x[i]
+                vt[i] = xd[i] + dt * k3v[i]
+            _rhs(xt, vt, q2, t2, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
+                 F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k4v)
+            for i in range(n):
+                x[i] += dt / 6.0 * (k1x[i] + 2.0 * k2x[i] + 2.0 * k3x[i] + vt[i])
+                xd[i] += dt / 6.0 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i])
         for i in range(n):
-            k1x[i] = xd[i]
-            xt[i] = x[i] + 0.5 * dt * k1x[i]
-            vt[i] = xd[i] + 0.5 * dt * k1v[i]
-        _rhs(xt, vt, q1, t1, p, work, k2v)
-        for i in range(n):
-            k2x[i] = vt[i]
-            xt[i] = x[i] + 0.5 * dt * k2x[i]
-            vt[i] = xd[i] + 0.5 * dt * k2v[i]
-        _rhs(xt, vt, q1, t1, p, work, k3v)
-        for i in range(n):
-            k3x[i] = vt[i]
-            xt[i] = x[i] + dt * k3x[i]
-            vt[i] = xd[i] + dt * k3v[i]
-        _rhs(xt, vt, q2, t2, p, work, k4v)
-        for i in range(n):
-            x[i] += dt / 6.0 * (k1x[i] + 2.0 * k2x[i] + 2.0 * k3x[i] + vt[i])
-            xd[i] += dt / 6.0 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i])
-    for i in range(n):
-        X[r, i] = x[i]
-        V[r, i] = xd[i]
+            X[r, i] = x[i]
+            V[r, i] = xd[i]
 
 
-# -- error-controlled integration: one driver, two methods --------------------------------------
+
+# -- error-controlled integration: Dormand-Prince 5(4) with dense output and events ---------------
 #
-# Dormand-Prince 5(4): the tableau (A, B, C), the error weights E = b5 - b4 and the 4th-order
-# dense-output matrix P are those of Dormand & Prince (1980) as tabulated by SciPy's RK45 (Hairer,
-# Norsett & Wanner, Solving ODEs I, II.4-II.6); simulate.py passes them in. Event codes recorded
-# per run:
+# The tableau (A, B, C), the error weights E = b5 - b4 and the 4th-order dense-output matrix P
+# are those of Dormand & Prince (1980) as tabulated by SciPy's RK45 (Hairer, Norsett & Wanner,
+# Solving ODEs I, II.4-II.6); simulate.py passes them in. Event codes recorded per run:
 EVENT_CONTACT_OPENS = 1
 EVENT_CONTACT_CLOSES = 2
 EVENT_STICK = 3   # the sliding speed |w| falls into the regularisation band v_reg
@@ -239,14 +187,7 @@ EVENT_SLIP = 4    # ... and leaves it
 
 
 @njit(cache=True, inline="always")
-def _forcing(tt, fo):
-    """q and tan(theta) at time tt of one run, ``fo = (t0, h, q samples, tan(theta) samples, speed)``."""
-    tg0, hg, qg, tgr, vel = fo
-    return _forcing_at(tt, tg0, hg, qg, tgr, vel)
-
-
-@njit(cache=True, inline="always")
-def _forcing_at(tt, tg0, hg, qg, tgr, vel):
+def _forcing(tt, tg0, hg, qg, tgr, vel):
     """q and tan(theta) at time tt: cubic Hermite in time through the samples of q and dq/dt = v tan(theta)."""
     G = qg.shape[0]
     u = (tt - tg0) / hg
@@ -272,10 +213,12 @@ def _forcing_at(tt, tg0, hg, qg, tgr, vel):
 
 
 @njit(cache=True, inline="always")
-def _f(tt, z, dz, n, fo, p, work, acc):
+def _f(tt, z, dz, n, tg0, hg, qg, tgr, mu, v, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat,
+       kc, s, opts, work, acc):
     """First-order right-hand side dz = [x', x''] at (tt, z); returns (N cos theta, mu_eff, q, tan theta)."""
-    q, tan_t = _forcing(tt, fo)
-    nc, me = _rhs(z[:n], z[n:], q, tan_t, p, work, acc)
+    q, tan_t = _forcing(tt, tg0, hg, qg, tgr, v)
+    nc, me = _rhs(z[:n], z[n:], q, tan_t, mu, v, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat,
+                  kc, s, opts, work, acc)
     for i in range(n):
         dz[i] = z[n + i]
         dz[n + i] = acc[i]
@@ -283,234 +226,20 @@ def _f(tt, z, dz, n, fo, p, work, acc):
 
 
 @njit(cache=True, inline="always")
-def _gap_and_slip(x, xd, q, tan_t, p):
+def _gap_and_slip(x, xd, q, tan_t, v, b, fhat, kc, s, kin):
     """Contact force without clamping, -kc (b_t.x - q), and |w| (sliding speed of disc past pin)."""
     n = x.shape[0]
-    b, fhat, kin, s = p.b, p.fhat, p.kin, p.s
     d = -q
-    w = p.v
+    w = v
     for j in range(n):
         d += (b[j] + kin * s * tan_t * fhat[j]) * x[j]
         w -= s * fhat[j] * xd[j]
-    return -p.kc * d, abs(w)
-
-
-@njit(cache=True)
-def _locate(dense, tab, ws, slip, side_old, n_iter, z, z1, h, t, fo, p, zd):
-    """Fraction of the step at which the contact force changes sign (``slip`` False) or the sliding
-    speed crosses the stick band ``|w| < v_reg`` (``slip`` True), by bisection on the method's
-    dense output ``dense``."""
-    n = zd.shape[0] // 2
-    v_reg = p.opts[4]
-    lo, hi = 0.0, 1.0
-    for _ in range(n_iter):
-        mid = 0.5 * (lo + hi)
-        dense(tab, ws, z, z1, h, mid, zd)
-        qm, tm = _forcing(t + mid * h, fo)
-        gm, wm = _gap_and_slip(zd[:n], zd[n:], qm, tm, p)
-        side = (wm < v_reg) if slip else (gm > 0.0)
-        if side == side_old:
-            lo = mid
-        else:
-            hi = mid
-    return hi
+    return -kc * d, abs(w)
 
 
 @njit(cache=True, inline="always")
-def _log_event(r, t_ev, kind, st):
-    """Record event ``kind`` at ``t_ev`` for run ``r`` (counted even when the buffer is full)."""
-    n_ev, ev_t, ev_k = st.n_ev, st.ev_t, st.ev_k
-    k_ev = n_ev[r]
-    if k_ev < ev_t.shape[1]:
-        ev_t[r, k_ev] = t_ev
-        ev_k[r, k_ev] = kind
-    n_ev[r] = k_ev + 1
-
-
-@njit(cache=True, inline="always")
-def _store(r, o, o_base, z, dz, nc, me, limit, out):
-    """Write output sample ``o`` of run ``r`` at row ``o - o_base`` of the :data:`Output` buffers;
-    False (nothing written) if some |x_i| > ``limit``."""
-    out_x, out_v, out_a = out.x, out.v, out.a
-    n = out_x.shape[2]
-    for i in range(n):
-        if not (abs(z[i]) <= limit):
-            return False
-    for i in range(n):
-        out_x[r, o - o_base, i] = z[i]
-        out_v[r, o - o_base, i] = z[n + i]
-        out_a[r, o - o_base, i] = dz[n + i]
-    out.nc[r, o - o_base] = nc
-    out.me[r, o - o_base] = me
-    out.n_valid[r] = o + 1
-    return True
-
-
-@njit(cache=True, inline="always")
-def _drive(step, dense, accepted, tab, ws, r, p, fo, win, ctl, st, out):
-    """Advance run ``r`` over ``[win.t_a, win.t_b]`` by an error-controlled method.
-
-    The method is ``step(tab, ws, z, znew, t, h, t_new, n, fo, p, work, acc, rtol, atol, counts)``
-    (returns ``(factorised, err, q, tan_theta)``, ``err`` the scaled RMS error, q and tan(theta)
-    at ``t_new``), ``dense(tab, ws, z, znew, h, theta, out)`` (its continuous extension) and
-    ``accepted(ws)`` (what it keeps for the next step); ``ws.f0`` holds f(t, z) at a step's start.
-    Output samples inside the window are written by dense output; with contact loss (opts[1]) a
-    sign change of the contact force inside a step is located by bisection on the dense output and
-    the step is retaken to end just past it, so no step straddles the kink; the events (and
-    stick/slip band crossings with the sign law) are recorded in ``st``.
-    """
-    n = st.X.shape[1]
-    m = 2 * n
-    opts = p.opts
-    counts = st.counts[r]
-    atol = ctl.atol[r]
-    status = st.status
-    rtol, limit, h_max, exponent, grow = ctl.rtol, ctl.limit, ctl.h_max[r], tab.exponent, tab.grow
-    t_b, fs, o_last, o_base = win.t_b, win.fs, win.o_last, win.o_base
-    z = np.empty(m)
-    for i in range(n):
-        z[i] = st.X[r, i]
-        z[n + i] = st.V[r, i]
-    znew = np.empty(m)
-    zd = np.empty(m)
-    dzd = np.empty(m)
-    work = np.empty(n)
-    acc = np.empty(n)
-    t = win.t_a
-    h = st.H[r]
-    o = win.o_first
-    # the first sample of the chunk may sit exactly at t_a
-    nc, me, q, tt_ = _f(t, z, ws.f0, n, fo, p, work, acc)
-    counts[2] += 1
-    if o <= o_last and o / fs <= t + 1e-12 / fs:
-        if not _store(r, o, o_base, z, ws.f0, nc, me, limit, out):
-            status[r] = 1
-        o += 1
-    g_old, w_old = _gap_and_slip(z[:n], z[n:], q, tt_, p)
-    retake = False
-    h_saved = h
-    while t < t_b and status[r] == 0:
-        h_min = 1e-14 * max(1.0, abs(t)) + 1e-300
-        if h > h_max:
-            h = h_max
-        last = False
-        if t + h >= t_b:
-            h = t_b - t
-            last = True
-        t_new = t + h if not last else t_b
-        factorised, err, q, tt_ = step(tab, ws, z, znew, t, h, t_new, n, fo, p, work, acc, rtol, atol, counts)
-        if not factorised:  # the step's matrix is singular: halve the step
-            counts[1] += 1
-            h *= 0.5
-            if h < h_min:
-                status[r] = 2
-            continue
-        if not (err <= 1.0):
-            counts[1] += 1
-            fac = 0.9 * err ** exponent if err == err and err < 1e300 else 0.2
-            h *= max(0.2, fac)
-            if h < h_min:
-                status[r] = 2
-            continue
-        # accepted: is there a contact event inside the step?
-        g_new, w_new = _gap_and_slip(znew[:n], znew[n:], q, tt_, p)
-        if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0) and not retake:
-            hi = _locate(dense, tab, ws, False, g_old > 0.0, 50, z, znew, h, t, fo, p, zd)
-            if hi < 1.0 - 1e-9 and hi * h > h_min:
-                # retake the step to end just past the crossing: no step straddles the kink
-                # (ws.f0 = f(t, z) is still valid: the stages only overwrote the others)
-                h_saved = h
-                h = hi * h
-                retake = True
-                continue
-        counts[0] += 1
-        if h < counts[3] or counts[3] == 0.0:
-            counts[3] = h
-        # events: contact (located above) and stick/slip band crossings (located here)
-        if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0):
-            # the crossing on this step's dense output (the step was retaken to end near it, but its
-            # end can lie a whole step past where the retaken solution crosses)
-            hi = _locate(dense, tab, ws, False, g_old > 0.0, 50, z, znew, h, t, fo, p, zd)
-            _log_event(r, t + hi * h, EVENT_CONTACT_OPENS if g_new <= 0.0 else EVENT_CONTACT_CLOSES, st)
-        if opts[2] != 0.0 and (w_old < opts[4]) != (w_new < opts[4]):
-            hi = _locate(dense, tab, ws, True, w_old < opts[4], 40, z, znew, h, t, fo, p, zd)
-            _log_event(r, t + hi * h, EVENT_STICK if w_new < opts[4] else EVENT_SLIP, st)
-        # output samples inside (t, t_new] by dense output
-        while o <= o_last and o / fs <= t_new * (1.0 + 1e-15):
-            dense(tab, ws, z, znew, h, min((o / fs - t) / h, 1.0), zd)
-            ncs, mes, _q, _t = _f(o / fs, zd, dzd, n, fo, p, work, acc)
-            if not _store(r, o, o_base, zd, dzd, ncs, mes, limit, out):
-                status[r] = 1
-                break
-            o += 1
-        if status[r] != 0:
-            break
-        t = t_new
-        for i in range(m):
-            z[i] = znew[i]
-        accepted(ws)
-        g_old, w_old = g_new, w_new
-        if not retake:
-            fac = 0.9 * err ** exponent if err > 0.0 else grow
-            h = h * min(grow, max(0.2, fac))
-        else:
-            h = h_saved  # after the event, the step the controller had before it
-        retake = False
-        if h < h_min:
-            status[r] = 2
-    for i in range(n):
-        st.X[r, i] = z[i]
-        st.V[r, i] = z[n + i]
-    st.H[r] = h
-
-
-@njit(cache=True, inline="always")
-def _run_forcing(forcing, r, p):
-    return (forcing.t0, forcing.h, forcing.q[r], forcing.tan_theta[r], p.v)
-
-
-# -- Dormand-Prince 5(4) -----------------------------------------------------------------------
-
-DP5Work = namedtuple("DP5Work", "K f0 zt")
-
-
-@njit(cache=True, inline="always")
-def _dp5_step(tab, ws, z, znew, t, h, t_new, n, fo, p, work, acc, rtol, atol, counts):
-    """One Dormand-Prince step from (t, z) (``ws.K[0]`` = f(t, z)): ``znew``, the FSAL stage
-    ``K[S]`` = f(t_new, znew) and the scaled error."""
-    A, B, Cn, E, K, zt = tab.A, tab.B, tab.C, tab.E, ws.K, ws.zt
-    m = z.shape[0]
-    S = A.shape[0]  # stages before the FSAL stage
-    for k in range(1, S):
-        for i in range(m):
-            a = 0.0
-            for j in range(k):
-                a += A[k, j] * K[j, i]
-            zt[i] = z[i] + h * a
-        _f(t + Cn[k] * h, zt, K[k], n, fo, p, work, acc)
-    for i in range(m):
-        a = 0.0
-        for j in range(S):
-            a += B[j] * K[j, i]
-        znew[i] = z[i] + h * a
-    _nc, _me, q, tt_ = _f(t_new, znew, K[S], n, fo, p, work, acc)
-    counts[2] += S
-    err = 0.0
-    for i in range(m):
-        e = 0.0
-        for j in range(S + 1):
-            e += E[j] * K[j, i]
-        sc = atol[i] + rtol * max(abs(z[i]), abs(znew[i]))
-        e = h * e / sc
-        err += e * e
-    err = math.sqrt(err / m)
-    return True, err, q, tt_
-
-
-@njit(cache=True, inline="always")
-def _dp5_dense(tab, ws, z, z1, h, th, out):
+def _dense(z, K, P, h, th, out):
     """State at t + th h from the step's stages (4th-order continuous extension)."""
-    K, P = ws.K, tab.P
     m = z.shape[0]
     p0 = th
     p1 = th * th
@@ -524,54 +253,230 @@ def _dp5_dense(tab, ws, z, z1, h, th, out):
 
 
 @njit(cache=True, inline="always")
-def _dp5_accepted(ws):
-    """FSAL: the last stage is the next step's first."""
-    K = ws.K
-    S = K.shape[0] - 1
-    for i in range(K.shape[1]):
-        K[0, i] = K[S, i]
+def _dense_ros(z, z1, U, Dd, th, out):
+    """Rodas4's 3rd-order continuous extension at t + th h."""
+    m = z.shape[0]
+    for i in range(m):
+        d2 = 0.0
+        d3 = 0.0
+        for j in range(Dd.shape[1]):
+            d2 += Dd[0, j] * U[j, i]
+            d3 += Dd[1, j] * U[j, i]
+        out[i] = (1.0 - th) * z[i] + th * (z1[i] + (1.0 - th) * (d2 + th * d3))
+
+@njit(cache=True, inline="always")
+def _interp(z, z1, St, Co, h, th, rosenbrock, out):
+    """State at t + th h by the step's continuous extension: Dormand-Prince's (stages ``St`` = K,
+    coefficients ``Co`` = P) or Rodas4's (``St`` = U, ``Co`` = its dense-output matrix)."""
+    if rosenbrock:
+        _dense_ros(z, z1, St, Co, th, out)
+    else:
+        _dense(z, St, Co, h, th, out)
 
 
 @njit(cache=True, inline="always")
-def _dp5_work(tab, n):
-    """Workspace of a Dormand-Prince step: the stages K (K[0] = f0 = f(t, z)) and a stage state."""
-    K = np.empty((tab.A.shape[0] + 1, 2 * n))
-    return DP5Work(K, K[0], np.empty(2 * n))
+def _locate(slip, side_old, n_iter, z, z1, St, Co, h, rosenbrock, t, tg0, hg, qg, tgr, v, b, fhat, kc, s, kin,
+            v_reg, zd):
+    """Fraction of the step at which the contact force changes sign (``slip`` False) or the sliding
+    speed crosses the stick band ``|w| < v_reg`` (``slip`` True), by bisection on the dense output."""
+    n = zd.shape[0] // 2
+    lo, hi = 0.0, 1.0
+    for _ in range(n_iter):
+        mid = 0.5 * (lo + hi)
+        _interp(z, z1, St, Co, h, mid, rosenbrock, zd)
+        qm, tm = _forcing(t + mid * h, tg0, hg, qg, tgr, v)
+        gm, wm = _gap_and_slip(zd[:n], zd[n:], qm, tm, v, b, fhat, kc, s, kin)
+        side = (wm < v_reg) if slip else (gm > 0.0)
+        if side == side_old:
+            lo = mid
+        else:
+            hi = mid
+    return hi
 
 
 @njit(cache=True, inline="always")
-def _advance(r, work, step, dense, accepted, model, forcing, window, control, tableau, state, out):
-    """Run ``r`` of the batch over the window by the method (``work``, ``step``, ``dense``,
-    ``accepted``: see :func:`_drive`); nothing if the run has stopped."""
-    if state.status[r] != 0:
-        return
-    p = run_model(model, r)
-    _drive(step, dense, accepted, tableau, work(tableau, state.X.shape[1]), r, p, _run_forcing(forcing, r, p),
-           window, control, state, out)
+def _log_event(r, t_ev, kind, ev_t, ev_k, n_ev):
+    """Record event ``kind`` at ``t_ev`` for run ``r`` (counted even when the buffer is full)."""
+    k_ev = n_ev[r]
+    if k_ev < ev_t.shape[1]:
+        ev_t[r, k_ev] = t_ev
+        ev_k[r, k_ev] = kind
+    n_ev[r] = k_ev + 1
 
 
-@njit(cache=True)
-def integrate_adaptive(model, forcing, window, control, tableau, state, out):
-    """Advance each run from ``window.t_a`` to ``window.t_b`` by Dormand-Prince 5(4) with error control.
-
-    Arguments: :data:`Model`, :data:`Forcing`, :data:`Window`, :data:`Control`, :data:`DP5`,
-    :data:`State`, :data:`Output`. Output samples ``o_first..o_last`` (times ``o / fs``) inside
-    ``[t_a, t_b]`` are written by dense output, sample ``o`` at row ``o - o_base`` of the
-    buffers (a buffer per chunk: the memory does not grow with the duration). ``state.H[r]``
-    carries each run's step size between calls. See :func:`_drive`. The runs one after the
-    other (one run; :func:`integrate_adaptive_batch` in parallel).
-    """
-    for r in range(state.X.shape[0]):
-        _advance(r, _dp5_work, _dp5_step, _dp5_dense, _dp5_accepted, model, forcing, window, control, tableau,
-                 state, out)
+@njit(cache=True, inline="always")
+def _store(r, o, o_base, z, dz, nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
+    """Write output sample ``o`` of run ``r`` at row ``o - o_base`` of the output buffers; False
+    (nothing written) if some |x_i| > ``limit``."""
+    n = out_x.shape[2]
+    for i in range(n):
+        if not (abs(z[i]) <= limit):
+            return False
+    for i in range(n):
+        out_x[r, o - o_base, i] = z[i]
+        out_v[r, o - o_base, i] = z[n + i]
+        out_a[r, o - o_base, i] = dz[n + i]
+    out_nc[r, o - o_base] = nc
+    out_me[r, o - o_base] = me
+    n_valid[r] = o + 1
+    return True
 
 
 @njit(cache=True, parallel=True)
-def integrate_adaptive_batch(model, forcing, window, control, tableau, state, out):
-    """:func:`integrate_adaptive` in parallel over runs (``prange``)."""
-    for r in prange(state.X.shape[0]):
-        _advance(r, _dp5_work, _dp5_step, _dp5_dense, _dp5_accepted, model, forcing, window, control, tableau,
-                 state, out)
+def integrate_adaptive(
+    X, V, H, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+    qg, tgr, tg0, hg, t_a, t_b, fs, o_first, o_last, o_base, A, Bw, Cn, E, P, rtol, atol, h_max,
+    out_x, out_v, out_a, out_nc, out_me, limit, status, n_valid, counts, ev_t, ev_k, n_ev,
+):
+    """Advance each run from ``t_a`` to ``t_b`` by Dormand-Prince 5(4) with error control.
+
+    Output samples ``o_first..o_last`` (times ``o / fs``) inside ``[t_a, t_b]`` are written by
+    dense output, sample ``o`` at index ``o - o_base`` of the ``out_*`` buffers (a buffer per
+    chunk: the memory does not grow with the duration). ``H[r]`` carries each run's step size
+    between calls. ``atol`` has one entry per state component (x then x').
+    ``counts[r] = [accepted, rejected, rhs calls, smallest step]``.
+    With contact loss (opts[1]) a sign change of the contact force inside a step is located by
+    bisection on the dense output and the step is retaken to end just past it, so no step
+    straddles the kink; the events (and stick/slip band crossings with the sign law) are recorded
+    in ``ev_t``/``ev_k``. ``status[r]``: 1 diverged (|x| > limit), 2 step size underflow.
+    """
+    R = X.shape[0]
+    n = X.shape[1]
+    m = 2 * n
+    S = A.shape[0]  # stages before the FSAL stage
+    for r in prange(R):
+        if status[r] != 0:
+            continue
+        z = np.empty(m)
+        for i in range(n):
+            z[i] = X[r, i]
+            z[n + i] = V[r, i]
+        K = np.empty((S + 1, m))
+        zt = np.empty(m)
+        znew = np.empty(m)
+        zd = np.empty(m)
+        dzd = np.empty(m)
+        work = np.empty(n)
+        acc = np.empty(n)
+        mu_r, v_r, kc_r, s_r, kin_r = mu[r], v[r], kc[r], s[r], kin[r]
+        bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r = bM[r], fM[r], C[r], K0[r], Kn[r], Kf[r]
+        Knx_r, Kfx_r = Knx[r], Kfx[r]
+        F0_r, fn_r, ff_r, b_r, f_r, fhat_r = F0[r], fn[r], ff[r], b[r], f[r], fhat[r]
+        qg_r, tg_r = qg[r], tgr[r]
+        t = t_a
+        h = H[r]
+        o = o_first
+        # the first sample of the chunk may sit exactly at t_a
+        nc, me, q, tt_ = _f(t, z, K[0], n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+                            Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+        counts[r, 2] += 1
+        if o <= o_last and o / fs <= t + 1e-12 / fs:
+            if not _store(r, o, o_base, z, K[0], nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
+                status[r] = 1
+            o += 1
+        g_old, w_old = _gap_and_slip(z[:n], z[n:], q, tt_, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
+        retake = False
+        h_saved = h
+        while t < t_b and status[r] == 0:
+            h_min = 1e-14 * max(1.0, abs(t)) + 1e-300
+            if h > h_max[r]:
+                h = h_max[r]
+            last = False
+            if t + h >= t_b:
+                h = t_b - t
+                last = True
+            # stages
+            for k in range(1, S):
+                for i in range(m):
+                    a = 0.0
+                    for j in range(k):
+                        a += A[k, j] * K[j, i]
+                    zt[i] = z[i] + h * a
+                _f(t + Cn[k] * h, zt, K[k], n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r,
+                   Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+            for i in range(m):
+                a = 0.0
+                for j in range(S):
+                    a += Bw[j] * K[j, i]
+                znew[i] = z[i] + h * a
+            t_new = t + h if not last else t_b
+            nc, me, q, tt_ = _f(t_new, znew, K[S], n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r,
+                                Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r,
+                                opts, work, acc)
+            counts[r, 2] += S
+            err = 0.0
+            for i in range(m):
+                e = 0.0
+                for j in range(S + 1):
+                    e += E[j] * K[j, i]
+                sc = atol[r, i] + rtol * max(abs(z[i]), abs(znew[i]))
+                e = h * e / sc
+                err += e * e
+            err = math.sqrt(err / m)
+            if not (err <= 1.0):
+                counts[r, 1] += 1
+                fac = 0.9 * err ** -0.2 if err == err and err < 1e300 else 0.2
+                h *= max(0.2, fac)
+                if h < h_min:
+                    status[r] = 2
+                continue
+            # accepted: is there a contact event inside the step?
+            g_new, w_new = _gap_and_slip(znew[:n], znew[n:], q, tt_, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
+            if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0) and not retake:
+                hi = _locate(False, g_old > 0.0, 50, z, znew, K, P, h, False, t, tg0, hg, qg_r, tg_r, v_r,
+                             b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
+                if hi < 1.0 - 1e-9 and hi * h > h_min:
+                    # retake the step to end just past the crossing: no step straddles the kink
+                    # (K[0] = f(t, z) is still valid: the stages only overwrote K[1:])
+                    h_saved = h
+                    h = hi * h
+                    retake = True
+                    continue
+            counts[r, 0] += 1
+            if h < counts[r, 3] or counts[r, 3] == 0.0:
+                counts[r, 3] = h
+            # events: contact (located above) and stick/slip band crossings (located here)
+            if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0):
+                # the crossing on this step's dense output (the step was retaken to end near it, but its
+                # end can lie a whole step past where the retaken solution crosses)
+                hi = _locate(False, g_old > 0.0, 50, z, znew, K, P, h, False, t, tg0, hg, qg_r, tg_r, v_r,
+                             b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
+                _log_event(r, t + hi * h, EVENT_CONTACT_OPENS if g_new <= 0.0 else EVENT_CONTACT_CLOSES, ev_t, ev_k,
+                           n_ev)
+            if opts[2] != 0.0 and (w_old < opts[4]) != (w_new < opts[4]):
+                hi = _locate(True, w_old < opts[4], 40, z, znew, K, P, h, False, t, tg0, hg, qg_r, tg_r, v_r,
+                             b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
+                _log_event(r, t + hi * h, EVENT_STICK if w_new < opts[4] else EVENT_SLIP, ev_t, ev_k, n_ev)
+            # output samples inside (t, t_new] by dense output
+            while o <= o_last and o / fs <= t_new * (1.0 + 1e-15):
+                _interp(z, znew, K, P, h, min((o / fs - t) / h, 1.0), False, zd)
+                ncs, mes, _q, _t = _f(o / fs, zd, dzd, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r,
+                                      Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r,
+                                      s_r, opts, work, acc)
+                if not _store(r, o, o_base, zd, dzd, ncs, mes, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
+                    status[r] = 1
+                    break
+                o += 1
+            if status[r] != 0:
+                break
+            # advance (FSAL: the last stage is the next step's first)
+            t = t_new
+            for i in range(m):
+                z[i] = znew[i]
+                K[0, i] = K[S, i]
+            g_old, w_old = g_new, w_new
+            if not retake:
+                fac = 0.9 * err ** -0.2 if err > 0.0 else 10.0
+                h = h * min(10.0, max(0.2, fac))
+            else:
+                h = h_saved  # after the event, the step the controller had before it
+            retake = False
+            if h < h_min:
+                status[r] = 2
+        for i in range(n):
+            X[r, i] = z[i]
+            V[r, i] = z[n + i]
+        H[r] = h
 
 
 # -- stiff integration: Rodas4 (linearly implicit Rosenbrock 4(3)) with the analytic Jacobian -----
@@ -582,11 +487,11 @@ def integrate_adaptive_batch(model, forcing, window, control, tableau, state, ou
 #   (I / (h gamma) - J) u_i = f(t + alpha_i h, z + sum_j a_ij u_j) + sum_j (c_ij / h) u_j + h d_i f_t
 #   z1 = z + sum_j m_j u_j,   error estimate u_6
 # dense output  z(t + s h) = (1 - s) z + s (z1 + (1 - s) (D2.u + s D3.u)).
-# simulate.py passes the coefficients (:data:`Rodas4`).
+# simulate.py passes the coefficients (ROS_A, ROS_C, ROS_ALPHA, ROS_D, ROS_M, ROS_DENSE, gamma).
 
 
 @njit(cache=True, inline="always")
-def _jacobian(x, xd, q, t, p, Jx, Jv):
+def _jacobian(x, xd, q, t, mu, v, C, K0, Kn, Kf, Knx, Kfx, kin, bM, fM, b, fhat, kc, s, opts, Jx, Jv):
     """Analytic d(acc)/dx into Jx and d(acc)/dx' into Jv (the force law of :func:`_rhs`).
 
     Linear law: -K0 - g (Kn + kin s t Knx) - e (Kf + kin s t Kfx), and -C. Structured law with
@@ -594,8 +499,6 @@ def _jacobian(x, xd, q, t, p, Jx, Jv):
     w = v - s fhat.x': d/dx adds (g bM + e fM) dNc/dx, d/dx' adds Nc (s fM - t bM) mu_e'(w) (-s fhat).
     """
     n = x.shape[0]
-    mu, s, kin, kc, opts = p.mu, p.s, p.kin, p.kc, p.opts
-    K0, C, Kn, Kf, Knx, Kfx, b, fhat, bM, fM = p.K0, p.C, p.Kn, p.Kf, p.Knx, p.Kfx, p.b, p.fhat, p.bM, p.fM
     for i in range(n):
         for j in range(n):
             Jx[i, j] = -K0[i, j]
@@ -617,7 +520,7 @@ def _jacobian(x, xd, q, t, p, Jx, Jv):
     if opts[1] != 0.0 and nc < 0.0:
         nc = 0.0
         closed = False
-    w = p.v
+    w = v
     for j in range(n):
         w -= s * fhat[j] * xd[j]
     mw = mu
@@ -695,121 +598,189 @@ def _lu_solve(A, piv, x):
         x[i] = acc / A[i, i]
 
 
-RodasWork = namedtuple("RodasWork", "U F f0 ft fa zt W piv Jx Jv")
+@njit(cache=True, parallel=True)
+def integrate_rosenbrock(
+    X, V, H, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+    qg, tgr, tg0, hg, t_a, t_b, fs, o_first, o_last, o_base, RA, RC, RAL, RD, RM, RDD, gam, rtol, atol, h_max,
+    out_x, out_v, out_a, out_nc, out_me, limit, status, n_valid, counts, ev_t, ev_k, n_ev,
+):
+    """Advance each run from ``t_a`` to ``t_b`` by Rodas4 (see the notes above) with error control.
 
-
-@njit(cache=True, inline="always")
-def _rodas4_step(tab, ws, z, znew, t, h, t_new, n, fo, p, work, acc, rtol, atol, counts):
-    """One Rodas4 step from (t, z): f(t, z) into ``ws.f0``, f_t by a central difference in time of
-    the forcing, the analytic Jacobian (:func:`_jacobian`), the stages ``ws.U`` and ``znew``."""
-    U, F, f0, ft, fa, zt, W, piv, Jx, Jv = ws
-    RA, RC, RAL, RD, RM = tab.A, tab.C, tab.alpha, tab.d, tab.m
-    m = z.shape[0]
+    Same conventions as :func:`integrate_adaptive` (output by the method's dense output, contact
+    sign changes located by bisection on it and the step retaken to end there, stick/slip events,
+    ``counts``, ``status``); the Jacobian is analytic (:func:`_jacobian`) and evaluated every step,
+    f_t by a central difference in time of the forcing.
+    """
+    R = X.shape[0]
+    n = X.shape[1]
+    m = 2 * n
     S = RA.shape[0]
-    dtf = 1e-4 * fo[1]
-    # f(t, z) (f0), f_t and the Jacobian at the start of the step
-    _nc, _me, q, tt_ = _f(t, z, f0, n, fo, p, work, acc)
-    _f(t + dtf, z, ft, n, fo, p, work, acc)
-    _f(t - dtf, z, fa, n, fo, p, work, acc)
-    for i in range(m):
-        ft[i] = (ft[i] - fa[i]) / (2.0 * dtf)
-    counts[2] += 3
-    _jacobian(z[:n], z[n:], q, tt_, p, Jx, Jv)
-    ihg = 1.0 / (h * tab.gamma)
-    for i in range(m):
-        for j in range(m):
-            W[i, j] = 0.0
-    for i in range(n):
-        W[i, i] = ihg
-        W[i, n + i] = -1.0
-        for j in range(n):
-            W[n + i, j] = -Jx[i, j]
-            W[n + i, n + j] = -Jv[i, j]
-        W[n + i, n + i] += ihg
-    if not _lu(W, piv):
-        return False, 0.0, 0.0, 0.0
-    # stages
-    for k in range(S):
-        if k == 0:
+    for r in prange(R):
+        if status[r] != 0:
+            continue
+        z = np.empty(m)
+        for i in range(n):
+            z[i] = X[r, i]
+            z[n + i] = V[r, i]
+        U = np.empty((S, m))
+        F = np.empty(m)
+        f0 = np.empty(m)
+        ft = np.empty(m)
+        fa = np.empty(m)
+        zt = np.empty(m)
+        znew = np.empty(m)
+        zd = np.empty(m)
+        dzd = np.empty(m)
+        W = np.empty((m, m))
+        piv = np.empty(m, dtype=np.int64)
+        Jx = np.empty((n, n))
+        Jv = np.empty((n, n))
+        work = np.empty(n)
+        acc = np.empty(n)
+        mu_r, v_r, kc_r, s_r, kin_r = mu[r], v[r], kc[r], s[r], kin[r]
+        bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r = bM[r], fM[r], C[r], K0[r], Kn[r], Kf[r]
+        Knx_r, Kfx_r = Knx[r], Kfx[r]
+        F0_r, fn_r, ff_r, b_r, f_r, fhat_r = F0[r], fn[r], ff[r], b[r], f[r], fhat[r]
+        qg_r, tg_r = qg[r], tgr[r]
+        t = t_a
+        h = H[r]
+        o = o_first
+        nc, me, q, tt_ = _f(t, z, f0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+                            Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+        counts[r, 2] += 1
+        if o <= o_last and o / fs <= t + 1e-12 / fs:
+            if not _store(r, o, o_base, z, f0, nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
+                status[r] = 1
+            o += 1
+        g_old, w_old = _gap_and_slip(z[:n], z[n:], q, tt_, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
+        retake = False
+        h_saved = h
+        dtf = 1e-4 * hg
+        while t < t_b and status[r] == 0:
+            h_min = 1e-14 * max(1.0, abs(t)) + 1e-300
+            if h > h_max[r]:
+                h = h_max[r]
+            last = False
+            if t + h >= t_b:
+                h = t_b - t
+                last = True
+            # f(t, z) (f0), f_t and the Jacobian at the start of the step
+            nc, me, q, tt_ = _f(t, z, f0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+                                Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+            _f(t + dtf, z, ft, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+               Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+            _f(t - dtf, z, fa, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
+               Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
             for i in range(m):
-                F[i] = f0[i]
-        else:
+                ft[i] = (ft[i] - fa[i]) / (2.0 * dtf)
+            counts[r, 2] += 3
+            _jacobian(z[:n], z[n:], q, tt_, mu_r, v_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, bM_r, fM_r,
+                      b_r, fhat_r, kc_r, s_r, opts, Jx, Jv)
+            ihg = 1.0 / (h * gam)
+            for i in range(m):
+                for j in range(m):
+                    W[i, j] = 0.0
+            for i in range(n):
+                W[i, i] = ihg
+                W[i, n + i] = -1.0
+                for j in range(n):
+                    W[n + i, j] = -Jx[i, j]
+                    W[n + i, n + j] = -Jv[i, j]
+                W[n + i, n + i] += ihg
+            if not _lu(W, piv):
+                counts[r, 1] += 1
+                h *= 0.5
+                if h < h_min:
+                    status[r] = 2
+                continue
+            # stages
+            for k in range(S):
+                if k == 0:
+                    for i in range(m):
+                        F[i] = f0[i]
+                else:
+                    for i in range(m):
+                        a = 0.0
+                        for j in range(k):
+                            a += RA[k, j] * U[j, i]
+                        zt[i] = z[i] + a
+                    _f(t + RAL[k] * h, zt, F, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r,
+                       Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+                    counts[r, 2] += 1
+                for i in range(m):
+                    a = F[i] + h * RD[k] * ft[i]
+                    for j in range(k):
+                        a += RC[k, j] / h * U[j, i]
+                    U[k, i] = a
+                _lu_solve(W, piv, U[k])
             for i in range(m):
                 a = 0.0
-                for j in range(k):
-                    a += RA[k, j] * U[j, i]
-                zt[i] = z[i] + a
-            _f(t + RAL[k] * h, zt, F, n, fo, p, work, acc)
-            counts[2] += 1
-        for i in range(m):
-            a = F[i] + h * RD[k] * ft[i]
-            for j in range(k):
-                a += RC[k, j] / h * U[j, i]
-            U[k, i] = a
-        _lu_solve(W, piv, U[k])
-    for i in range(m):
-        a = 0.0
-        for j in range(S):
-            a += RM[j] * U[j, i]
-        znew[i] = z[i] + a
-    err = 0.0
-    for i in range(m):
-        sc = atol[i] + rtol * max(abs(z[i]), abs(znew[i]))
-        e = U[S - 1, i] / sc
-        err += e * e
-    err = math.sqrt(err / m)
-    qn, tn = _forcing(t_new, fo)
-    return True, err, qn, tn
-
-
-@njit(cache=True, inline="always")
-def _rodas4_dense(tab, ws, z, z1, h, th, out):
-    """Rodas4's 3rd-order continuous extension at t + th h."""
-    U, Dd = ws.U, tab.dense
-    m = z.shape[0]
-    for i in range(m):
-        d2 = 0.0
-        d3 = 0.0
-        for j in range(Dd.shape[1]):
-            d2 += Dd[0, j] * U[j, i]
-            d3 += Dd[1, j] * U[j, i]
-        out[i] = (1.0 - th) * z[i] + th * (z1[i] + (1.0 - th) * (d2 + th * d3))
-
-
-@njit(cache=True, inline="always")
-def _rodas4_accepted(ws):
-    """Nothing carries over: each step starts with f(t, z) and the Jacobian anew."""
-    return
-
-
-@njit(cache=True, inline="always")
-def _rodas4_work(tab, n):
-    """Workspace of a Rodas4 step: stages U, f, f(t, z), f_t, a stage state, W = I/(h gamma) - J
-    and its pivots, the Jacobian's blocks."""
-    m = 2 * n
-    return RodasWork(np.empty((tab.A.shape[0], m)), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m),
-                     np.empty((m, m)), np.empty(m, dtype=np.int64), np.empty((n, n)), np.empty((n, n)))
-
-
-@njit(cache=True)
-def integrate_rosenbrock(model, forcing, window, control, tableau, state, out):
-    """Advance each run from ``window.t_a`` to ``window.t_b`` by Rodas4 (see the notes above) with error control.
-
-    Same arguments and conventions as :func:`integrate_adaptive` with the tableau a
-    :data:`Rodas4`; the Jacobian is analytic (:func:`_jacobian`) and evaluated every step, f_t by
-    a central difference in time of the forcing. :func:`integrate_rosenbrock_batch` in parallel.
-    """
-    for r in range(state.X.shape[0]):
-        _advance(r, _rodas4_work, _rodas4_step, _rodas4_dense, _rodas4_accepted, model, forcing, window, control,
-                 tableau, state, out)
-
-
-@njit(cache=True, parallel=True)
-def integrate_rosenbrock_batch(model, forcing, window, control, tableau, state, out):
-    """:func:`integrate_rosenbrock` in parallel over runs (``prange``)."""
-    for r in prange(state.X.shape[0]):
-        _advance(r, _rodas4_work, _rodas4_step, _rodas4_dense, _rodas4_accepted, model, forcing, window, control,
-                 tableau, state, out)
+                for j in range(S):
+                    a += RM[j] * U[j, i]
+                znew[i] = z[i] + a
+            t_new = t + h if not last else t_b
+            err = 0.0
+            for i in range(m):
+                sc = atol[r, i] + rtol * max(abs(z[i]), abs(znew[i]))
+                e = U[S - 1, i] / sc
+                err += e * e
+            err = math.sqrt(err / m)
+            if not (err <= 1.0):
+                counts[r, 1] += 1
+                fac = 0.9 * err ** -0.25 if err == err and err < 1e300 else 0.2
+                h *= max(0.2, fac)
+                if h < h_min:
+                    status[r] = 2
+                continue
+            qn, tn = _forcing(t_new, tg0, hg, qg_r, tg_r, v_r)
+            g_new, w_new = _gap_and_slip(znew[:n], znew[n:], qn, tn, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
+            if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0) and not retake:
+                hi = _locate(False, g_old > 0.0, 50, z, znew, U, RDD, h, True, t, tg0, hg, qg_r, tg_r, v_r,
+                             b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
+                if hi < 1.0 - 1e-9 and hi * h > h_min:
+                    h_saved = h
+                    h = hi * h
+                    retake = True
+                    continue
+            counts[r, 0] += 1
+            if h < counts[r, 3] or counts[r, 3] == 0.0:
+                counts[r, 3] = h
+            if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0):
+                hi = _locate(False, g_old > 0.0, 50, z, znew, U, RDD, h, True, t, tg0, hg, qg_r, tg_r, v_r,
+                             b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
+                _log_event(r, t + hi * h, EVENT_CONTACT_OPENS if g_new <= 0.0 else EVENT_CONTACT_CLOSES, ev_t, ev_k,
+                           n_ev)
+            if opts[2] != 0.0 and (w_old < opts[4]) != (w_new < opts[4]):
+                hi = _locate(True, w_old < opts[4], 40, z, znew, U, RDD, h, True, t, tg0, hg, qg_r, tg_r, v_r,
+                             b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
+                _log_event(r, t + hi * h, EVENT_STICK if w_new < opts[4] else EVENT_SLIP, ev_t, ev_k, n_ev)
+            while o <= o_last and o / fs <= t_new * (1.0 + 1e-15):
+                _interp(z, znew, U, RDD, h, min((o / fs - t) / h, 1.0), True, zd)
+                ncs, mes, _q, _t = _f(o / fs, zd, dzd, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r,
+                                      Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r,
+                                      s_r, opts, work, acc)
+                if not _store(r, o, o_base, zd, dzd, ncs, mes, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
+                    status[r] = 1
+                    break
+                o += 1
+            if status[r] != 0:
+                break
+            t = t_new
+            for i in range(m):
+                z[i] = znew[i]
+            g_old, w_old = g_new, w_new
+            if not retake:
+                fac = 0.9 * err ** -0.25 if err > 0.0 else 6.0
+                h = h * min(6.0, max(0.2, fac))
+            else:
+                h = h_saved
+            retake = False
+            if h < h_min:
+                status[r] = 2
+        for i in range(n):
+            X[r, i] = z[i]
+            V[r, i] = z[n + i]
+        H[r] = h
 
 
 # -- monodromy matrix of the periodic linear system (Floquet) --------------------------------------

@@ -109,9 +109,8 @@ def _dopri_tableau():
 
     A = np.zeros((RK45.n_stages, RK45.n_stages))
     A[:, : RK45.A.shape[1]] = RK45.A
-    # step control: h *= 0.9 err^(-1/5), by at most 10 (the 5th-order method's error ~ h^5)
-    return ode.DP5(np.ascontiguousarray(A), np.ascontiguousarray(RK45.B), np.ascontiguousarray(RK45.C),
-                   np.ascontiguousarray(RK45.E), np.ascontiguousarray(RK45.P), -0.2, 10.0)
+    return (np.ascontiguousarray(A), np.ascontiguousarray(RK45.B), np.ascontiguousarray(RK45.C),
+            np.ascontiguousarray(RK45.E), np.ascontiguousarray(RK45.P))
 def _rodas4_tableau():
     """Rodas4 in the transformed form of Hairer & Wanner II, eq. (IV.7.25), coefficients of their
     code RODAS (method 1): a_ij, c_ij, alpha_i, d_i (f_t), m_j, dense output D2, D3 and gamma."""
@@ -134,8 +133,7 @@ def _rodas4_tableau():
     dense = np.zeros((2, 6))
     dense[0, :5] = [10.12623508344586, -7.487995877610167, -34.80091861555747, -7.992771707568823, 1.025137723295662]
     dense[1, :5] = [-0.6762803392801253, 6.087714651680015, 16.43084320892478, 24.76722511418386, -6.594389125716872]
-    # step control: h *= 0.9 err^(-1/4), by at most 6 (the embedded 3rd-order estimate ~ h^4)
-    return ode.Rodas4(A, Cm, alpha, d, m, dense, 0.25, -0.25, 6.0)
+    return A, Cm, alpha, d, m, dense, 0.25
 
 
 #: Steps per compiled call (progress and divergence are checked between calls).
@@ -392,7 +390,7 @@ def _prepare(
         X[i], V[i] = _initial_state(run, contact, x0, v0, perturbation, noise[i], x_start)
     status = np.zeros(R, dtype=np.int64)
     n_valid = np.zeros(R, dtype=np.int64)
-    arrays = ode.Model(bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts)
+    arrays = (bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts)
     return dict(runs=runs, X=X, V=V, arrays=arrays, n=n, n_out=n_out, n_steps=n_steps, status=status,
                 n_valid=n_valid, dt=dt, dt_user=dt_user, stride=stride, x_start=x_start, limit=limit, contact=contact,
                 rtol=rtol, atol_user=atol, bounds=bounds, method=method, fs=fs)
@@ -469,9 +467,8 @@ def _run_rk4(setup: dict[str, Any], progress: Progress | None) -> Iterator[tuple
         first = done // stride
         outs = _buffers(R, m // stride if m else 1, setup["n"])
         with limit_threads(threads_for(R, serial_below=2)):  # parallel over runs: one run is serial
-            kernel = ode.integrate_chunk if R == 1 else ode.integrate_chunk_batch
-            kernel(X, V, arrays, qh, th, dt, m, stride, ode.Output(*outs, setup["n_valid"]), first, setup["limit"],
-                   status, first)
+            ode.integrate_chunk(X, V, *arrays, qh, th, dt, m, stride, *outs, first, setup["limit"], status,
+                                setup["n_valid"], first)
         done += m
         yield first, outs
         if progress is not None:
@@ -500,18 +497,12 @@ def _run_dopri5(setup: dict[str, Any], progress: Progress | None
     atol_a = np.ascontiguousarray(np.concatenate([np.repeat(atol_x[:, None], n, axis=1),
                                                   np.repeat((atol_x * w)[:, None], n, axis=1)], axis=1))
     tableau = _dopri_tableau() if method == "dopri5" else _rodas4_tableau()
-    # one run: the serial kernel (compiled without the parallel machinery, which one run does not use)
-    if method == "dopri5":
-        kernel = ode.integrate_adaptive if R == 1 else ode.integrate_adaptive_batch
-    else:
-        kernel = ode.integrate_rosenbrock if R == 1 else ode.integrate_rosenbrock_batch
+    kernel = ode.integrate_adaptive if method == "dopri5" else ode.integrate_rosenbrock
     H = np.minimum(h_max, 0.1 / w)
     setup.update(counts=np.zeros((R, 4)), ev_t=np.full((R, _MAX_EVENTS), np.nan),
                  ev_k=np.zeros((R, _MAX_EVENTS), dtype=np.int64), n_ev=np.zeros(R, dtype=np.int64), atol=atol_a,
                  h_max=h_max)
     per = _FORCING_PER_SAMPLE
-    control = ode.Control(rtol, atol_a, h_max, setup["limit"])
-    state = ode.State(X, V, H, status, setup["counts"], setup["ev_t"], setup["ev_k"], setup["n_ev"])
     o_first = 0
     while o_first < n_out:
         o_last = min(n_out - 1, o_first + _CHUNK_SAMPLES)
@@ -521,9 +512,11 @@ def _run_dopri5(setup: dict[str, Any], progress: Progress | None
         qg, tg = _profile_samples(runs, setup["x_start"], g)
         outs = _buffers(R, o_last - o_first + 1, n)
         with limit_threads(threads_for(R, serial_below=2)):  # parallel over runs: one run is serial
-            kernel(arrays, ode.Forcing(g[0], 1.0 / (fs * per), qg, tg),
-                   ode.Window(t_a, t_b, fs, o_first, o_last, o_first), control, tableau, state,
-                   ode.Output(*outs, setup["n_valid"]))
+            kernel(
+                X, V, H, *arrays, qg, tg, g[0], 1.0 / (fs * per), t_a, t_b, fs, o_first, o_last, o_first, *tableau,
+                rtol, atol_a, h_max, *outs, setup["limit"], status, setup["n_valid"], setup["counts"], setup["ev_t"],
+                setup["ev_k"], setup["n_ev"],
+            )
         yield o_first, outs
         if progress is not None:
             progress(o_last, n_out - 1)
