@@ -12,10 +12,10 @@ from squealkit._validation import InputError
 from squealkit.cli.main import cli
 from squealkit.models import Hoffmann2002, MatrixModel, get_preset
 from squealkit.models.friction import Stribeck, point_contact
+from squealkit.solvers import ode as transient_kernels
 from squealkit.stability import critical_friction, eigenvalues, runout_tolerance, stability_map
 from squealkit.stability.eigen import stability_verdict
 from squealkit.transient import Contact, simulate
-from squealkit.transient import _kernels as transient_kernels
 
 
 def mass_on_belt(*, m=0.5, kx=2.0e5, ky=3.0e5, kc=1.0e6, c=4.0, P=5.0):
@@ -70,7 +70,7 @@ def test_slope_and_coefficient_of_the_law():
 
 @pytest.mark.parametrize("kinematics", ["paper", "consistent"])
 def test_linearised_friction_is_the_derivative_of_the_transient_force(kinematics):
-    # The transient kernel's force (transient/_kernels.py, _rhs) differentiated numerically
+    # The transient kernel's force (solvers/ode.py, _rhs) differentiated numerically
     # at the static equilibrium of steady sliding: d acc / d x' = -M^-1 (C + dmu/dv N0 D) and
     # d acc / d x = -M^-1 K(mu(V), tan_theta), with tan_theta != 0 to test the slope terms
     # (with consistent kinematics also the kernel's gap b_t.x against slope_parts).

@@ -111,7 +111,7 @@ def test_rosenbrock_locates_contact_events():
 @pytest.mark.parametrize("kin", [0.0, 1.0])
 @pytest.mark.parametrize("contact", [Contact.linear(), Contact.nonlinear(v_reg=1e-4, mu_static=0.6, v_stribeck=1e-3)])
 def test_analytic_jacobian_matches_finite_differences(contact, kin):
-    from squealkit.transient import _kernels as K
+    from squealkit.solvers import ode as K
     from squealkit.transient.contact import contact_geometry
 
     m = LV

@@ -11,7 +11,7 @@ from squealkit import _warmup
 def test_transient_group_compiles_no_stability_kernel(monkeypatch):
     # The parent compiles the stability kernels while the child compiles the integrator: the
     # child's run must not call one (it would compile it a second time, on the other core).
-    from squealkit.stability import _kernels
+    from squealkit.solvers import small as _kernels
 
     def refuse(*args, **kwargs):
         raise AssertionError("the warm-up child called a stability kernel")
@@ -19,6 +19,12 @@ def test_transient_group_compiles_no_stability_kernel(monkeypatch):
     for name in dir(_kernels):
         if isinstance(getattr(_kernels, name), numba.core.registry.CPUDispatcher):
             monkeypatch.setattr(_kernels, name, refuse)
+    # the child swaps simulate's eigenvalues for LAPACK's stand-in: undone after this test, so
+    # that later tests in this process (tests/test_stribeck.py's growth rates) see the real one
+    import importlib
+
+    sim = importlib.import_module("squealkit.transient.simulate")
+    monkeypatch.setattr(sim, "eigenvalues", sim.eigenvalues)
     _warmup._transient()
 
 

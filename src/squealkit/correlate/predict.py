@@ -140,7 +140,7 @@ def _small_task(item: tuple) -> tuple[np.ndarray, ...]:
 def _predict_small(model: FrictionModel, points: xr.Dataset, scale_names: list[str], *, damped: bool,
                    theta: float, client: Any) -> dict[str, Any]:
     from ..scale import map_tasks
-    from ..stability._kernels import derived_quantities
+    from ..solvers.small import derived_quantities
     from ..stability._schema import UNSTABLE_RTOL
 
     keys, inverse = _distinct(points, scale_names, speed=False)  # (no speed in a small model without a law)

@@ -1,4 +1,7 @@
-"""Compiled loops of the harmonic balance: the AFT Jacobian's assembly and the monodromy product.
+"""Compiled loops of the harmonic balance: the AFT Jacobian's assembly and the contact force.
+
+The monodromy matrix is :func:`squealkit.solvers.ode.monodromy_rk4` (one RK4 monodromy for
+the transient's Floquet exponents and the limit cycles).
 
 Private: :mod:`squealkit.nonlinear.harmonic_balance` and :mod:`squealkit.nonlinear.continuation`
 prepare the arrays.
@@ -58,54 +61,6 @@ def aft_jacobian(ca, cb, omega, out):  # pragma: no cover - compiled
                         out[H + k, i, q, j] = a_sc - (wl * b_ss if q > 0 else 0.0)
                         if q > 0:
                             out[H + k, i, H + q, j] = a_ss + wl * b_sc
-
-
-@njit(cache=True)
-def monodromy_rk4(A, dt):  # pragma: no cover - compiled
-    """Monodromy matrix of ``Phi' = A(t) Phi`` by classical RK4 from samples of ``A``.
-
-    ``A`` (2S+1, m, m) holds ``A(j dt / 2)``, j = 0..2S (steps ``dt``, midpoints included).
-    """
-    m = A.shape[1]
-    S = (A.shape[0] - 1) // 2
-    Phi = np.eye(m)
-    k1 = np.empty((m, m))
-    k2 = np.empty((m, m))
-    k3 = np.empty((m, m))
-    k4 = np.empty((m, m))
-    Y = np.empty((m, m))
-    for s in range(S):
-        A0 = A[2 * s]
-        Ah = A[2 * s + 1]
-        A1 = A[2 * s + 2]
-        _mm(A0, Phi, k1)
-        for i in range(m):
-            for j in range(m):
-                Y[i, j] = Phi[i, j] + 0.5 * dt * k1[i, j]
-        _mm(Ah, Y, k2)
-        for i in range(m):
-            for j in range(m):
-                Y[i, j] = Phi[i, j] + 0.5 * dt * k2[i, j]
-        _mm(Ah, Y, k3)
-        for i in range(m):
-            for j in range(m):
-                Y[i, j] = Phi[i, j] + dt * k3[i, j]
-        _mm(A1, Y, k4)
-        for i in range(m):
-            for j in range(m):
-                Phi[i, j] += dt / 6.0 * (k1[i, j] + 2.0 * k2[i, j] + 2.0 * k3[i, j] + k4[i, j])
-    return Phi
-
-
-@njit(cache=True, inline="always")
-def _mm(A, B, out):  # pragma: no cover - compiled
-    m = A.shape[0]
-    for i in range(m):
-        for j in range(m):
-            acc = 0.0
-            for r in range(m):
-                acc += A[i, r] * B[r, j]
-            out[i, j] = acc
 
 
 @njit(cache=True)

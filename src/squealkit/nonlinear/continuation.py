@@ -118,14 +118,14 @@ def floquet_multipliers(system: SecondOrderSystem, cycle: LimitCycle, *, n_floqu
         All 2n multipliers, sorted by decreasing modulus, with the one nearest 1 (the
         trivial multiplier, the phase shift along the cycle) moved last.
     """
-    from . import _kernels
+    from ..solvers import ode
 
     S = floquet_steps(system, cycle) if n_floquet is None else int(n_floquet)
     if S < 1:
         raise InputError(f"Parameter n_floquet={n_floquet!r} must be an integer >= 1.")
     A = _variational(system, cycle, 2 * S)
     A = np.concatenate([A, A[:1]], axis=0)  # A(T) = A(0)
-    Phi = _kernels.monodromy_rk4(A, 2 * math.pi / cycle.omega / S)
+    Phi = ode.monodromy_rk4(ode.sampled_rhs, np.ascontiguousarray(A), S, 2 * math.pi / cycle.omega / S, A.shape[1])
     rho = np.linalg.eigvals(Phi)
     i = int(np.argmin(np.abs(rho - 1.0)))
     rest = np.delete(rho, i)

@@ -13,7 +13,7 @@ Fourier basis (vectorised, no finite differences). The frequency is fixed by a p
 condition (``b_1`` of one DOF is zero) and the system is solved by Newton's method.
 
 For a squealkit model the nonlinear force is the contact law of the transient solver
-(:mod:`squealkit.transient._kernels`): ``N_c = -kc (b.x - q)`` clipped at ``N_c >= 0`` when
+(:mod:`squealkit.solvers.ode`): ``N_c = -kc (b.x - q)`` clipped at ``N_c >= 0`` when
 contact may open, friction ``mu(w) tanh(w / v_reg)`` with the sliding speed
 ``w = v - s fhat.x'`` and the slope terms ``g = 1 - mu_e t``, ``e = s (mu_e + t)`` of eq. (4).
 :func:`contact_system` builds it from the model's public parts only (``stiffness_parts``,
@@ -158,7 +158,7 @@ def contact_system(model, contact=None, *, speed: float = 0.02, tan_theta: float
                    param: str = "mu") -> SecondOrderSystem:
     """The nonlinear pin-on-disc system of the transient solver, for harmonic balance.
 
-    Reproduces the contact force of :mod:`squealkit.transient._kernels` (``_rhs``,
+    Reproduces the contact force of :mod:`squealkit.solvers.ode` (``_rhs``,
     structured branch) on the mean surface ``q = 0`` with a frozen slope ``tan_theta``::
 
         f_nl = N_c (g b + e f),  N_c = -kc (b_t.x)  (>= 0 if contact may open)

@@ -1,4 +1,4 @@
-"""Numerical engines of the FE side, without analysis vocabulary.
+"""Numerical engines, without analysis vocabulary.
 
 - :mod:`~squealkit.solvers.lu`: the pluggable sparse LU (SuperLU by default, a dense LAPACK LU,
   any backend registered or passed per call);
@@ -6,7 +6,10 @@
   (dense) or in a frequency band (shift-invert block Krylov-Schur walks, one LU per shift);
 - :mod:`~squealkit.solvers.reduction`: modal and POD bases, projection, reduced solves with
   full-model backward errors;
-- :mod:`~squealkit.solvers.mac`: mode tracking by MAC.
+- :mod:`~squealkit.solvers.mac`: mode tracking by MAC;
+- :mod:`~squealkit.solvers.small`: the compiled eigenvalue kernels of small (few-DOF) models;
+- :mod:`~squealkit.solvers.ode`: the compiled time integrators (DP5, Rodas4, RK4, event location)
+  and the one RK4 monodromy of Floquet analysis and limit cycles.
 
 The analyses built on them (stability maps, onset, modes of FE models) are in
 :mod:`squealkit.stability`.

@@ -31,7 +31,7 @@ from .._validation import (
 )
 from ..models import FrictionModel
 from ..models.friction import Stribeck, validate_friction
-from ._kernels import (
+from ..solvers.small import (
     charpoly_table,
     permutations_table,
     quadratic_eigvals,

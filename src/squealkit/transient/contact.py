@@ -126,7 +126,7 @@ class Contact:
         return "; ".join(parts)
 
     def options(self) -> np.ndarray:
-        """The kernel's flag vector (see :mod:`squealkit.transient._kernels`)."""
+        """The kernel's flag vector (see :mod:`squealkit.solvers.ode`)."""
         return np.array(
             [
                 0.0 if self.is_linear else 1.0,

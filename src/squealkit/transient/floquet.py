@@ -35,8 +35,8 @@ from .._validation import (
     validate_positive,
 )
 from ..models import FrictionModel
+from ..solvers import ode
 from ..stability.eigen import eigenvalues
-from . import _kernels
 from .profiles import SineRunOut
 
 __all__ = ["FloquetResult", "floquet", "floquet_map"]
@@ -136,7 +136,7 @@ def _exponents(model, mu, amplitude, wavelength, speed, damped, steps):
     kin = np.full(B, float(model.slope_coupled))
     out = np.empty((B, 2 * model.n_dof, 2 * model.n_dof))
     with limit_threads(threads_for(B, serial_below=2)):
-        _kernels.monodromy(tg, np.ascontiguousarray(mu, dtype=float), s, kin, *arrays, period, n_steps, out)
+        ode.monodromy(tg, np.ascontiguousarray(mu, dtype=float), s, kin, *arrays, period, n_steps, out)
     bad = ~np.all(np.isfinite(out), axis=(-2, -1))
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])

@@ -51,8 +51,8 @@ from .._validation import (
     validate_positive,
 )
 from ..models import FrictionModel
+from ..solvers import ode
 from ..stability.eigen import eigenvalues
-from . import _kernels
 from .contact import Contact, as_contact, contact_geometry
 from .profiles import Smooth, SurfaceProfile
 
@@ -467,8 +467,8 @@ def _run_rk4(setup: dict[str, Any], progress: Progress | None) -> Iterator[tuple
         first = done // stride
         outs = _buffers(R, m // stride if m else 1, setup["n"])
         with limit_threads(threads_for(R, serial_below=2)):  # parallel over runs: one run is serial
-            _kernels.integrate_chunk(X, V, *arrays, qh, th, dt, m, stride, *outs, first, setup["limit"], status,
-                                     setup["n_valid"], first)
+            ode.integrate_chunk(X, V, *arrays, qh, th, dt, m, stride, *outs, first, setup["limit"], status,
+                                setup["n_valid"], first)
         done += m
         yield first, outs
         if progress is not None:
@@ -497,7 +497,7 @@ def _run_dopri5(setup: dict[str, Any], progress: Progress | None
     atol_a = np.ascontiguousarray(np.concatenate([np.repeat(atol_x[:, None], n, axis=1),
                                                   np.repeat((atol_x * w)[:, None], n, axis=1)], axis=1))
     tableau = _dopri_tableau() if method == "dopri5" else _rodas4_tableau()
-    kernel = _kernels.integrate_adaptive if method == "dopri5" else _kernels.integrate_rosenbrock
+    kernel = ode.integrate_adaptive if method == "dopri5" else ode.integrate_rosenbrock
     H = np.minimum(h_max, 0.1 / w)
     setup.update(counts=np.zeros((R, 4)), ev_t=np.full((R, _MAX_EVENTS), np.nan),
                  ev_k=np.zeros((R, _MAX_EVENTS), dtype=np.int64), n_ev=np.zeros(R, dtype=np.int64), atol=atol_a,

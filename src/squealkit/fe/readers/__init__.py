@@ -81,8 +81,8 @@ def read_matrices(path: str | Path) -> dict[str, Any]:
 
     A file in one of the labelled formats (:data:`~squealkit.fe.readers.labelled.LABELLED_FORMATS`)
     is recognised from its content, whatever its suffix; any other file is read by the reader of
-    its suffix (:data:`~squealkit.fe.readers.READERS`); a suffix given a reader by :func:`register_reader` is always read
-    by that reader. Matrices keep the form they were read in (COO, CSC, or
+    its suffix (:data:`~squealkit.fe.readers.READERS`); a suffix given a reader by
+    :func:`register_reader` is always read by that reader. Matrices keep the form they were read in (COO, CSC, or
     :class:`~squealkit.fe.dofmap.LabelledMatrix`); :func:`load_fe_model` places labelled ones in one
     DOF map, and :class:`FEModel` checks them and makes them CSR.
 
