@@ -129,8 +129,8 @@ def main() -> None:
               f"in [{q['interval'][0]:.4f}, {q['interval'][1]:.4f}] (hidden 0.05)")
 
         if args.fe:
-            from squealkit.models import FEModel
             from squealkit.fe.demo import build_fe_demo
+            from squealkit.models import FEModel
             from squealkit.stability.fe_sweep import FESolver
 
             demo = build_fe_demo(n_theta=args.fe_theta, n_r=2)
