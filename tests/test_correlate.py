@@ -215,7 +215,7 @@ def test_fe_demo_with_one_reduced_basis(tmp_path):
 
     demo = build_fe_demo(n_theta=8, n_r=2)
     fe = FEModel.from_matrices(**{k: demo[k] for k in ("M", "D1", "DG", "K1", "KR", "KGeo")},
-                               omega_ref=demo["omega_ref"], mu_ref=demo["mu_ref"])
+                               disc_speed_ref=demo["disc_speed_ref"], mu_ref=demo["mu_ref"])
     band = (4000.0, 5000.0)
     dense = FESolver(fe, "dense", band)
     ref = {}

@@ -1,6 +1,6 @@
 """The compiled kernels reproduce their golden cases bit for bit (issue #28: refactors change no number).
 
-Reference: ``tests/golden/*.npz``, written by ``tests/golden/make_golden.py`` from the code as it was
+Reference: ``tests/golden/*.npz``, written by ``tests/golden/make_golden_kernels.py`` from the code as it was
 before the kernels moved to :mod:`squealkit.solvers` (commit "tests: golden cases of the compiled
 kernels"). Every case is recomputed here with the same settings and compared with ``np.array_equal``
 (NaN equal to NaN): not a tolerance, the same bits.
@@ -18,7 +18,7 @@ GOLDEN = Path(__file__).parent / "golden"
 
 
 def _load_maker():
-    spec = importlib.util.spec_from_file_location("make_golden", GOLDEN / "make_golden.py")
+    spec = importlib.util.spec_from_file_location("make_golden_kernels", GOLDEN / "make_golden_kernels.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod

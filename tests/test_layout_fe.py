@@ -156,9 +156,14 @@ def test_no_new_import_circle_through_packages():
 
 def test_fe_and_solver_modules_are_short():
     # issue #28: no module over ~800 lines unless it is one algorithm
+    # one algorithm each, over the limit: the grid eigenvalue pipeline (determinant expansion, Aberth roots,
+    # error radii) and the compiled integrators with their shared event location (issue #28 leaves ode.py whole:
+    # its bundled-argument split ran 3-4x slower and was taken back)
+    one_algorithm = {"small.py", "ode.py"}
     for folder in ("fe", "solvers"):
         for p in (SRC / folder).rglob("*.py"):
-            assert len(p.read_text(encoding="utf-8").splitlines()) <= 800, p
+            if p.name not in one_algorithm:
+                assert len(p.read_text(encoding="utf-8").splitlines()) <= 800, p
     for name in ("maps.py", "_schema.py", "fe_sweep.py", "eigen.py"):
         assert len((SRC / "stability" / name).read_text(encoding="utf-8").splitlines()) <= 800, name
 

@@ -73,7 +73,12 @@ class NumberOrRange(click.ParamType):
             parse_range(name, text)  # START, STOP and N are numbers
             return text
         if self.unit is None:
-            number = float(parse_range(name, text)[0])
+            try:
+                number = float(text)
+            except ValueError:
+                raise InputError(f"{name} {text!r} is not a valid float and not a range START:STOP:N.") from None
+            if not math.isfinite(number):
+                raise InputError(f"{name} {text!r} must be finite.")
             return number if self.single else text
         from .._units import parse_quantity
 

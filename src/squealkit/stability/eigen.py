@@ -315,8 +315,8 @@ def _solve_grid(model, mu, tan_theta, damped, progress=None, friction=None, spee
     return (lam.reshape((*shape, n)), err.reshape((*shape, n)), verdict.reshape(shape), thr.reshape(shape))
 
 
-@keyword_only("tan_theta", why=_TAN_THETA_WHY)
 @honour_thread_limit
+@keyword_only("tan_theta", why=_TAN_THETA_WHY)
 def eigenvalues(
     model: FrictionModel,
     mu: ArrayLike,
@@ -377,8 +377,8 @@ def eigenvalues(
     return _solve_grid(model, mu, tan_theta, damped, progress, friction, speed)[0]
 
 
-@keyword_only("tan_theta", why=_TAN_THETA_WHY)
 @honour_thread_limit
+@keyword_only("tan_theta", why=_TAN_THETA_WHY)
 def stability_verdict(
     model: FrictionModel,
     mu: ArrayLike,

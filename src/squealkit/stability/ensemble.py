@@ -177,8 +177,8 @@ def _slope(tan_theta: float) -> float:
     return validate_finite("tan_theta", tan_theta)
 
 
-@keyword_only("tan_theta", why=_TAN_THETA_WHY)
 @honour_thread_limit
+@keyword_only("tan_theta", why=_TAN_THETA_WHY)
 def ensemble_unstable(ens: ModelEnsemble, mu: ArrayLike, *, tan_theta: float = 0.0) -> NDArray[np.bool_]:
     """Which models are unstable at each friction coefficient (paper eqs. 7-8).
 
@@ -211,8 +211,8 @@ def ensemble_unstable(ens: ModelEnsemble, mu: ArrayLike, *, tan_theta: float = 0
     return _unstable_rows(ens, np.broadcast_to(mu_a, (len(ens), mu_a.size)), t)
 
 
-@keyword_only("tan_theta", why=_TAN_THETA_WHY)
 @honour_thread_limit
+@keyword_only("tan_theta", why=_TAN_THETA_WHY)
 def ensemble_onset(
     ens: ModelEnsemble,
     mu: ArrayLike,

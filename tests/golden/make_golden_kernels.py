@@ -1,6 +1,6 @@
 """Golden cases of the compiled kernels: run once on the code before a refactor, then compared bit for bit.
 
-Run from the repository root: ``python tests/golden/make_golden.py`` (with ``SQUEALKIT_THREADS=1``).
+Run from the repository root: ``python tests/golden/make_golden_kernels.py`` (with ``SQUEALKIT_THREADS=1``).
 It writes ``tests/golden/<case>.npz``; :mod:`tests.test_golden_kernels` recomputes every case with the
 same settings and asserts ``np.array_equal`` against the stored arrays. The cases cover each
 integrator (Dormand-Prince 5(4), Rodas4, fixed-step RK4), the paper's run-out, loss of contact with
