@@ -315,3 +315,16 @@ def test_cli_lengths_take_units_and_refuse_unit_slips(run, recording_in_um):
     from squealkit._units import parse_quantity
 
     assert parse_quantity("--radius", "60 mm", "m") == 0.06 and parse_quantity("q", "80 µm", "m") == 8e-5
+
+
+def test_tolerance_wavelength_takes_its_unit_and_names_a_slip(run):
+    # issue #27 (units): "--wavelength 1 mm" must mean 1e-3 m, as --sro-wavelength does in simulate and
+    # floquet; a bare 50 (mm typed as m) is named as the likely slip instead of a 50 m wavelength
+    import json
+
+    mm = run("tolerance", "--mu", "0.3", "--wavelength", "1 mm", "--undamped", "--json")
+    si = run("tolerance", "--mu", "0.3", "--wavelength", "0.001", "--undamped", "--json")
+    assert mm.exit_code == 0 and si.exit_code == 0, (mm.output, si.output)
+    assert json.loads(mm.stdout) == json.loads(si.stdout)
+    slip = run("tolerance", "--mu", "0.3", "--wavelength", "50", "--undamped")
+    assert slip.exit_code == 2 and "mm" in slip.stderr and len(slip.stderr.strip().splitlines()) == 1

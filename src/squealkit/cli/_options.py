@@ -627,7 +627,7 @@ OPTIONS: dict[str, Term] = {
     "--uncertain": Term("file", "TOML file with the [uncertain] table"),
     "--unit": Term("text", "unit of a channel, CHANNEL=UNIT", multiple=True),
     "--vtk": Term("file", "write mode shapes with the mesh (.vtu)"),
-    "--wavelength": Term("number", "run-out wavelength of the amplitude tolerance", "METRES"),
+    "--wavelength": Term("quantity[m]", "run-out wavelength of the amplitude tolerance", "[m]"),
 }
 
 #: Old spellings kept for one release: (command, old option) -> the option that now says it. Each

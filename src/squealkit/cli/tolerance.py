@@ -7,6 +7,7 @@ import math
 import click
 
 from ._options import (
+    RUNOUT_WAVELENGTH,
     NumberOrRange,
     build_model_from_options,
     check_output_suffix,
@@ -72,8 +73,9 @@ def _state_text(tol) -> str:
 @click.command()
 @model_options
 @click.option("--mu", "mu_spec", required=True, type=NumberOrRange(), help="Friction coefficient(s).")
-@click.option("--wavelength", type=float, default=None,
-              help="Run-out wavelength lambda in METRES; gives the amplitude tolerance q0 (eq. 11).")
+@click.option("--wavelength", type=RUNOUT_WAVELENGTH, default=None,
+              help="Run-out wavelength lambda [m], or with a unit: '1 mm'; gives the amplitude tolerance q0 "
+              "(eq. 11).")
 @damping_option
 @fe_options()
 @click.option("--mu-max", default=2.0, show_default=True, type=float, help="FE models: search friction up to this.")
