@@ -7,19 +7,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from .campaign import _SYN, _fig
+
 __all__ = ["calibration_profile_plot", "noise_map_plot", "noise_matrices_plot", "outcome_plot"]
 
-_SYN = " [SYNTHETIC]"
 _COLOURS = {"hit": "tab:green", "miss": "tab:red", "over_prediction": "tab:orange", "quiet": "0.7"}
-
-
-def _fig(ax, **kw):
-    import matplotlib.pyplot as plt
-
-    if ax is None:
-        fig, ax = plt.subplots(**kw)
-        return fig, ax
-    return ax.figure, ax
 
 
 def noise_matrices_plot(ds, *, by: str = "temperature", synthetic: bool = False, axes=None):
