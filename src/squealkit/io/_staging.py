@@ -33,8 +33,8 @@ try:
 except ImportError:  # pragma: no cover - not POSIX: outputs are not locked
     fcntl = None  # type: ignore[assignment]
 
-from . import _accessor  # noqa: F401  (registers ds.squeal.plot(), also on loaded results)
-from ._validation import InputError, validate_dataset
+from .. import _accessor  # noqa: F401  (registers ds.squeal.plot(), also on loaded results)
+from .._validation import InputError, validate_dataset
 
 __all__ = ["atomic_path", "check_output", "load_dataset", "output_folder", "outputs_together", "save_blocks",
            "save_dataset", "save_figure", "write_text", "written_path"]
@@ -646,7 +646,7 @@ def output_folder(path: str | Path, *, force: bool = False, keep: Iterable[str] 
 
 def _write_manifest(folder: Path, files: list[str]) -> None:
     """List ``files`` as squealkit's in ``folder`` (replacing its manifest whole)."""
-    from . import __version__
+    from .. import __version__
 
     doc: dict[str, Any] = {"written_by": f"squealkit {__version__}", "files": [f for f in files if f not in _MANIFESTS]}
     name = MANIFEST
