@@ -10,6 +10,7 @@ import signal
 import stat
 import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -41,7 +42,7 @@ def test_unwritable_folder_is_one_line(run, tmp_path, monkeypatch):
     def denied(*a, **k):
         raise PermissionError(13, "Permission denied")
 
-    monkeypatch.setattr(io.tempfile, "mkstemp", denied)
+    monkeypatch.setattr(tempfile, "mkstemp", denied)
     r = run("stability", "--mu", "0:0.8:5", "--theta", "0", "--out", str(tmp_path / "m.nc"))
     assert r.exit_code == 2 and "Permission denied" in _one_line(r)
     r = run("critical", "--theta", "0", "--json")  # no output file: unaffected
@@ -90,7 +91,7 @@ def test_interrupt_swallowed_by_a_library_still_discards_the_output(tmp_path):
             tmp.write_text("half")
             io.note_interrupt()  # the handler ran, but the exception was caught inside a library
     finally:
-        io._interrupted.clear()
+        io.clear_interrupt()
     assert os.listdir(tmp_path) == []
 
 
