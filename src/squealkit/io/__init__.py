@@ -18,8 +18,12 @@ The package, from the bottom up:
 - ``_staging``: staging and moving into place (:func:`atomic_path`, :func:`output_folder`,
   :func:`outputs_together`, :func:`check_output`, :func:`written_path`).
 - ``_datasets`` and ``_files``: the writers and readers on top (netCDF/zarr results, figures, text).
+
+What a loaded result is (its ``kind``, :func:`result_kind`) and a file saved by an older squealkit
+brought to today's names (:func:`upgrade_result`) come from the result schema (``squealkit._accessor``).
 """
 
+from .._accessor import RESULT_KINDS, result_kind, upgrade_result
 from .._validation import InputError as InputError
 from ._datasets import load_dataset, save_blocks, save_dataset
 from ._files import save_figure, write_text
@@ -29,7 +33,7 @@ from ._ownership import ZARR_MANIFEST as ZARR_MANIFEST
 from ._ownership import final_name as final_name
 from ._staging import atomic_path, check_output, output_folder, outputs_together, written_path
 
-__all__ = ["atomic_path", "check_output", "clear_interrupt", "deferred_interrupts", "interrupt_signal",
-           "interrupts_deferred", "load_dataset", "note_interrupt", "output_folder", "outputs_together", "save_blocks",
-           "save_dataset", "save_figure", "write_text", "written_path"]
+__all__ = ["RESULT_KINDS", "atomic_path", "check_output", "clear_interrupt", "deferred_interrupts", "interrupt_signal",
+           "interrupts_deferred", "load_dataset", "note_interrupt", "output_folder", "outputs_together", "result_kind",
+           "save_blocks", "save_dataset", "save_figure", "upgrade_result", "write_text", "written_path"]
 
