@@ -38,7 +38,7 @@ import xarray as xr
 
 import test_bad_inputs as tbi
 import test_output_safety as tos
-from squealkit._validation import InputError
+from squealkit import InputError
 
 CASE_FILE = Path(__file__).with_name("adversarial-2026-12-02.md")
 EXAMPLES = Path(__file__).parents[1] / "examples"

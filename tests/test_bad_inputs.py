@@ -14,7 +14,7 @@ import pytest
 import scipy.io
 import scipy.sparse as sp
 
-from squealkit._validation import InputError
+from squealkit import InputError
 from squealkit.fe import FEModel, load_fe_model
 
 
@@ -417,7 +417,7 @@ def test_read_only_store(tmp_path, good_store):
     p = tmp_path / "campaign.duckdb"
     shutil.copy(good_store, p)
     code = ("import sys\nfrom squealkit.campaign.store import CampaignStore\n"
-            "from squealkit._validation import InputError\n"
+            "from squealkit import InputError\n"
             "try:\n    CampaignStore(sys.argv[1])\nexcept InputError as e:\n    print(e)\n    sys.exit(3)\n")
     if os.geteuid() == 0:  # root writes read-only files: drop the capability that lets it
         if not shutil.which("setpriv"):
@@ -462,7 +462,7 @@ _TAKING_A_MODEL = _public_functions_taking_a_model()
 def test_every_public_function_taking_a_model_checks_its_type(name):
     import inspect
 
-    from squealkit._validation import InputTypeError
+    from squealkit import InputTypeError
 
     f = _TAKING_A_MODEL[name]
     params = list(inspect.signature(f).parameters.values())[1:]

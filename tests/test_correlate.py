@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from squealkit._validation import InputError
+from squealkit import InputError
 from squealkit.campaign import read_matrix, run_campaign
 from squealkit.cli.main import cli
 from squealkit.correlate import (

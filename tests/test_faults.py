@@ -10,6 +10,7 @@ import signal
 import stat
 import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -41,7 +42,7 @@ def test_unwritable_folder_is_one_line(run, tmp_path, monkeypatch):
     def denied(*a, **k):
         raise PermissionError(13, "Permission denied")
 
-    monkeypatch.setattr(io.tempfile, "mkstemp", denied)
+    monkeypatch.setattr(tempfile, "mkstemp", denied)
     r = run("stability", "--mu", "0:0.8:5", "--theta", "0", "--out", str(tmp_path / "m.nc"))
     assert r.exit_code == 2 and "Permission denied" in _one_line(r)
     r = run("critical", "--theta", "0", "--json")  # no output file: unaffected
@@ -90,7 +91,7 @@ def test_interrupt_swallowed_by_a_library_still_discards_the_output(tmp_path):
             tmp.write_text("half")
             io.note_interrupt()  # the handler ran, but the exception was caught inside a library
     finally:
-        io._interrupted.clear()
+        io.clear_interrupt()
     assert os.listdir(tmp_path) == []
 
 
@@ -186,9 +187,7 @@ def test_scheduler_file_that_is_not_one_is_one_line(run, tmp_path):
 
 
 def test_work_that_will_not_fit_in_memory_is_refused_before_allocating(run, tmp_path, monkeypatch):
-    from squealkit import _validation
-
-    monkeypatch.setattr(_validation, "available_memory", lambda: 1 << 30)  # a 1 GiB machine
+    monkeypatch.setattr("squealkit._validation.available_memory", lambda: 1 << 30)  # a 1 GiB machine
     # the grid itself: 1e8 points of mu
     r = run("stability", "--mu", "0:1:100000000", "--theta", "0")
     assert r.exit_code == 2 and "needs about" in _one_line(r) and "available" in r.stderr
@@ -204,11 +203,9 @@ def test_work_that_will_not_fit_in_memory_is_refused_before_allocating(run, tmp_
 
 
 def test_monte_carlo_too_big_is_refused_before_sampling(run, monkeypatch, tmp_path):
-    from squealkit import _validation
-
     unc = tmp_path / "unc.toml"
     unc.write_text('[uncertain]\nk3 = {dist = "normal", mean = 9e5, std = 1e5}\n')
-    monkeypatch.setattr(_validation, "available_memory", lambda: 1 << 30)
+    monkeypatch.setattr("squealkit._validation.available_memory", lambda: 1 << 30)
     r = run("montecarlo", "--preset", "hoffmann2002", "--uncertain", str(unc), "--samples", "100000000",
             "--mu", "0:1:11")
     assert r.exit_code == 2 and "Monte Carlo of 100000000 samples" in _one_line(r)

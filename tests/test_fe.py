@@ -15,7 +15,7 @@ import scipy.io
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from squealkit._validation import InputError
+from squealkit import InputError
 from squealkit.data import nlevp_path
 from squealkit.models import FEModel, MatrixModel, load_fe_model, load_model
 from squealkit.solvers.band import band_eigs, dense_eigs

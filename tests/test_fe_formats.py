@@ -21,7 +21,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 import _fe_format_writers as wr
-from squealkit._validation import InputError
+from squealkit import InputError
 from squealkit.fe.demo import demo_dof_map, demo_mesh
 from squealkit.fe.dofmap import DofMap
 from squealkit.fe.mesh import FEMesh, read_mesh, write_abaqus_inp

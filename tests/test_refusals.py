@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from squealkit._validation import InputError
+from squealkit import InputError
 
 NLEVP_TOML = 'model = "fe"\n[fe]\nfile = "{path}"\n'
 

@@ -197,7 +197,7 @@ def test_default_operating_point(tmp_path):
     assert own.mu_transient < c < own.mu_transient + own.sro_slope
     assert not own.is_paper and "damped onset" in own.source
     cfg.write_text(DAMPED.split("[report]")[0] + "[report]\nmu_desing = 0.1\n")
-    from squealkit._validation import InputError
+    from squealkit import InputError
 
     with pytest.raises(InputError, match="mu_desing"):
         load_report_settings(cfg, model, paper=False)

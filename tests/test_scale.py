@@ -224,7 +224,7 @@ def test_map_tasks_without_client_runs_in_order():
 
 
 def test_client_needs_a_store(tmp_path):
-    from squealkit._validation import InputError
+    from squealkit import InputError
 
     with pytest.raises(InputError, match="zarr"):
         stability_map(get_preset("lv2013"), [0.1, 0.2], [0.0], client=object())

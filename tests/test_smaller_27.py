@@ -11,8 +11,7 @@ import pytest
 
 from squealkit.data import nlevp_path
 from squealkit.models import get_preset, load_fe_model
-from squealkit.stability import fe_stability_map, lock_in, stability_map
-from squealkit.stability._solve import VERDICTS
+from squealkit.stability import VERDICTS, fe_stability_map, lock_in, stability_map
 
 FLUTTER = VERDICTS.index("flutter")
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.linalg import block_diag
 
-from squealkit._validation import InputError
+from squealkit import InputError
 from squealkit.models import Hoffmann2002, MatrixModel, get_preset
 from squealkit.stability import (
     ONSET_STATUS,

@@ -8,7 +8,7 @@ import pytest
 from click.testing import CliRunner
 from scipy.signal import find_peaks
 
-from squealkit._validation import InputError
+from squealkit import InputError
 from squealkit.cli.main import cli
 from squealkit.models import Hoffmann2002, MatrixModel, get_preset
 from squealkit.models.friction import Stribeck, point_contact

@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from squealkit._threads import ENV_VAR, SERIAL_BELOW, env_threads, limit_threads, thread_limit, threads_for
-from squealkit._validation import InputError
+from squealkit import InputError
 from squealkit.cli.main import cli
 from squealkit.models import get_preset
+from squealkit.scale import ENV_VAR, SERIAL_BELOW, env_threads, limit_threads, thread_limit, threads_for
 from squealkit.stability import eigenvalues, stability_map
 
 POOL = numba.config.NUMBA_NUM_THREADS
@@ -97,6 +97,7 @@ def test_cli_threads_1_gives_the_default_numbers(runner):
 
 
 def test_cli_threads_limit_holds_during_the_command_and_is_released(runner, monkeypatch):
+    monkeypatch.delenv(ENV_VAR, raising=False)  # the suite runs with SQUEALKIT_THREADS=1: the pool after the command
     seen = []
     import squealkit.stability.eigen as eigen
 

@@ -9,7 +9,7 @@ import pytest
 import xarray as xr
 from scipy import stats
 
-from squealkit._validation import InputError
+from squealkit import InputError
 from squealkit.io import load_dataset, save_dataset
 from squealkit.models import Hoffmann2002, PinOnDisc3DOF, get_preset, load_model
 from squealkit.stability import critical_friction, critical_friction_sensitivity

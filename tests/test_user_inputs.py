@@ -14,7 +14,7 @@ import warnings
 import numpy as np
 import pytest
 
-from squealkit._validation import InputError
+from squealkit import InputError
 
 #: The paper's model with one strong damper beside k1 only: stable undamped at mu = 0.3 (the undamped
 #: onset is mu = 0.4448, paper §3), unstable with its damping from mu = 0.0378 on (unequal modal damping
@@ -312,9 +312,11 @@ def test_cli_lengths_take_units_and_refuse_unit_slips(run, recording_in_um):
     assert r.exit_code == 2 and "did you mean 80 um? write '80 um'" in r.stderr, r.output
     r = run("simulate", "--mu", "0.3", "--sro-amplitude", "80 um", "--duration", "0.002", "--json")
     assert r.exit_code == 0, r.output
-    from squealkit._units import parse_quantity
+    from squealkit.models import PinOnDiscRig
 
-    assert parse_quantity("--radius", "60 mm", "m") == 0.06 and parse_quantity("q", "80 µm", "m") == 8e-5
+    # a declared length given as text with its unit, as the CLI's options and model files take it
+    assert PinOnDiscRig(pin_diameter="60 mm").pin_diameter == 0.06
+    assert PinOnDiscRig(pin_diameter="30000 µm").pin_diameter == pytest.approx(0.03, rel=1e-15)
 
 
 def test_tolerance_wavelength_takes_its_unit_and_names_a_slip(run):

@@ -124,7 +124,7 @@ FORBIDDEN_RESULT_NAMES = {"frequency": "frequency_hz", "freq_hz": "frequency_hz"
 
 def schema_problems(ds) -> list[str]:
     """How the variables and coordinates of a result Dataset break the shared schema (DESIGN.md)."""
-    from squealkit._accessor import RESULT_KINDS
+    from squealkit.io import RESULT_KINDS
 
     out = []
     if ds.attrs.get("kind") not in RESULT_KINDS:
@@ -159,7 +159,7 @@ def test_schema_check_catches_a_breach():
 @pytest.mark.parametrize("kind", ["stability_map", "modes", "critical_friction", "fe_stability_map", "fe_modes",
                                   "fe_critical_friction", "simulation", "floquet_map"])
 def test_results_follow_one_schema_and_say_their_kind(results, kind):
-    from squealkit._accessor import result_kind
+    from squealkit.io import result_kind
 
     ds = results[kind]
     assert schema_problems(ds) == []
@@ -221,7 +221,7 @@ def test_result_dataclasses_use_the_vocabulary():
 def test_files_saved_before_the_kind_attribute_still_plot(results, tmp_path):
     """An older result (``frequency``, ``omega_disc``, no ``kind``) is recognised and plots alike."""
     pytest.importorskip("matplotlib")
-    from squealkit._accessor import result_kind, upgrade_result
+    from squealkit.io import result_kind, upgrade_result
 
     new = results["fe_stability_map"]
     old = new.rename({"frequency_hz": "frequency", "disc_speed": "omega_disc"})
@@ -243,7 +243,7 @@ def test_files_saved_before_the_kind_attribute_still_plot(results, tmp_path):
 def test_limit_cycle_onset_kind_moved_out_of_the_result_kind():
     import xarray as xr
 
-    from squealkit._accessor import upgrade_result
+    from squealkit.io import upgrade_result
     from squealkit.nonlinear.continuation import _old_or_new
 
     old = xr.Dataset({"amplitude": (("point", "dof"), np.zeros((2, 1))), "stable": ("point", [True, False]),

@@ -15,6 +15,6 @@ squealkit.io          atomic saving and loading of results
 
 __version__ = "0.1.0"
 
-from ._validation import InputError
+from ._validation import InputError, InputTypeError
 
-__all__ = ["InputError", "__version__"]
+__all__ = ["InputError", "InputTypeError", "__version__"]

@@ -90,6 +90,11 @@ def validate_threads(name: str, value: object) -> int:
 def env_threads() -> int | None:
     """The thread count set by ``SQUEALKIT_THREADS``, or None if it is unset or empty.
 
+    Returns
+    -------
+    int or None
+        The count (an integer >= 1), or None.
+
     Raises
     ------
     InputError
@@ -110,6 +115,13 @@ def _pool_size() -> int:
 def thread_limit() -> int:
     """The most threads a kernel may use now (at least 1, at most numba's pool size).
 
+    The innermost :func:`limit_threads` block, else ``SQUEALKIT_THREADS``, else numba's pool.
+
+    Returns
+    -------
+    int
+        The limit in force in this thread.
+
     Raises
     ------
     InputError
@@ -127,6 +139,18 @@ def threads_for(work_items: int, *, serial_below: int = SERIAL_BELOW) -> int:
 
     One thread when ``work_items < serial_below`` (the parallel start-up would cost more
     than it saves), else :func:`thread_limit`.
+
+    Parameters
+    ----------
+    work_items : int
+        How many independent items the kernel works on (eigenvalue points, runs).
+    serial_below : int
+        Below this many items, one thread (default :data:`SERIAL_BELOW`).
+
+    Returns
+    -------
+    int
+        The number of threads to use.
     """
     return 1 if work_items < serial_below else thread_limit()
 
@@ -138,7 +162,24 @@ def limit_threads(n: int) -> Iterator[int]:
     ``n`` is capped by an enclosing ``limit_threads`` block and by numba's pool size (not
     by ``SQUEALKIT_THREADS``: an explicit limit takes precedence over the environment);
     blocks nest, an inner block can only lower the count, and each restores the previous
-    count on exit. Yields the count in force.
+    count on exit.
+
+    Parameters
+    ----------
+    n : int
+        The most threads, an integer >= 1 (else an ``InputError``).
+
+    Yields
+    ------
+    int
+        The count in force inside the block.
+
+    Examples
+    --------
+    >>> from squealkit.scale import limit_threads
+    >>> with limit_threads(1) as n:   # e.g. one Dask task per core
+    ...     n
+    1
     """
     import numba
 

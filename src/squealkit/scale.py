@@ -11,6 +11,10 @@ A lost worker is handled by the scheduler: its tasks are run again on the others
 whole), so a job survives workers that die mid-run.
 
 Install the optional part with ``pip install "squealkit[distributed]"``.
+
+On one machine, :func:`limit_threads` (or ``SQUEALKIT_THREADS``) bounds the threads of the
+compiled kernels: :func:`thread_limit` is the limit in force, :func:`threads_for` what a call
+of a given size uses.
 """
 
 from __future__ import annotations
@@ -30,10 +34,12 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from ._threads import ENV_VAR, SERIAL_BELOW, env_threads, limit_threads, thread_limit, threads_for
 from ._validation import InputError
 from .io import atomic_path, deferred_interrupts, written_path
 
-__all__ = ["LOCAL_WORKER_CONFIG", "cluster_client", "get_client", "lazy_template", "map_tasks", "stream_to_zarr"]
+__all__ = ["ENV_VAR", "LOCAL_WORKER_CONFIG", "SERIAL_BELOW", "cluster_client", "env_threads", "get_client",
+           "lazy_template", "limit_threads", "map_tasks", "stream_to_zarr", "thread_limit", "threads_for"]
 
 Progress = Callable[[int, int], None]
 
