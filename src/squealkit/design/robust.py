@@ -93,6 +93,9 @@ COUPLING_MAX = 0.5
 _FULL_MAX_DOF = 200
 #: Samples per Monte Carlo task (results never depend on it).
 _BATCH = 256
+#: Estimated Monte Carlo time [s] below which a given Dask client is not used: shipping the tasks
+#: costs more than solving them here (a sample's eigen solve is about 25 (2n)^3 flops, at 1e10 flop/s).
+_CLUSTER_MIN_SECONDS = 2.0
 #: Samples whose eigenpairs are checked in the full model (the first ones drawn, and the nominal).
 _CHECKED = 16
 #: Relative growth rate below which a mode counts as neutral, not unstable (as the stability maps).
@@ -269,8 +272,10 @@ def _montecarlo(builder: Callable, payload: Any, X: NDArray, lam0: NDArray, lo: 
 
     starts = list(range(0, X.shape[0], batch_size))
     tasks = [(builder, payload, X[a:a + batch_size], lam0, lo, hi, gamma) for a in starts]
-    # one batch is cheaper here than the round trip to a cluster: small work never pays for one
-    use = client if len(tasks) > 1 else None
+    # small work never pays for a cluster: one batch, or seconds of work, run here
+    n2 = 2 * lam0.size if payload is None else 2 * np.shape(builder(payload, X[:1]))[-1]
+    seconds = X.shape[0] * 25.0 * n2**3 / 1e10
+    use = client if len(tasks) > 1 and seconds >= _CLUSTER_MIN_SECONDS else None
     unstable = np.empty(X.shape[0], dtype=bool)
     top = np.empty(X.shape[0])
     matched = np.empty((X.shape[0], lam0.size), dtype=complex)
@@ -679,9 +684,10 @@ def robust_margins(
     xarray.Dataset
         ``kind = "robust_margins"``. Over ``mode`` (the nominal modes in the band, by frequency):
         ``frequency_hz`` [Hz], ``growth_rate`` [1/s] (at the parameters' mean); over
-        ``(method, mode)``: ``growth_rate_mean``, ``growth_rate_std`` [1/s] and
-        ``probability_unstable`` (Monte Carlo: each sample's eigenvalue matched to the nominal
-        mode by least total distance); over ``method``: ``propensity``, ``propensity_ci_lower``,
+        ``(estimator, mode)`` (``estimator`` the methods run, named as in ``method``; not called
+        ``method``, which is a keyword of ``Dataset.sel``): ``growth_rate_mean``, ``growth_rate_std``
+        [1/s] and ``probability_unstable`` (Monte Carlo: each sample's eigenvalue matched to the
+        nominal mode by least total distance); over ``estimator``: ``propensity``, ``propensity_ci_lower``,
         ``propensity_ci_upper`` and ``cost_seconds``. With the perturbation estimate:
         ``growth_rate_sensitivity`` (mode, parameter) [1/s per unit], ``perturbation_status``
         (codes of :data:`PERTURBATION_STATUS`) and ``coupling_ratio`` (mode). With Monte Carlo:
@@ -710,7 +716,7 @@ def robust_margins(
 
     >>> from squealkit.models import Hoffmann2002
     >>> ds = robust_margins(Hoffmann2002(), mu=0.18, scatter={"k3": 0.05}, samples=400, damped=False)
-    >>> ds.propensity.sel(method="montecarlo").item() < 0.05
+    >>> ds.propensity.sel(estimator="montecarlo").item() < 0.05
     True
     """
     from ..fe.model import FEModel
@@ -862,16 +868,17 @@ def _dataset(model: Any, unc: Sequence[UncertainParameter], units: Sequence[str]
         "frequency_hz": ("mode", lam0.imag / (2 * math.pi), {"units": "Hz", "long_name": "frequency (nominal)"}),
         "growth_rate": ("mode", lam0.real, {"units": "1/s", "long_name": "growth rate (nominal: the mean "
                                                                          "parameters)"}),
-        "growth_rate_mean": (("method", "mode"), per_mode["mean"], {"units": "1/s", "long_name": "mean growth rate"}),
-        "growth_rate_std": (("method", "mode"), per_mode["std"],
+        "growth_rate_mean": (("estimator", "mode"), per_mode["mean"],
+                             {"units": "1/s", "long_name": "mean growth rate"}),
+        "growth_rate_std": (("estimator", "mode"), per_mode["std"],
                             {"units": "1/s", "long_name": "standard deviation of the growth rate"}),
-        "probability_unstable": (("method", "mode"), per_mode["probability"],
+        "probability_unstable": (("estimator", "mode"), per_mode["probability"],
                                  {"units": "1", "long_name": "probability that the mode grows"}),
-        "propensity": ("method", [results[meth]["propensity"] for meth in methods],
+        "propensity": ("estimator", [results[meth]["propensity"] for meth in methods],
                        {"units": "1", "long_name": "probability that some mode in the band grows"}),
-        "propensity_ci_lower": ("method", ci[:, 0], {"units": "1", "long_name": "lower end of the interval"}),
-        "propensity_ci_upper": ("method", ci[:, 1], {"units": "1", "long_name": "upper end of the interval"}),
-        "cost_seconds": ("method", [results[meth]["seconds"] for meth in methods],
+        "propensity_ci_lower": ("estimator", ci[:, 0], {"units": "1", "long_name": "lower end of the interval"}),
+        "propensity_ci_upper": ("estimator", ci[:, 1], {"units": "1", "long_name": "upper end of the interval"}),
+        "cost_seconds": ("estimator", [results[meth]["seconds"] for meth in methods],
                          {"units": "s", "long_name": "wall time of the method (after the common set-up)"}),
         "distribution_mean": ("parameter", mean_p, {"long_name": "distribution mean (unit: parameter_unit)"}),
         "distribution_std": ("parameter", std_p, {"long_name": "distribution standard deviation"}),
@@ -902,7 +909,7 @@ def _dataset(model: Any, unc: Sequence[UncertainParameter], units: Sequence[str]
     ds = xr.Dataset(
         data,
         coords={
-            "method": ("method", np.array(methods, dtype=object)),
+            "estimator": ("estimator", np.array(methods, dtype=object)),
             "mode": ("mode", np.arange(m)),
             "parameter": ("parameter", np.array([p.name for p in unc], dtype=object)),
             "parameter_unit": ("parameter", np.array(units, dtype=object)),
