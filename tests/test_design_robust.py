@@ -111,6 +111,19 @@ def test_small_model_sensitivity_matches_the_exact_first_order_sensitivity():
         np.testing.assert_allclose(got, ref.dgrowth_rate_dp.values[order], rtol=1e-6)
 
 
+def test_small_model_propensity_agrees_with_monte_carlo():
+    # the paper's rig (Lv et al. 2013) just below its onset: the 2384 Hz mode grows in a share of samples
+    from squealkit.models import get_preset
+
+    ds = robust_margins(get_preset("lv2013"), mu=0.35, scatter={"kc": 0.1, "c1": 0.1, "c2": 0.1},
+                        samples=2000, damped=True, seed=1)
+    pert, mc = ds.sel(estimator="perturbation"), ds.sel(estimator="montecarlo")
+    assert np.all(pert.perturbation_status.values == 0)
+    assert 0.05 < pert.propensity.item() < 0.5
+    assert mc.propensity_ci_lower.item() <= pert.propensity.item() <= mc.propensity_ci_upper.item()
+    assert list(ds.parameter_unit.values) == ["N/m", "N s/m", "N s/m"]
+
+
 # ----------------------------------------------------------------------------- closed form, 2 DOF
 
 
