@@ -309,3 +309,19 @@ def test_fe_montecarlo_and_perturbation_agree_where_the_estimate_holds(brake):
 
         back = xr.Dataset.from_dict(ds.to_dict())
     assert back.attrs["kind"] == "robust_margins"
+
+
+def test_the_figure_draws_what_the_result_holds():
+    pytest.importorskip("matplotlib")
+    from squealkit.models import Hoffmann2002
+    from squealkit.plotting.design_robust import robust_margins_plot
+
+    ds = robust_margins(_two_dof(), rpm=0.0, scatter={"D1": 0.1}, samples=100)
+    ax = robust_margins_plot(ds).axes[0]
+    bars = [c for c in ax.containers if hasattr(c, "lines")]  # one errorbar per estimator
+    assert len(bars) == 2
+    np.testing.assert_allclose(bars[1].lines[0].get_ydata(), ds.growth_rate_mean.sel(estimator="perturbation"))
+    with pytest.warns(PerturbationWarning):
+        near = robust_margins(Hoffmann2002(), mu=0.23, scatter={"k3": 0.05}, samples=50, damped=False)
+    labels = robust_margins_plot(near).axes[0].get_legend_handles_labels()[1]
+    assert any("indeterminate" in label for label in labels)
