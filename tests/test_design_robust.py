@@ -212,6 +212,21 @@ def test_near_a_coalescence_the_estimate_says_indeterminate():
     assert ds.sel(estimator="montecarlo").propensity.item() > 0.5  # Monte Carlo still answers
 
 
+def test_a_close_stable_pair_is_bounded_stable_not_indeterminate():
+    # two equal oscillators (100 Hz) split by a weak spring (1e-3 k) and damped by 100 N s/m; the
+    # scattered damping diag(1, -1) couples their modes: beyond the expansion (coupling ratio 0.85),
+    # but the pair cannot reach sigma = 0 (-50 1/s, shifts of a few 1/s), so it counts as stable
+    k = (2 * math.pi * 100.0) ** 2
+    model = FEModel.from_matrices(M=np.eye(2), K1=[[k, 1e-3 * k], [1e-3 * k, k]], D1=100.0 * np.eye(2),
+                                  D4=np.diag([1.0, -1.0]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PerturbationWarning)
+        ds = robust_margins(model, rpm=0.0, scatter={"D4": 0.3}, samples=200)
+    assert np.all(ds.coupling_ratio.values > 0.5)
+    assert ds.perturbation_status.values.tolist() == [1, 1]
+    assert ds.propensity.values.tolist() == [0.0, 0.0]
+
+
 def test_bad_inputs_are_named():
     from squealkit.models import Hoffmann2002
 
