@@ -835,7 +835,8 @@ def robust_margins(
                       "basis= or a narrower scatter.", UserWarning, stacklevel=2)
     return _dataset(model, unc, units, methods, results, lam0, X, mean_p, std_p, attrs={
         "rpm": rpm if is_fe else math.nan, "disc_speed": disc_speed if is_fe else math.nan, "mu": mu,
-        "theta": theta, "tan_theta": tan_t, "band_hz": [lo, hi], "samples": samples, "seed": seed,
+        "theta": theta, "tan_theta": tan_t, "band_hz": [lo, hi], "seed": seed,
+        "samples": samples if "montecarlo" in methods else 0,
         "confidence": confidence, "basis": setup["basis"],
         "n_reduced": int(nominal_mats.shape[-1]),
         "n_full": int(model.n_dof),
