@@ -676,8 +676,8 @@ def robust_margins(
     batch_size : int
         Monte Carlo samples per task.
     client : distributed.Client, optional
-        Run the Monte Carlo batches on this Dask cluster (:mod:`squealkit.scale`); a single batch
-        runs here.
+        Run the Monte Carlo batches on this Dask cluster (:mod:`squealkit.scale`); a single batch,
+        or work estimated under 2 s, runs here (shipping it would cost more than solving it).
 
     Returns
     -------
