@@ -1,0 +1,1 @@
+"""Design of brakes against squeal: derivatives of eigenvalues, countermeasures and robust margins."""
