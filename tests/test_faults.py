@@ -177,6 +177,25 @@ def test_scheduler_that_is_not_dask_times_out_in_one_line(run, tmp_path, monkeyp
     server.close()
 
 
+def test_local_cluster_whose_workers_never_start_is_one_line(run, tmp_path, monkeypatch):
+    """A local cluster whose worker processes never come up (seen once under heavy load: a whole CI run then
+    waited in LocalCluster's start-up until it was killed) ends within the start-up bound, in one line."""
+    import dask
+
+    from squealkit import scale
+
+    preload = tmp_path / "stall.py"  # every worker stalls in its start-up, as a stuck worker would
+    preload.write_text("import time\ntime.sleep(600)\n")
+    monkeypatch.setattr(scale, "LOCAL_START_TIMEOUT", 3.0)
+    t0 = time.monotonic()
+    with dask.config.set({"distributed.worker.preload": [str(preload)]}):
+        r = run("stability", "--mu", "0:0.8:5", "--theta", "0", "--scheduler", "local",
+                "--out", str(tmp_path / "s.zarr"))
+    assert r.exit_code == 2 and "did not start within 3 s" in _one_line(r), r.output
+    assert time.monotonic() - t0 < 60
+    assert not (tmp_path / "s.zarr").exists()
+
+
 def test_scheduler_file_that_is_not_one_is_one_line(run, tmp_path):
     bad = tmp_path / "sched.json"
     for text in ('{"address": 5}', "not json", "[1, 2]"):

@@ -26,6 +26,7 @@ import os
 import shutil
 import tempfile
 import threading
+import time
 import weakref
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
@@ -65,6 +66,9 @@ def _distributed():
 #: memory as this process does (glibc's defaults: at most a few tens of MB kept for reuse).
 #: A value set in this process's environment is still passed on (the workers inherit it).
 LOCAL_WORKER_CONFIG = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
+#: Seconds a local cluster's worker process may take to start (numba and SciPy imports under load take
+#: tens of seconds; one that is not up by then is stuck).
+LOCAL_START_TIMEOUT = 180.0
 #: Local cluster -> removal of its scratch folder (see :func:`get_client`).
 _SCRATCH: dict[int, weakref.finalize] = {}
 
@@ -99,11 +103,23 @@ def get_client(scheduler: str, *, n_workers: int | None = None):
         # when the cluster is closed (cluster_client) or collected, never left in the temporary folder
         scratch = tempfile.mkdtemp(prefix="squealkit-dask-")
         # a failing task reaches the caller as its exception; the workers need not log it too
+        t0 = time.monotonic()
         try:
             with dask.config.set({**LOCAL_WORKER_CONFIG, "temporary-directory": scratch}):
+                # each worker's nanny gives up on a worker process that has not started within the bound,
+                # and the cluster's start then fails instead of waiting for ever
                 cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                                    dashboard_address=None, silence_logs=logging.CRITICAL,
-                                                   local_directory=scratch)
+                                                   local_directory=scratch,
+                                                   death_timeout=f"{LOCAL_START_TIMEOUT:g}s")
+        except Exception as e:
+            shutil.rmtree(scratch, ignore_errors=True)
+            if time.monotonic() - t0 >= LOCAL_START_TIMEOUT:
+                why = f"its {n} worker processes did not start within {LOCAL_START_TIMEOUT:g} s"
+            else:
+                why = f"{type(e).__name__}: {str(e).splitlines()[0] if str(e) else 'no message'}"
+            raise InputError(f"The local Dask cluster could not be started ({why}); run without --scheduler, "
+                             "or start a cluster and give its address.") from e
         except BaseException:
             shutil.rmtree(scratch, ignore_errors=True)
             raise
