@@ -45,10 +45,11 @@ def robust_margins_plot(ds: xr.Dataset, ax=None):
         one = ds.sel(estimator=name)
         offset = (i - (len(estimators) - 1) / 2) * 0.008 * (span or 1.0)
         lo, hi = one.propensity_ci_lower.item(), one.propensity_ci_upper.item()
+        p = one.propensity.item()
+        said = (f"propensity {p:.3f} [{lo:.3f}, {hi:.3f}]" if np.isfinite(p)
+                else "propensity indeterminate (modes near a coalescence)")
         ax.errorbar(f_khz + offset, one.growth_rate_mean.values, yerr=2 * one.growth_rate_std.values, fmt=marker,
-                    color=color, ms=5, capsize=3, lw=1.2,
-                    label=f"{label}: propensity {one.propensity.item():.3f} [{lo:.3f}, {hi:.3f}], "
-                          f"{one.cost_seconds.item():.3g} s")
+                    color=color, ms=5, capsize=3, lw=1.2, label=f"{label}: {said}, {one.cost_seconds.item():.3g} s")
     ax.plot(f_khz, ds.growth_rate.values, "x", color="k", ms=6, label="nominal")
     if "perturbation_status" in ds:
         bad = ds.perturbation_status.values == 2
