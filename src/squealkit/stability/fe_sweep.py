@@ -668,13 +668,17 @@ def _dofs_on_points(names: Any, n_pts: int) -> tuple[np.ndarray, np.ndarray, np.
     return dof, point, comp
 
 
-def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any) -> None:
+def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any, *, energy: xr.Dataset | None = None) -> None:
     """Write mode shapes with the model's mesh (a ``meshio.Mesh``) to a VTK file (needs meshio).
 
     The model's DOFs are the mesh points' displacement components in order (``n_dof = 3 x
     points`` or ``= points``), or are named ``node{k}.x``/``.y``/``.z`` (as the FE demo names
     them): such a DOF goes to point k, DOFs on other nodes (mid-side nodes) are left out and
-    points without DOFs (clamped) are at rest. Each mode becomes point data ``mode{k}_re``/``_im``.
+    points without DOFs (clamped) are at rest. Each mode k (its number in ``ds``) becomes point
+    data ``mode{k}_re``/``_im`` (the phase animation in ParaView: warp by
+    ``mode{k}_re * cos(phi) - mode{k}_im * sin(phi)``) and, with ``energy`` (its
+    :func:`~squealkit.fe.energy.mode_energy`), ``mode{k}_friction_work``: the friction work per
+    cycle through each node [J].
     """
     from ..io import atomic_path
 
@@ -694,6 +698,7 @@ def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any) -> None:
     import meshio
 
     data = {} if fe_mesh is None else {"node_label": fe_mesh.node_labels}  # the FE code's labels, for lookups
+    numbers = ds["mode"].values
     for k in range(ds.sizes["mode"]):
         for part in ("real", "imag"):
             shape = ds[f"shape_{part}"].values[:, k]
@@ -703,7 +708,16 @@ def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any) -> None:
                 dof, point, c = place
                 v = np.zeros((n_pts, 3))
                 v[point, c] = shape[dof]
-            data[f"mode{k}_{part[:2]}"] = v
+            data[f"mode{numbers[k]}_{part[:2]}"] = v
+        if energy is not None:
+            work = np.nan_to_num(energy["friction_work_dof"].sel(mode=numbers[k]).values)
+            if place is None:
+                w = work.reshape(n_pts, comp).sum(axis=1)
+            else:
+                dof, point, _c = place
+                w = np.zeros(n_pts)
+                np.add.at(w, point, work[dof])
+            data[f"mode{numbers[k]}_friction_work"] = w
     out = meshio.Mesh(mesh.points, mesh.cells, point_data=data)
     with atomic_path(path) as tmp:
         out.write(tmp, file_format="vtu")
