@@ -119,6 +119,8 @@ def render_html(sections: Sequence[Section], figures_dir: Path, *, title: str, s
                 + (", <code>.svg</code>" if (figures_dir / f"{f.stem}.svg").is_file() else "")
                 + ")</figcaption></figure>"
             )
+        for v in s.views:
+            parts.append(f"<div class='view'>{v}</div>")
         if s.data:
             files = ", ".join(f"<code>data/{html.escape(d)}</code>" for d in s.data)
             parts.append(f"<p class='meta'>Data behind these figures: {files}</p>")
