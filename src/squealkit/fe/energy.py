@@ -153,7 +153,8 @@ def mode_energy(model: Any, ds: xr.Dataset) -> xr.Dataset:
     nan = np.where(oscillating, 1.0, np.nan)
     growth = math.pi * sigma * (2.0 * omega * m + c.imag) * nan
 
-    kinetic = 0.5 * omega**2 * _per_dof(model.M, X).real
+    # the shares of omega^2/2 Re(conj(phi_i)(M phi)_i): omega^2 cancels (and real roots get shares too)
+    kinetic = 0.5 * _per_dof(model.M, X).real
     strain = 0.5 * _per_dof(model.K1, X).real
     body_vars, names, attrs = _body_shares(model, kinetic, strain)
     top = np.argmax(np.abs(kinetic), axis=0)

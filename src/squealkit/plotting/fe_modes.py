@@ -96,8 +96,8 @@ def friction_work_plot(energy: xr.Dataset, mode: int, *, fig=None):
 def mode_tracking_plot(ds: xr.Dataset, *, over: str = "mu", at: int | None = None, fig=None):
     """Frequency and growth rate of each MAC-tracked mode over friction (or disc speed).
 
-    Branches that are unstable somewhere on the line are coloured and labelled, the others
-    grey; unstable points are marked.
+    Branches that are unstable somewhere on the line are coloured and labelled by their
+    number in the map and their median frequency, the others grey; unstable points are marked.
 
     Parameters
     ----------
@@ -125,7 +125,7 @@ def mode_tracking_plot(ds: xr.Dataset, *, over: str = "mu", at: int | None = Non
     f = line["frequency_hz"].transpose(over, "mode").values
     s = line["growth_rate"].transpose(over, "mode").values
     u = line["unstable"].transpose(over, "mode").values
-    fig = fig or _figure(figsize=(7.5, 6.0), layout="constrained")
+    fig = fig or _figure(figsize=(9.0, 6.0), layout="constrained")
     ax_f, ax_s = fig.subplots(2, 1, sharex=True)
     import matplotlib
 
@@ -138,7 +138,8 @@ def mode_tracking_plot(ds: xr.Dataset, *, over: str = "mu", at: int | None = Non
         ax_s.plot(x, s[:, k], color="0.75", lw=0.8)
     for n, k in enumerate(grown):
         c = colours(n % 10)
-        label = f"mode {int(line['mode'].values[k])}"
+        # the map's branch numbers are its own: the frequency says which mode of a table it is
+        label = f"branch {int(line['mode'].values[k])}, {np.nanmedian(f[:, k]):.5g} Hz"
         ax_f.plot(x, f[:, k], color=c, lw=1.6, label=label)
         ax_s.plot(x, s[:, k], color=c, lw=1.6)
         ax_f.plot(x[u[:, k]], f[u[:, k], k], "o", color=c, ms=4)
@@ -151,7 +152,7 @@ def mode_tracking_plot(ds: xr.Dataset, *, over: str = "mu", at: int | None = Non
     ax_f.set_title(f"Modes tracked by MAC over {'friction' if over == 'mu' else 'disc speed'} at {where} "
                    f"({len(grown)} become unstable: coloured; dots: unstable)", fontsize=9)
     if len(grown):
-        ax_f.legend(fontsize=7, ncol=min(4, len(grown)), loc="best")
+        ax_f.legend(fontsize=7, ncol=1 if len(grown) <= 12 else 2, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return fig
 
 

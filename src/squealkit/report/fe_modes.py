@@ -8,7 +8,9 @@ opens offline), ``figures/`` and ``data/``:
 2. every unstable mode of each load case (disc speed x friction): frequency, growth rate,
    damping ratio, the body carrying most of its kinetic energy, the friction work per cycle;
 3. each unstable mode animated over its phase on the mesh (a 3D view to turn), and the friction
-   work per contact point on the pads: which part of the pad feeds the mode;
+   work per contact point on the pads: which part of the pad feeds the mode; every unstable
+   mode also goes to ``data/fe_modes_case<N>.vtu`` for ParaView (``mode<k>_re``/``_im``,
+   ``mode<k>_friction_work``; with meshio);
 4. the modes tracked by MAC over friction and over disc speed.
 
 The load cases come from the model file's ``[report]`` table::
@@ -230,6 +232,11 @@ def modes_step(model: Any, settings: FEReportSettings, figures: Path, data: Path
         surface = mode_surface(model, ds.sel(mode=drawn), energy.sel(mode=drawn))
         save_dataset(surface, data / f"fe_surface_case{case}.nc")
         files.append(f"fe_surface_case{case}.nc")
+        if _has_meshio():  # every unstable mode for ParaView: real and imaginary parts, friction work per node
+            from ..stability.fe_sweep import modes_to_vtk
+
+            modes_to_vtk(ds.sel(mode=unstable), model, data / f"fe_modes_case{case}.vtu", energy=energy)
+            files.append(f"fe_modes_case{case}.vtu")
         drawn_work = energy.friction_work_drawn.sel(mode=drawn).values
         total_work = energy.friction_work.sel(mode=drawn).values
         off_mesh += list(1.0 - drawn_work / total_work)
@@ -269,6 +276,14 @@ def modes_step(model: Any, settings: FEReportSettings, figures: Path, data: Path
     table = Table("Unstable modes per load case (most unstable first)", header, tuple(rows))
     return Section("fe_modes", "Unstable modes", tuple(paragraphs), tables=(table,), figures=tuple(figs),
                    data=tuple(files), numbers={**numbers, "unstable": float(n_unstable)}, views=tuple(views))
+
+
+def _has_meshio() -> bool:
+    try:
+        import meshio  # noqa: F401
+    except ImportError:  # optional: the VTK files need it
+        return False
+    return True
 
 
 def tracking_step(model: Any, settings: FEReportSettings, figures: Path, data: Path) -> Section:
