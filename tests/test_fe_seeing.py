@@ -248,3 +248,22 @@ def test_report_of_an_fe_model_shows_every_unstable_mode_offline(run, brake_toml
     toml.write_text(text + "\n[report]\nrpms = 1000\n")
     bad = run("report", "--config", str(toml), "--out-dir", str(tmp_path / "bad"))
     assert bad.exit_code == 2 and "unknown key 'rpms'" in bad.stderr
+
+
+def test_modes_to_pvd_is_the_phase_animation_as_a_time_series(brake, modes, energy, tmp_path):
+    meshio = pytest.importorskip("meshio")
+    import xml.etree.ElementTree as ET
+
+    from squealkit.stability.fe_sweep import modes_to_vtk
+
+    u = modes.mode.values[modes.unstable.values]
+    modes_to_vtk(modes.sel(mode=u), brake, tmp_path / "m.pvd", energy=energy, n_frames=4)
+    sets = ET.parse(tmp_path / "m.pvd").getroot().findall(".//DataSet")
+    assert [float(d.get("timestep")) for d in sets] == [0.0, 90.0, 180.0, 270.0]
+    f0, f1 = (meshio.read(tmp_path / d.get("file")) for d in sets[:2])
+    k = u[0]
+    # phase 0 is Re(phi), phase 90 deg is Re(j phi) = -Im(phi): the two parts of the complex shape
+    modes_to_vtk(modes.sel(mode=u), brake, tmp_path / "m.vtu")
+    parts = meshio.read(tmp_path / "m.vtu")
+    np.testing.assert_allclose(f0.point_data[f"mode{k}"], parts.point_data[f"mode{k}_re"], atol=1e-12)
+    np.testing.assert_allclose(f1.point_data[f"mode{k}"], -parts.point_data[f"mode{k}_im"], atol=1e-12)

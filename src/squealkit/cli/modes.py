@@ -32,7 +32,8 @@ from ._options import (
               help="Use the critical friction at this theta instead of --mu, and mark the mode that loses stability.")
 @fe_options(rpm_help="Disc speed [rpm] (one value). FE models only.", single_rpm=True)
 @click.option("--vtk", "vtk_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="FE models with a mesh: write the unstable mode shapes with the mesh (.vtu, needs meshio).")
+              help="FE models with a mesh: write the unstable mode shapes with the mesh (.vtu: real and imaginary "
+              "parts; .pvd: the phase animation as a time series; needs meshio).")
 @output_options()
 def modes(preset, config, sets, mu, theta_deg, damped, at_onset, rpm_spec, band_spec, method, n_modes, vtk_path,
           as_json, out_path, plot_path) -> None:
@@ -73,7 +74,7 @@ def modes(preset, config, sets, mu, theta_deg, damped, at_onset, rpm_spec, band_
     friction_work and net_work [J per cycle at 1 m largest amplitude; null for a
     real root]; the shapes go to --out FILE.nc (shape_real, shape_imag over dof x
     mode) and, with a mesh, --vtk (every unstable mode: real and imaginary parts,
-    friction work per node).
+    friction work per node; FILE.pvd: the phase animation as a ParaView time series).
       squealkit modes --config brake.toml --rpm 60 --mu 1.0 --out modes.nc
     """
     from .._validation import InputError, validate_finite
@@ -150,7 +151,7 @@ def _modes_fe(model, fe, mu, theta, at_onset, vtk_path, as_json, out_path, plot_
 
     if plot_path is not None:
         raise InputError("--plot is not available for FE modes yet; use --out FILE.nc or --vtk.")
-    check_output_suffix(vtk_path, (".vtu",), "--vtk")
+    check_output_suffix(vtk_path, (".vtu", ".pvd"), "--vtk")
     if len(fe["rpm"]) != 1:
         raise InputError("modes takes one disc speed: --rpm RPM.")
     rpm = float(fe["rpm"][0])

@@ -668,7 +668,8 @@ def _dofs_on_points(names: Any, n_pts: int) -> tuple[np.ndarray, np.ndarray, np.
     return dof, point, comp
 
 
-def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any, *, energy: xr.Dataset | None = None) -> None:
+def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any, *, energy: xr.Dataset | None = None,
+                 n_frames: int = 16) -> None:
     """Write mode shapes with the model's mesh (a ``meshio.Mesh``) to a VTK file (needs meshio).
 
     The model's DOFs are the mesh points' displacement components in order (``n_dof = 3 x
@@ -679,6 +680,11 @@ def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any, *, energy: xr.Datase
     ``mode{k}_re * cos(phi) - mode{k}_im * sin(phi)``) and, with ``energy`` (its
     :func:`~squealkit.fe.energy.mode_energy`), ``mode{k}_friction_work``: the friction work per
     cycle through each node [J].
+
+    A path ending in ``.pvd`` writes the phase animation as a time series instead: a ParaView
+    collection whose time is the phase [deg], over ``n_frames`` files in the folder
+    ``<stem>_frames`` beside it, each with the displacement ``mode{k}`` = Re(phi e^{j phase})
+    of every mode (and its friction work): open the ``.pvd``, Warp By Vector, press play.
     """
     from ..io import atomic_path
 
@@ -718,6 +724,33 @@ def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any, *, energy: xr.Datase
                 w = np.zeros(n_pts)
                 np.add.at(w, point, work[dof])
             data[f"mode{numbers[k]}_friction_work"] = w
-    out = meshio.Mesh(mesh.points, mesh.cells, point_data=data)
-    with atomic_path(path) as tmp:
-        out.write(tmp, file_format="vtu")
+    from pathlib import Path
+
+    target = Path(path)
+    if target.suffix.lower() != ".pvd":
+        out = meshio.Mesh(mesh.points, mesh.cells, point_data=data)
+        with atomic_path(target) as tmp:
+            out.write(tmp, file_format="vtu")
+        return
+    if isinstance(n_frames, bool) or int(n_frames) != n_frames or n_frames < 2:
+        raise InputError(f"Parameter n_frames={n_frames!r} must be an integer >= 2.")
+    from ..io import outputs_together
+
+    frames = target.with_name(f"{target.stem}_frames")
+    phases = 360.0 * np.arange(int(n_frames)) / int(n_frames)
+    rows = []
+    with outputs_together():
+        with atomic_path(frames, directory=True) as stage:
+            stage.mkdir()
+            for i, phase in enumerate(phases):
+                turn = np.exp(1j * math.radians(phase))
+                frame = {k: v for k, v in data.items() if not k.endswith(("_re", "_im"))}
+                for k in numbers:
+                    frame[f"mode{k}"] = (data[f"mode{k}_re"] + 1j * data[f"mode{k}_im"]).__mul__(turn).real
+                meshio.Mesh(mesh.points, mesh.cells, point_data=frame).write(stage / f"frame{i:03d}.vtu",
+                                                                            file_format="vtu")
+                rows.append(f'    <DataSet timestep="{phase:g}" part="0" file="{frames.name}/frame{i:03d}.vtu"/>')
+        text = ('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
+                + "\n".join(rows) + "\n  </Collection>\n</VTKFile>\n")
+        with atomic_path(target) as tmp:
+            Path(tmp).write_text(text)
