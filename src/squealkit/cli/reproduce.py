@@ -181,4 +181,5 @@ def _fe_report(ctx: click.Context, model, config, out_dir: Path, force: bool, qu
                    "numbers": result.numbers()})
         return
     click.echo(f"wrote {result.report} ({result.seconds:.1f} s)")
-    click.echo(f"figures: {result.out_dir / 'figures'} (PNG and SVG); data: {result.out_dir / 'data'} (netCDF)")
+    click.echo(f"figures: {result.out_dir / 'figures'} ({'PNG' if quick else 'PNG and SVG'}); data: "
+               f"{result.out_dir / 'data'} (netCDF, VTK)")

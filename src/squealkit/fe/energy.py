@@ -37,16 +37,17 @@ The kinetic energy ``omega^2/2 Re(conj(phi_i)(M phi)_i)`` and the strain energy
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.sparse as sp
-import xarray as xr
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from .._validation import InputError, validate_model
 from .surface import bodies, dof_places, mesh_of
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 __all__ = ["friction_parts", "mode_energy"]
 
@@ -134,6 +135,8 @@ def mode_energy(model: Any, ds: xr.Dataset) -> xr.Dataset:
     >>> bool(np.allclose(e.net_work, e.growth_work))
     True
     """
+    import xarray as xr
+
     validate_model(model, kind="fe")
     X = _shapes(ds)
     if X.shape[0] != model.n_dof:
@@ -230,6 +233,7 @@ def _dominant(names: tuple[str, ...], share: NDArray) -> str:
 
 def _contact_points(model: Any, w_dof: NDArray, modes: NDArray) -> xr.Dataset:
     """The friction work summed per node and over coincident nodes (contact pairs), on the mesh."""
+    import xarray as xr
     points, _cells = mesh_of(model)
     dof, point, _comp = dof_places(model)
     active = np.flatnonzero(np.nan_to_num(np.abs(w_dof[dof])).max(axis=1, initial=0.0) > 0.0)
@@ -279,6 +283,8 @@ def _coincident_groups(xyz: NDArray, tol: float) -> NDArray[np.int64]:
     """A group number per point, points within ``tol`` of each other in one group (numbered 0..g-1)."""
     if not len(xyz):
         return np.zeros(0, dtype=np.int64)
+    from scipy.spatial import cKDTree
+
     pairs = cKDTree(xyz).query_pairs(tol, output_type="ndarray")
     from scipy.sparse.csgraph import connected_components
 

@@ -46,6 +46,17 @@ def _base_kind(kind: str) -> str:
 def mesh_of(model: Any) -> tuple[NDArray[np.float64], tuple[tuple[str, NDArray[np.int64]], ...]]:
     """The mesh of an FE model as ``(points (p, 3), cells)``.
 
+    Parameters
+    ----------
+    model : FEModel
+        A model with a mesh (an :class:`~squealkit.fe.mesh.FEMesh` or a ``meshio.Mesh``).
+
+    Returns
+    -------
+    points : ndarray, shape (p, 3)
+    cells : tuple of (str, ndarray)
+        Cell type and point indices of each element block.
+
     Raises
     ------
     InputError
@@ -81,6 +92,15 @@ def dof_places(model: Any) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArra
     points' components in order (``n_dof`` = 1, 2 or 3 times the points). DOFs on nodes
     outside the mesh (mid-side nodes of a vertex-only mesh, rotations) are left out.
 
+    Parameters
+    ----------
+    model : FEModel
+        A model with a mesh.
+
+    Returns
+    -------
+    dof, point, component : ndarray of int64, each shape (d,)
+
     Raises
     ------
     InputError
@@ -109,6 +129,17 @@ def surface_triangles(points: NDArray, cells: Any) -> NDArray[np.int64]:
     Faces of solid elements that belong to one element only (the boundary), split into
     triangles; shell elements (``triangle``, ``quad``) are surface already. Line elements are
     left out. Higher-order elements contribute their corner nodes.
+
+    Parameters
+    ----------
+    points : ndarray, shape (p, 3)
+        The mesh's points (only their number matters).
+    cells : sequence of (str, ndarray)
+        Element blocks: meshio cell type and point indices, VTK node order.
+
+    Returns
+    -------
+    ndarray of int64, shape (t, 3)
     """
     faces: list[NDArray[np.int64]] = []  # quads as (f, 4), triangles padded with -1
     for kind, conn in cells:
