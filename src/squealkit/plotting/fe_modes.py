@@ -160,8 +160,8 @@ def mode_view(surface: xr.Dataset, mode: int, *, energy: xr.Dataset | None = Non
               amplification: float | None = None):
     """One complex mode animated over its phase on the mesh: a 3D plotly figure the reader can turn.
 
-    Frame k shows ``Re(phi e^{j 2 pi k / n_frames})`` added to the mesh (coloured by the
-    displacement's size at that phase); play/pause buttons and a phase slider step through
+    Frame k shows ``Re(phi e^{j 2 pi k / n_frames})`` added to the mesh, coloured by the
+    amplitude of the motion at each point; play/pause buttons and a phase slider step through
     the cycle. With ``energy``, the friction work per contact point is drawn as coloured
     markers (red: fed into the mode). Coordinates are sent as float32.
 
@@ -196,15 +196,16 @@ def mode_view(surface: xr.Dataset, mode: int, *, energy: xr.Dataset | None = Non
     f32 = np.float32
 
     def frame(phase: float) -> dict[str, Any]:
-        u = (shape * np.exp(1j * phase)).real * amp
-        pos = (xyz + u).astype(f32)
-        return {"x": pos[:, 0], "y": pos[:, 1], "z": pos[:, 2],
-                "intensity": (np.linalg.norm(u, axis=1) / amp).astype(f32)}
+        pos = (xyz + (shape * np.exp(1j * phase)).real * amp).astype(f32)
+        return {"x": pos[:, 0], "y": pos[:, 1], "z": pos[:, 2]}
 
     phases = 2 * math.pi * np.arange(n_frames) / n_frames
+    # coloured by the amplitude of the motion at each point (the envelope over the cycle): where the mode lives
+    envelope = np.linalg.norm(np.abs(shape), axis=1)
+    envelope = (envelope / (envelope.max() or 1.0)).astype(f32)
     mesh = go.Mesh3d(**frame(0.0), i=tri[:, 0].astype(np.int32), j=tri[:, 1].astype(np.int32),
-                     k=tri[:, 2].astype(np.int32), colorscale="Viridis", cmin=0.0, cmax=1.0,
-                     colorbar={"title": {"text": "|u| / max", "side": "right"}, "x": 1.0, "len": 0.6},
+                     k=tri[:, 2].astype(np.int32), intensity=envelope, colorscale="Viridis", cmin=0.0, cmax=1.0,
+                     colorbar={"title": {"text": "amplitude / max", "side": "right"}, "x": 1.0, "len": 0.6},
                      flatshading=True, lighting={"ambient": 0.55, "diffuse": 0.7}, name="mode shape",
                      hoverinfo="skip")
     data = [mesh]

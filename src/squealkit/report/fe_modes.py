@@ -44,6 +44,8 @@ from .document import FigureRef, Section, Table
 
 __all__ = ["FEReportSettings", "fe_report", "load_fe_report_settings"]
 
+#: Coordinates per 3D view [bytes] (before base64): frames are dropped (down to 6 a cycle) to stay near it.
+_VIEW_BYTES = 1_500_000
 _KEYS = ("rpm", "mu", "eigen_band", "method", "mu_sweep", "rpm_sweep", "max_views", "n_frames")
 
 
@@ -240,8 +242,10 @@ def modes_step(model: Any, settings: FEReportSettings, figures: Path, data: Path
         drawn_work = energy.friction_work_drawn.sel(mode=drawn).values
         total_work = energy.friction_work.sel(mode=drawn).values
         off_mesh += list(1.0 - drawn_work / total_work)
+        # a sane page: about _VIEW_BYTES of coordinates per view (float32 x, y, z per point and frame)
+        frames = int(np.clip(_VIEW_BYTES // (12 * surface.sizes["surface_point"]), 6, settings.n_frames))
         for k in drawn:
-            fig = mode_view(surface, int(k), energy=energy, n_frames=settings.n_frames)
+            fig = mode_view(surface, int(k), energy=energy, n_frames=min(frames, settings.n_frames))
             views.append(f"<p class='meta'>Load case {case} ({rpm:g} rpm, mu {mu:g}), mode {int(k)}: press play, "
                          "or drag the slider through the phase; the friction work per contact point is in the "
                          "legend (click to show).</p>"
