@@ -655,19 +655,6 @@ def fe_modes(
     )
 
 
-def _dofs_on_points(names: Any, n_pts: int) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """(DOF index, point, component) of DOFs named ``node{k}.x/y/z`` with k a mesh point; None if none are."""
-    import re
-
-    pattern = re.compile(r"^node(\d+)\.([xyz])$")
-    hits = [(i, int(m.group(1)), "xyz".index(m.group(2))) for i, name in enumerate(names or ())
-            if (m := pattern.match(str(name))) and int(m.group(1)) < n_pts]
-    if not hits:
-        return None
-    dof, point, comp = (np.array(x, dtype=np.int64) for x in zip(*hits, strict=True))
-    return dof, point, comp
-
-
 def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any, *, energy: xr.Dataset | None = None,
                  n_frames: int = 16) -> None:
     """Write mode shapes with the model's mesh (a ``meshio.Mesh``) to a VTK file (needs meshio).
@@ -691,38 +678,25 @@ def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any, *, energy: xr.Datase
     if model.mesh is None:
         raise InputError("The model has no mesh: mode shapes can be exported only with one.")
     from ..fe.mesh import FEMesh
+    from ..fe.surface import dof_places
 
     fe_mesh = model.mesh if isinstance(model.mesh, FEMesh) else None
     mesh = fe_mesh.to_meshio() if fe_mesh is not None else model.mesh
     n_pts = len(mesh.points)
-    place = (fe_mesh.dof_points(model.dof_map) if fe_mesh is not None and model.dof_map is not None
-             else _dofs_on_points(model.dof_names, n_pts))
-    comp = model.n_dof // n_pts if n_pts and model.n_dof % n_pts == 0 else 0
-    if place is None and comp not in (1, 2, 3):
-        raise InputError(f"The model's {model.n_dof} DOFs do not map onto the mesh's {n_pts} points "
-                         "(nor are they named node{k}.x/y/z).")
+    dof, point, c = dof_places(model)  # one placement for every view of the modes on the mesh
     import meshio
 
     data = {} if fe_mesh is None else {"node_label": fe_mesh.node_labels}  # the FE code's labels, for lookups
     numbers = ds["mode"].values
     for k in range(ds.sizes["mode"]):
         for part in ("real", "imag"):
-            shape = ds[f"shape_{part}"].values[:, k]
-            if place is None:
-                v = shape.reshape(n_pts, comp)
-            else:
-                dof, point, c = place
-                v = np.zeros((n_pts, 3))
-                v[point, c] = shape[dof]
+            v = np.zeros((n_pts, 3))
+            v[point, c] = ds[f"shape_{part}"].values[dof, k]
             data[f"mode{numbers[k]}_{part[:2]}"] = v
         if energy is not None:
             work = np.nan_to_num(energy["friction_work_dof"].sel(mode=numbers[k]).values)
-            if place is None:
-                w = work.reshape(n_pts, comp).sum(axis=1)
-            else:
-                dof, point, _c = place
-                w = np.zeros(n_pts)
-                np.add.at(w, point, work[dof])
+            w = np.zeros(n_pts)
+            np.add.at(w, point, work[dof])
             data[f"mode{numbers[k]}_friction_work"] = w
     from pathlib import Path
 
