@@ -112,7 +112,7 @@ class Section:
     numbers : dict of str to float
         The computed numbers the text quotes, for tests and ``--json``.
     views : tuple of str
-        Self-contained HTML blocks placed after the figures (interactive 3D views: no
+        Self-contained HTML blocks placed before the figures (interactive 3D views: no
         network needed to show them).
     """
 

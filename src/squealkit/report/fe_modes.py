@@ -196,14 +196,14 @@ def model_step(model: Any, settings: FEReportSettings) -> Section:
                    numbers={"n_dof": float(model.n_dof)})
 
 
-def modes_step(model: Any, settings: FEReportSettings, figures: Path, data: Path) -> Section:
-    """Every unstable mode of each load case: the table, the friction work maps and the 3D views."""
+def modes_step(model: Any, settings: FEReportSettings, figures: Path, data: Path) -> list[Section]:
+    """Every unstable mode of each load case: the table, then a section per drawn mode (3D view, friction work)."""
     from ..fe.energy import mode_energy
     from ..fe.surface import mode_surface
     from ..plotting.fe_modes import friction_work_plot, mode_view
     from ..stability import fe_modes
 
-    rows, figs, views, files, off_mesh = [], [], [], [], []
+    rows, files, off_mesh, mode_sections = [], [], [], []
     numbers: dict[str, float] = {}
     meshed = model.mesh is not None
     plotly_js: bool | str = True  # inlined once, in the first view: the report opens offline
@@ -245,19 +245,28 @@ def modes_step(model: Any, settings: FEReportSettings, figures: Path, data: Path
         # a sane page: about _VIEW_BYTES of coordinates per view (float32 x, y, z per point and frame)
         frames = int(np.clip(_VIEW_BYTES // (12 * surface.sizes["surface_point"]), 6, settings.n_frames))
         for k in drawn:
+            e = energy.sel(mode=k)
             fig = mode_view(surface, int(k), energy=energy, n_frames=min(frames, settings.n_frames))
-            views.append(f"<p class='meta'>Load case {case} ({rpm:g} rpm, mu {mu:g}), mode {int(k)}: press play, "
-                         "or drag the slider through the phase; the friction work per contact point is in the "
-                         "legend (click to show).</p>"
-                         + fig.to_html(full_html=False, include_plotlyjs=plotly_js, auto_play=False,
-                                       config={"displaylogo": False, "responsive": True}))
+            view = fig.to_html(full_html=False, include_plotlyjs=plotly_js, auto_play=False,
+                               config={"displaylogo": False, "responsive": True})
             plotly_js = False
+            figs: tuple[FigureRef, ...] = ()
             if "friction_work_contact" in energy:
                 stem = f"fe_friction_work_case{case}_mode{int(k)}"
                 _save_fig(friction_work_plot(energy, int(k)), figures, stem)
-                figs.append(FigureRef(stem, f"Load case {case} ({rpm:g} rpm, mu {mu:g}), mode {int(k)}: friction "
-                                            "work per cycle on each pad's contact surface (red: energy fed into "
-                                            "the mode)."))
+                figs = (FigureRef(stem, f"Load case {case} ({rpm:g} rpm, mu {mu:g}), mode {int(k)}: friction work "
+                                        "per cycle on each pad's contact surface (red: energy fed into the mode)."),)
+            text = (f"{float(e.frequency_hz):.6g} Hz, growth rate {float(e.growth_rate):+.4g} 1/s (damping ratio "
+                    f"{float(e.damping_ratio):.3g}) at {rpm:g} rpm and mu {mu:g}; carried by "
+                    f"{e.dominant_body.values!s}; friction feeds in {float(e.friction_work):.3g} J per cycle "
+                    "at 1 m largest amplitude. Press play or drag the slider through the phase; drag the view to "
+                    "turn it; the friction work per contact point is in the legend (click to show).")
+            mode_sections.append(Section(f"fe_case{case}_mode{int(k)}",
+                                         f"Case {case}, mode {int(k)}: {float(e.frequency_hz):.5g} Hz",
+                                         (text,), figures=figs, views=(view,),
+                                         numbers={"frequency_hz": float(e.frequency_hz),
+                                                  "growth_rate": float(e.growth_rate),
+                                                  "friction_work": float(e.friction_work)}))
     paragraphs = [
         f"{n_unstable} unstable mode{'s' if n_unstable != 1 else ''} over {len(settings.load_cases)} load "
         f"case{'s' if len(settings.load_cases) != 1 else ''}. Friction work W is the energy the friction forces "
@@ -268,8 +277,8 @@ def modes_step(model: Any, settings: FEReportSettings, figures: Path, data: Path
     ]
     if meshed and n_unstable:
         paragraphs.append(f"Each unstable mode (up to {settings.max_views} per load case, the most unstable first) "
-                          "is drawn below on the mesh's surface, animated over its phase (a 3D view: drag to turn, "
-                          "scroll to zoom), with a map of its friction work on the pads.")
+                          "has a section below: its shape on the mesh's surface animated over its phase (a 3D view: "
+                          "drag to turn, scroll to zoom) and a map of its friction work on the pads.")
     if off_mesh and max(off_mesh) > 1e-6:
         paragraphs.append(f"Up to {100 * max(off_mesh):.0f} % of a mode's friction work acts on nodes that are not "
                           "points of the mesh (e.g. the mid-side nodes of quadratic elements when the mesh holds "
@@ -278,8 +287,9 @@ def modes_step(model: Any, settings: FEReportSettings, figures: Path, data: Path
     header = ("case", "rpm", "mu", "mode", "f [Hz]", "sigma [1/s]", "zeta", "dominant component",
               "kinetic share (%)", "W_friction [J]", "residual")
     table = Table("Unstable modes per load case (most unstable first)", header, tuple(rows))
-    return Section("fe_modes", "Unstable modes", tuple(paragraphs), tables=(table,), figures=tuple(figs),
-                   data=tuple(files), numbers={**numbers, "unstable": float(n_unstable)}, views=tuple(views))
+    summary = Section("fe_modes", "Unstable modes", tuple(paragraphs), tables=(table,), data=tuple(files),
+                      numbers={**numbers, "unstable": float(n_unstable)})
+    return [summary, *mode_sections]
 
 
 def _has_meshio() -> bool:
@@ -363,7 +373,7 @@ def fe_report(
     out = Path(out_dir)
     check_output(out, directory=True, force=force, names=REPORT_FILES)
     settings = settings or load_fe_report_settings(config, model, quick=quick)
-    steps: list[tuple[str, Callable[[Path, Path], Section]]] = [
+    steps: list[tuple[str, Callable[[Path, Path], Section | list[Section]]]] = [
         ("FE model", lambda fig, dat: model_step(model, settings)),
         ("unstable modes", lambda fig, dat: modes_step(model, settings, fig, dat)),
         ("tracking", lambda fig, dat: tracking_step(model, settings, fig, dat)),
@@ -377,7 +387,8 @@ def fe_report(
         for i, (name, step) in enumerate(steps):
             if progress is not None:
                 progress(i, len(steps), name)
-            sections.append(step(figures, data))
+            made = step(figures, data)
+            sections.extend(made if isinstance(made, list) else [made])
         if progress is not None:
             progress(len(steps), len(steps), "report")
         subtitle = f"FE model, {model.n_dof} DOFs" + (f", from {Path(config).name}" if config is not None else "")
