@@ -159,7 +159,8 @@ def mode_energy(model: Any, ds: xr.Dataset) -> xr.Dataset:
     # the shares of omega^2/2 Re(conj(phi_i)(M phi)_i): omega^2 cancels (and real roots get shares too)
     kinetic = 0.5 * _per_dof(model.M, X).real
     strain = 0.5 * _per_dof(model.K1, X).real
-    body_vars, names, attrs = _body_shares(model, kinetic, strain)
+    parts = bodies(model) if getattr(model, "mesh", None) is not None else None
+    body_vars, names, attrs = _body_shares(model, parts, kinetic, strain)
     top = np.argmax(np.abs(kinetic), axis=0)
     body_vars["dominant_dof"] = ("mode", np.array([ds["dof"].values[i] for i in top], dtype=str),
                                  {"long_name": "DOF with the largest kinetic energy"})
@@ -189,19 +190,18 @@ def mode_energy(model: Any, ds: xr.Dataset) -> xr.Dataset:
                **attrs},
     )
     if getattr(model, "mesh", None) is not None:
-        out = out.merge(_contact_points(model, w_dof, out["mode"].values))
+        out = out.merge(_contact_points(model, parts, w_dof, out["mode"].values))
         out.attrs["kind"] = "fe_mode_energy"
     return out
 
 
-def _body_shares(model: Any, kinetic: NDArray, strain: NDArray) -> tuple[dict, tuple[str, ...], dict]:
+def _body_shares(model: Any, b: Any, kinetic: NDArray, strain: NDArray) -> tuple[dict, tuple[str, ...], dict]:
     """Kinetic and strain energy shares per body (and off the mesh), the dominant body of each mode."""
-    if getattr(model, "mesh", None) is None:
+    if b is None:
         of = np.zeros(model.n_dof, dtype=np.int64)
         names: tuple[str, ...] = ("model",)
         attrs = {"bodies": "model: no mesh, one body"}
     else:
-        b = bodies(model)
         of = b.of_dof
         names = b.names
         attrs = {"bodies": "; ".join(b.describe(k) for k in range(len(b.names)))}
@@ -231,7 +231,7 @@ def _dominant(names: tuple[str, ...], share: NDArray) -> str:
     return " + ".join(names[i] for i in np.flatnonzero(share >= top - _TIE * abs(top)))
 
 
-def _contact_points(model: Any, w_dof: NDArray, modes: NDArray) -> xr.Dataset:
+def _contact_points(model: Any, b: Any, w_dof: NDArray, modes: NDArray) -> xr.Dataset:
     """The friction work summed per node and over coincident nodes (contact pairs), on the mesh."""
     import xarray as xr
     points, _cells = mesh_of(model)
@@ -254,7 +254,6 @@ def _contact_points(model: Any, w_dof: NDArray, modes: NDArray) -> xr.Dataset:
     first[groups[::-1]] = np.arange(groups.size)[::-1]
     # the surface it is drawn on: the smaller body of the pair (the pad, not the disc)
     body_of_point = np.full(len(points), -1, dtype=np.int64)
-    b = bodies(model)
     body_of_point[point] = b.of_dof[dof]
     member_body = body_of_point[pts]
     surface = np.full(n_g, -1, dtype=np.int64)
