@@ -267,3 +267,16 @@ def test_modes_to_pvd_is_the_phase_animation_as_a_time_series(brake, modes, ener
     parts = meshio.read(tmp_path / "m.vtu")
     np.testing.assert_allclose(f0.point_data[f"mode{k}"], parts.point_data[f"mode{k}_re"], atol=1e-12)
     np.testing.assert_allclose(f1.point_data[f"mode{k}"], -parts.point_data[f"mode{k}_im"], atol=1e-12)
+
+
+def test_cli_modes_vtk_without_a_mesh_is_refused_before_the_solve(run, tmp_path, monkeypatch):
+    import scipy.io
+
+    from squealkit import stability
+
+    scipy.io.mmwrite(tmp_path / "M.mtx", np.eye(2))
+    scipy.io.mmwrite(tmp_path / "K1.mtx", 4.0 * np.eye(2))
+    (tmp_path / "b.toml").write_text('model = "fe"\n[fe]\nfiles = { M = "M.mtx", K1 = "K1.mtx" }\n')
+    monkeypatch.setattr(stability, "fe_modes", lambda *a, **k: pytest.fail("solved before refusing"))
+    r = run("modes", "--config", str(tmp_path / "b.toml"), "--rpm", "60", "--vtk", str(tmp_path / "m.pvd"))
+    assert r.exit_code == 2 and "has no mesh" in r.stderr and len(r.stderr.strip().splitlines()) == 1

@@ -152,6 +152,10 @@ def _modes_fe(model, fe, mu, theta, at_onset, vtk_path, as_json, out_path, plot_
     if plot_path is not None:
         raise InputError("--plot is not available for FE modes yet; use --out FILE.nc or --vtk.")
     check_output_suffix(vtk_path, (".vtu", ".pvd"), "--vtk")
+    if vtk_path is not None:  # before the solve, not after it
+        from ..fe.surface import dof_places
+
+        dof_places(model)  # no mesh, or DOFs that are not on it: one line
     if len(fe["rpm"]) != 1:
         raise InputError("modes takes one disc speed: --rpm RPM.")
     rpm = float(fe["rpm"][0])
