@@ -280,3 +280,13 @@ def test_cli_modes_vtk_without_a_mesh_is_refused_before_the_solve(run, tmp_path,
     monkeypatch.setattr(stability, "fe_modes", lambda *a, **k: pytest.fail("solved before refusing"))
     r = run("modes", "--config", str(tmp_path / "b.toml"), "--rpm", "60", "--vtk", str(tmp_path / "m.pvd"))
     assert r.exit_code == 2 and "has no mesh" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_energy_and_surface_results_follow_the_schema_and_draw_themselves(brake, modes, energy):
+    from test_vocabulary import schema_problems
+
+    u = modes.mode.values[modes.unstable.values]
+    srf = mode_surface(brake, modes.sel(mode=u), energy.sel(mode=u))
+    assert schema_problems(energy) == [] and schema_problems(srf) == []
+    fig = energy.squeal.plot(mode=int(u[0]))  # the friction work map, by the result's kind
+    assert "Friction work" in fig._suptitle.get_text()
