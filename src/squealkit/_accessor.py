@@ -32,6 +32,8 @@ PLOTS: dict[str, tuple[str, str, str]] = {
     "fe_map": ("fe", "fe_map_plot", "ax"),
     "fe_growth": ("fe", "fe_growth_plot", "fig"),
     "modes": ("modes", "modes_plot", "fig"),
+    "mode_tracking": ("fe_modes", "mode_tracking_plot", "fig"),
+    "friction_work": ("fe_modes", "friction_work_plot", "fig"),
     "fig3": ("transient", "fig3_plot", "ax"),
     "fig4": ("transient", "fig4_plot", "ax"),
     "envelope": ("transient", "envelope_plot", "ax"),
@@ -55,7 +57,7 @@ _RESULTS: dict[str, tuple[Callable[[xr.Dataset], bool], tuple[str, ...]]] = {
     "floquet_map": (lambda ds: "floquet_exponent" in ds.data_vars, ("floquet",)),
     # squealkit.stability.fe_stability_map (stability_map of an FEModel)
     "fe_stability_map": (lambda ds: "max_growth_rate" in ds.data_vars and {"rpm", "mu", "mode"} <= set(ds.dims),
-                         ("fe_map", "fe_growth")),
+                         ("fe_map", "fe_growth", "mode_tracking")),
     # squealkit.stability.stability_map
     "stability_map": (lambda ds: "max_growth_rate" in ds.data_vars and {"mu", "theta", "mode"} <= set(ds.dims),
                       ("stability_map", "fig2", "root_locus")),
@@ -66,6 +68,8 @@ _RESULTS: dict[str, tuple[Callable[[xr.Dataset], bool], tuple[str, ...]]] = {
               ("modes",)),
     # squealkit.stability.fe_modes
     "fe_modes": (lambda ds: False, ("modes",)),
+    # squealkit.fe.mode_energy: friction work per contact point (ds.squeal.plot(mode=k))
+    "fe_mode_energy": (lambda ds: False, ("friction_work",)),
     # squealkit.transient.simulate (one run)
     "simulation": (_is_simulation, ("fig4", "fig3", "envelope")),
     # squealkit.nonlinear.limit_cycle_branch (and _slope)
@@ -82,6 +86,7 @@ _RESULTS: dict[str, tuple[Callable[[xr.Dataset], bool], tuple[str, ...]]] = {
 _UNPLOTTED: dict[str, str] = {
     "critical_friction": "squealkit.stability.critical_friction_curve (and CriticalFriction.to_dataset)",
     "fe_critical_friction": "squealkit.stability.fe_critical_friction",
+    "fe_mode_surface": "squealkit.fe.mode_surface (a 3D view: squealkit.plotting.fe_modes.mode_view)",
     "eigenvalue_sensitivity": "squealkit.stability.eigenvalue_sensitivity",
     "reduced_sweep": "squealkit.solvers.reduced_sweep",
     "simulation_batch": "squealkit.transient.simulate_batch",

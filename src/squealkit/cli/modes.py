@@ -32,7 +32,8 @@ from ._options import (
               help="Use the critical friction at this theta instead of --mu, and mark the mode that loses stability.")
 @fe_options(rpm_help="Disc speed [rpm] (one value). FE models only.", single_rpm=True)
 @click.option("--vtk", "vtk_path", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="FE models with a mesh: write the unstable mode shapes with the mesh (.vtu, needs meshio).")
+              help="FE models with a mesh: write the unstable mode shapes with the mesh (.vtu: real and imaginary "
+              "parts; .pvd: the phase animation as a time series; needs meshio).")
 @output_options()
 def modes(preset, config, sets, mu, theta_deg, damped, at_onset, rpm_spec, band_spec, method, n_modes, vtk_path,
           as_json, out_path, plot_path) -> None:
@@ -63,10 +64,17 @@ def modes(preset, config, sets, mu, theta_deg, damped, at_onset, rpm_spec, band_
     \b
     FE models (model = "fe" in --config): the modes at one disc speed --rpm and
     --mu (default mu_ref; or --at-onset: mu_crit at that speed) in --eigen-band, with
-    their backward errors; the table lists the 12 least stable. --json keys: rpm,
-    mu, theta_deg, verdict, method, n_dof, and modes (eigenvalue [re, im],
-    frequency_hz, growth_rate, damping_ratio, unstable, residual); the shapes go
-    to --out FILE.nc (shape_real, shape_imag over dof x mode) and, with a mesh, --vtk.
+    their backward errors; the table lists every unstable mode (then the least
+    stable others, 12 rows at least) with its dominant component (the body of the
+    mesh, or without a mesh the DOF, carrying most kinetic energy) and the
+    friction work per cycle. --json keys: rpm, mu, theta_deg, verdict, method,
+    n_dof, bodies, modes and unstable_modes (the unstable ones, most unstable
+    first), each with eigenvalue [re, im], frequency_hz, growth_rate,
+    damping_ratio, unstable, residual, dominant_component, kinetic_share,
+    friction_work and net_work [J per cycle at 1 m largest amplitude; null for a
+    real root]; the shapes go to --out FILE.nc (shape_real, shape_imag over dof x
+    mode) and, with a mesh, --vtk (every unstable mode: real and imaginary parts,
+    friction work per node; FILE.pvd: the phase animation as a ParaView time series).
       squealkit modes --config brake.toml --rpm 60 --mu 1.0 --out modes.nc
     """
     from .._validation import InputError, validate_finite
@@ -136,13 +144,18 @@ def _modes_fe(model, fe, mu, theta, at_onset, vtk_path, as_json, out_path, plot_
     import numpy as np
 
     from .._validation import InputError, validate_finite
+    from ..fe.energy import mode_energy
     from ..io import save_dataset
     from ..stability import fe_critical_friction, fe_modes
     from ..stability.fe_sweep import modes_to_vtk
 
     if plot_path is not None:
         raise InputError("--plot is not available for FE modes yet; use --out FILE.nc or --vtk.")
-    check_output_suffix(vtk_path, (".vtu",), "--vtk")
+    check_output_suffix(vtk_path, (".vtu", ".pvd"), "--vtk")
+    if vtk_path is not None:  # before the solve, not after it
+        from ..fe.surface import dof_places
+
+        dof_places(model)  # no mesh, or DOFs that are not on it: one line
     if len(fe["rpm"]) != 1:
         raise InputError("modes takes one disc speed: --rpm RPM.")
     rpm = float(fe["rpm"][0])
@@ -155,24 +168,62 @@ def _modes_fe(model, fe, mu, theta, at_onset, vtk_path, as_json, out_path, plot_
         mu = float(crit.mu_critical.values[0])
     mu = model.mu_ref if mu is None else validate_finite("--mu", mu)
     ds = fe_modes(model, rpm, mu, theta, **kw)
+    energy = mode_energy(model, ds)
     if out_path is not None:
         save_dataset(ds, out_path)
     if vtk_path is not None:
-        modes_to_vtk(ds.isel(mode=np.flatnonzero(ds.unstable.values)), model, vtk_path)
-    rows = [{"mode": int(k), "eigenvalue": [float(ds.eigenvalue_real[k]), float(ds.eigenvalue_imag[k])],
-             "frequency_hz": float(ds.frequency_hz[k]), "growth_rate": float(ds.growth_rate[k]),
-             "damping_ratio": float(ds.damping_ratio[k]), "unstable": bool(ds.unstable[k]),
-             "residual": float(ds.residual[k])} for k in range(ds.sizes["mode"])]
+        modes_to_vtk(ds.isel(mode=np.flatnonzero(ds.unstable.values)), model, vtk_path, energy=energy)
+    rows = [_fe_row(ds, energy, k, model.mesh is not None) for k in range(ds.sizes["mode"])]
+    unstable = sorted((r for r in rows if r["unstable"]), key=lambda r: -r["growth_rate"])
     if as_json:
         emit_json({"rpm": rpm, "mu": mu, "theta_deg": math.degrees(theta), "verdict": ds.attrs["verdict"],
-                   "method": ds.attrs["method"], "n_dof": model.n_dof, "modes": rows})
+                   "method": ds.attrs["method"], "n_dof": model.n_dof, "bodies": energy.attrs["bodies"],
+                   "modes": rows, "unstable_modes": unstable})
         return
     click.echo(f"model: fe, {model.n_dof} DOFs, {rpm:g} rpm, mu = {mu:g}, theta = {math.degrees(theta):g} deg, "
-               f"method {ds.attrs['method']}: {ds.attrs['verdict']}, {len(rows)} modes")
-    click.echo(f"{'mode':>5} {'f [Hz]':>12} {'sigma [1/s]':>13} {'zeta':>10} {'residual':>10}")
-    for r in sorted(rows, key=lambda r: -r["growth_rate"])[:12]:
+               f"method {ds.attrs['method']}: {ds.attrs['verdict']}, {len(rows)} modes, {len(unstable)} unstable")
+    if model.mesh is not None:
+        click.echo(f"bodies: {energy.attrs['bodies']}")
+    stable = sorted((r for r in rows if not r["unstable"]), key=lambda r: -r["growth_rate"])
+    shown = unstable + stable[:max(0, _FE_ROWS - len(unstable))]
+    click.echo(f"{'mode':>5} {'f [Hz]':>12} {'sigma [1/s]':>13} {'zeta':>10} {'W_friction [J]':>15} {'residual':>9}"
+               "  dominant component (kinetic energy share)")
+    for r in shown:
+        work = "-" if r["friction_work"] is None else f"{r['friction_work']:.4g}"
         click.echo(f"{r['mode']:5d} {r['frequency_hz']:12.6g} {r['growth_rate']:13.6g} {r['damping_ratio']:10.3g} "
-                   f"{r['residual']:10.2g}" + ("  <- UNSTABLE" if r["unstable"] else ""))
+                   f"{work:>15} {r['residual']:9.2g}  {r['dominant_component']} ({_pct(r['kinetic_share'])})"
+                   + ("  <- UNSTABLE" if r["unstable"] else ""))
+    if len(stable) > len(shown) - len(unstable):
+        click.echo(f"(every unstable mode listed; {len(stable) - (len(shown) - len(unstable))} more stable modes in "
+                   "--json or --out)")
     for label, path in (("dataset", out_path), ("mode shapes", vtk_path)):
         if path is not None:
             click.echo(f"wrote {label}: {path}")
+
+
+#: Rows of the FE modes table: every unstable mode, then the least stable others up to this many.
+_FE_ROWS = 12
+
+
+def _fe_row(ds, energy, k: int, meshed: bool) -> dict:
+    """One FE mode as plain Python: eigenvalue, residual, dominant component, friction work."""
+    def finite(x) -> float | None:
+        v = float(x)
+        return v if math.isfinite(v) else None
+
+    if meshed:
+        component = str(energy.dominant_body.values[k])
+        lead = component.split(" + ")[0]
+        kinetic = float(energy.kinetic_share.isel(mode=k).sel(body=lead)) if lead else float("nan")
+    else:  # no mesh, no bodies: the DOF that moves most
+        component, kinetic = str(energy.dominant_dof.values[k]), float(energy.dominant_dof_share.values[k])
+    return {"mode": int(k), "eigenvalue": [float(ds.eigenvalue_real[k]), float(ds.eigenvalue_imag[k])],
+            "frequency_hz": float(ds.frequency_hz[k]), "growth_rate": float(ds.growth_rate[k]),
+            "damping_ratio": float(ds.damping_ratio[k]), "unstable": bool(ds.unstable[k]),
+            "residual": float(ds.residual[k]), "dominant_component": component,
+            "kinetic_share": kinetic if math.isfinite(kinetic) else None,
+            "friction_work": finite(energy.friction_work[k]), "net_work": finite(energy.net_work[k])}
+
+
+def _pct(x: float | None) -> str:
+    return "-" if x is None else f"{x:.0%}"

@@ -105,6 +105,14 @@ def report(ctx: click.Context, preset, config, sets, out_dir: Path, force: bool,
     analysed with the options of 'squealkit analyze' (--tacho, --scale,
     --unit, the squeal criteria...).
 
+    An FE model (model = "fe" in --config) gets the report of its unstable
+    modes instead: every unstable mode per load case (frequency, growth rate,
+    damping ratio, dominant body, friction work), each animated on the mesh in
+    a 3D view (self-contained, offline), the friction work on the pads, and the
+    modes tracked over friction and disc speed; the load cases come from the
+    file's [report] table (rpm, mu, eigen_band, method, mu_sweep, rpm_sweep,
+    max_views, n_frames; see squealkit.report.fe_modes).
+
     \b
     Example:
       squealkit report --config myrig.toml --out-dir myrig-report
@@ -115,12 +123,15 @@ def report(ctx: click.Context, preset, config, sets, out_dir: Path, force: bool,
           --displacement 1 --scale 0=120 --tacho 2 --radius 0.05
     """
     from .._validation import InputError
+    from ..fe.model import FEModel
     from ..models import load_rig, parse_assignments
     from ..models._base import damping_names
     from ..report import RecordingSpec
     from ._options import PENDING_NOTES, build_model_from_options
 
-    model = build_model_from_options(preset, config, sets)
+    model = build_model_from_options(preset, config, sets, allow_fe=True)
+    if isinstance(model, FEModel):
+        return _fe_report(ctx, model, config, out_dir, force, quick, as_json)
     rig = load_rig(config, parse_assignments(sets)) if config is not None else None
     if damping_names(model):
         PENDING_NOTES.append(f"squealkit: the report's eigenvalue map, critical friction and run-out tolerance "
@@ -142,3 +153,33 @@ def report(ctx: click.Context, preset, config, sets, out_dir: Path, force: bool,
         options, scale_map, unit_map = recording_kwargs_from_options(rpm=rpm, scales=scales, units=units, **analysis)
         spec = RecordingSpec(recording, mic, displacement, rpm, radius, fs, scale_map, unit_map, options)
     _run(out_dir, model=model, rig=rig, recording=spec, quick=quick, as_json=as_json, force=force, config=config)
+
+
+def _fe_report(ctx: click.Context, model, config, out_dir: Path, force: bool, quick: bool, as_json: bool) -> None:
+    """``squealkit report`` on an FE model: the report of its unstable modes."""
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from .._validation import InputError
+    from ..report.fe_modes import fe_report, load_fe_report_settings
+
+    given = [p.opts[0] for p in ctx.command.params if p.name not in ("preset", "config", "sets", "out_dir", "force",
+                                                                      "quick", "as_json")
+             and ctx.get_parameter_source(p.name) == click.core.ParameterSource.COMMANDLINE]
+    if given:
+        raise InputError(f"{given[0]} applies to the paper's model and its recording, not to an FE model; "
+                         "an FE report takes its load cases from the [report] table of --config.")
+    settings = load_fe_report_settings(config, model, quick=quick)  # a bad [report] table: one line, before work
+    progress = Progress(TextColumn("{task.description:<28}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
+                        TimeElapsedColumn(), console=Console(stderr=True), disable=as_json, transient=True)
+    with progress:
+        task = progress.add_task("starting", total=None)
+        result = fe_report(out_dir, model, settings=settings, config=config, quick=quick, force=force,
+                           progress=lambda d, t, n: progress.update(task, completed=d, total=t, description=n))
+    if as_json:
+        emit_json({"out_dir": str(result.out_dir), "report": str(result.report), "seconds": result.seconds,
+                   "numbers": result.numbers()})
+        return
+    click.echo(f"wrote {result.report} ({result.seconds:.1f} s)")
+    click.echo(f"figures: {result.out_dir / 'figures'} ({'PNG' if quick else 'PNG and SVG'}); data: "
+               f"{result.out_dir / 'data'} (netCDF, VTK)")

@@ -111,6 +111,9 @@ class Section:
         Files the section wrote to ``data/``.
     numbers : dict of str to float
         The computed numbers the text quotes, for tests and ``--json``.
+    views : tuple of str
+        Self-contained HTML blocks placed before the figures (interactive 3D views: no
+        network needed to show them).
     """
 
     key: str
@@ -121,3 +124,4 @@ class Section:
     figures: tuple[FigureRef, ...] = ()
     data: tuple[str, ...] = ()
     numbers: dict[str, float] = field(default_factory=dict)
+    views: tuple[str, ...] = ()

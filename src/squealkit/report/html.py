@@ -110,6 +110,8 @@ def render_html(sections: Sequence[Section], figures_dir: Path, *, title: str, s
             parts.append(_comparisons(s.comparisons))
         for t in s.tables:
             parts.append(_table(t))
+        for v in s.views:
+            parts.append(f"<div class='view'>{v}</div>")
         for f in s.figures:
             png = (figures_dir / f"{f.stem}.png").read_bytes()
             uri = "data:image/png;base64," + base64.b64encode(png).decode("ascii")

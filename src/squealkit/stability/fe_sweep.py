@@ -655,55 +655,76 @@ def fe_modes(
     )
 
 
-def _dofs_on_points(names: Any, n_pts: int) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """(DOF index, point, component) of DOFs named ``node{k}.x/y/z`` with k a mesh point; None if none are."""
-    import re
-
-    pattern = re.compile(r"^node(\d+)\.([xyz])$")
-    hits = [(i, int(m.group(1)), "xyz".index(m.group(2))) for i, name in enumerate(names or ())
-            if (m := pattern.match(str(name))) and int(m.group(1)) < n_pts]
-    if not hits:
-        return None
-    dof, point, comp = (np.array(x, dtype=np.int64) for x in zip(*hits, strict=True))
-    return dof, point, comp
-
-
-def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any) -> None:
+def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any, *, energy: xr.Dataset | None = None,
+                 n_frames: int = 16) -> None:
     """Write mode shapes with the model's mesh (a ``meshio.Mesh``) to a VTK file (needs meshio).
 
     The model's DOFs are the mesh points' displacement components in order (``n_dof = 3 x
     points`` or ``= points``), or are named ``node{k}.x``/``.y``/``.z`` (as the FE demo names
     them): such a DOF goes to point k, DOFs on other nodes (mid-side nodes) are left out and
-    points without DOFs (clamped) are at rest. Each mode becomes point data ``mode{k}_re``/``_im``.
+    points without DOFs (clamped) are at rest. Each mode k (its number in ``ds``) becomes point
+    data ``mode{k}_re``/``_im`` (the phase animation in ParaView: warp by
+    ``mode{k}_re * cos(phi) - mode{k}_im * sin(phi)``) and, with ``energy`` (its
+    :func:`~squealkit.fe.energy.mode_energy`), ``mode{k}_friction_work``: the friction work per
+    cycle through each node [J].
+
+    A path ending in ``.pvd`` writes the phase animation as a time series instead: a ParaView
+    collection whose time is the phase [deg], over ``n_frames`` files in the folder
+    ``<stem>_frames`` beside it, each with the displacement ``mode{k}`` = Re(phi e^{j phase})
+    of every mode (and its friction work): open the ``.pvd``, Warp By Vector, press play.
     """
     from ..io import atomic_path
 
     if model.mesh is None:
         raise InputError("The model has no mesh: mode shapes can be exported only with one.")
     from ..fe.mesh import FEMesh
+    from ..fe.surface import dof_places
 
     fe_mesh = model.mesh if isinstance(model.mesh, FEMesh) else None
     mesh = fe_mesh.to_meshio() if fe_mesh is not None else model.mesh
     n_pts = len(mesh.points)
-    place = (fe_mesh.dof_points(model.dof_map) if fe_mesh is not None and model.dof_map is not None
-             else _dofs_on_points(model.dof_names, n_pts))
-    comp = model.n_dof // n_pts if n_pts and model.n_dof % n_pts == 0 else 0
-    if place is None and comp not in (1, 2, 3):
-        raise InputError(f"The model's {model.n_dof} DOFs do not map onto the mesh's {n_pts} points "
-                         "(nor are they named node{k}.x/y/z).")
+    dof, point, c = dof_places(model)  # one placement for every view of the modes on the mesh
     import meshio
 
     data = {} if fe_mesh is None else {"node_label": fe_mesh.node_labels}  # the FE code's labels, for lookups
+    numbers = ds["mode"].values
     for k in range(ds.sizes["mode"]):
         for part in ("real", "imag"):
-            shape = ds[f"shape_{part}"].values[:, k]
-            if place is None:
-                v = shape.reshape(n_pts, comp)
-            else:
-                dof, point, c = place
-                v = np.zeros((n_pts, 3))
-                v[point, c] = shape[dof]
-            data[f"mode{k}_{part[:2]}"] = v
-    out = meshio.Mesh(mesh.points, mesh.cells, point_data=data)
-    with atomic_path(path) as tmp:
-        out.write(tmp, file_format="vtu")
+            v = np.zeros((n_pts, 3))
+            v[point, c] = ds[f"shape_{part}"].values[dof, k]
+            data[f"mode{numbers[k]}_{part[:2]}"] = v
+        if energy is not None:
+            work = np.nan_to_num(energy["friction_work_dof"].sel(mode=numbers[k]).values)
+            w = np.zeros(n_pts)
+            np.add.at(w, point, work[dof])
+            data[f"mode{numbers[k]}_friction_work"] = w
+    from pathlib import Path
+
+    target = Path(path)
+    if target.suffix.lower() != ".pvd":
+        out = meshio.Mesh(mesh.points, mesh.cells, point_data=data)
+        with atomic_path(target) as tmp:
+            out.write(tmp, file_format="vtu")
+        return
+    if isinstance(n_frames, bool) or int(n_frames) != n_frames or n_frames < 2:
+        raise InputError(f"Parameter n_frames={n_frames!r} must be an integer >= 2.")
+    from ..io import outputs_together
+
+    frames = target.with_name(f"{target.stem}_frames")
+    phases = 360.0 * np.arange(int(n_frames)) / int(n_frames)
+    rows = []
+    with outputs_together():
+        with atomic_path(frames, directory=True) as stage:
+            stage.mkdir()
+            for i, phase in enumerate(phases):
+                turn = np.exp(1j * math.radians(phase))
+                frame = {k: v for k, v in data.items() if not k.endswith(("_re", "_im"))}
+                for k in numbers:
+                    frame[f"mode{k}"] = (data[f"mode{k}_re"] + 1j * data[f"mode{k}_im"]).__mul__(turn).real
+                meshio.Mesh(mesh.points, mesh.cells, point_data=frame).write(stage / f"frame{i:03d}.vtu",
+                                                                            file_format="vtu")
+                rows.append(f'    <DataSet timestep="{phase:g}" part="0" file="{frames.name}/frame{i:03d}.vtu"/>')
+        text = ('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
+                + "\n".join(rows) + "\n  </Collection>\n</VTKFile>\n")
+        with atomic_path(target) as tmp:
+            Path(tmp).write_text(text)
