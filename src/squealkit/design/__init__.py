@@ -1,0 +1,27 @@
+"""Designing squeal out: derivatives of the unstable modes w.r.t. declared design parameters,
+and the countermeasure study built on them.
+
+- :mod:`~squealkit.design.parameters`: design parameters declared in the model file's ``[design]``
+  table (a scale of a matrix part or of a node set, a point mass, a small model's parameter), each
+  with its derivative matrices ``dM, dC, dK``;
+- :mod:`~squealkit.design.derivatives`: ``d lambda / d p`` of every unstable mode from its right
+  and left eigenvectors, for full and reduced FE models and small models;
+- :mod:`~squealkit.design.countermeasures`: which change removes which mode (ranking, the smallest
+  stabilising change confirmed by solves) and a design-of-experiments sweep on the reduced model.
+"""
+
+from .countermeasures import STATUS, countermeasures
+from .derivatives import eigen_derivatives, eigenvalue_derivatives, left_eigenvectors
+from .parameters import DESIGN_PARTS, DesignParameter, design_parameters, load_design
+
+__all__ = [
+    "DESIGN_PARTS",
+    "STATUS",
+    "DesignParameter",
+    "countermeasures",
+    "design_parameters",
+    "eigen_derivatives",
+    "eigenvalue_derivatives",
+    "left_eigenvectors",
+    "load_design",
+]
