@@ -41,6 +41,8 @@ PLOTS: dict[str, tuple[str, str, str]] = {
     "uncertainty": ("uncertainty", "uncertainty_plot", "fig"),
     "propensity": ("uncertainty", "propensity_plot", "ax"),
     "sensitivity": ("uncertainty", "sensitivity_plot", "ax"),
+    "pareto": ("design", "pareto_plot", "ax"),
+    "countermeasures": ("design", "countermeasures_plot", "ax"),
 }
 
 
@@ -75,6 +77,10 @@ _RESULTS: dict[str, tuple[Callable[[xr.Dataset], bool], tuple[str, ...]]] = {
     ),
     # squealkit.uncertainty.squeal_propensity
     "propensity": (lambda ds: "probability_unstable" in ds.data_vars, ("uncertainty", "propensity", "sensitivity")),
+    # squealkit.design.doe_sweep
+    "doe_sweep": (lambda ds: {"change_size", "pareto"} <= set(ds.data_vars), ("pareto",)),
+    # squealkit.design.countermeasures
+    "countermeasures": (lambda ds: {"effect", "predicted_change"} <= set(ds.data_vars), ("countermeasures",)),
 }
 
 
@@ -83,6 +89,7 @@ _UNPLOTTED: dict[str, str] = {
     "critical_friction": "squealkit.stability.critical_friction_curve (and CriticalFriction.to_dataset)",
     "fe_critical_friction": "squealkit.stability.fe_critical_friction",
     "eigenvalue_sensitivity": "squealkit.stability.eigenvalue_sensitivity",
+    "eigen_derivatives": "squealkit.design.eigen_derivatives",
     "reduced_sweep": "squealkit.solvers.reduced_sweep",
     "simulation_batch": "squealkit.transient.simulate_batch",
 }

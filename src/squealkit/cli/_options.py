@@ -633,7 +633,7 @@ OPTIONS: dict[str, Term] = {
 #: Old spellings kept for one release: (command, old option) -> the option that now says it. Each
 #: is a hidden alias that prints one deprecation line on stderr (:func:`deprecated_alias`).
 DEPRECATED_OPTIONS: dict[tuple[str, str], str] = {
-    **{(c, "--band"): "--eigen-band" for c in ("stability", "critical", "modes", "tolerance")},
+    **{(c, "--band"): "--eigen-band" for c in ("stability", "critical", "modes", "tolerance", "design")},
     ("synth", "--tacho-ppr"): "--pulses-per-rev",
     **{(c, "--out"): "--out-dir" for c in ("campaign", "fe-demo", "report", "reproduce")},
 }

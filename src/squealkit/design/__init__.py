@@ -7,11 +7,14 @@ and the countermeasure study built on them.
 - :mod:`~squealkit.design.derivatives`: ``d lambda / d p`` of every unstable mode from its right
   and left eigenvectors, for full and reduced FE models and small models;
 - :mod:`~squealkit.design.countermeasures`: which change removes which mode (ranking, the smallest
-  stabilising change confirmed by solves) and a design-of-experiments sweep on the reduced model.
+  stabilising change confirmed by solves);
+- :mod:`~squealkit.design.doe`: a design-of-experiments sweep on the reduced model, every reduced
+  eigenpair checked by its backward error in the full model.
 """
 
 from .countermeasures import STATUS, countermeasures
 from .derivatives import eigen_derivatives, eigenvalue_derivatives, left_eigenvectors
+from .doe import doe_points, doe_sweep
 from .parameters import DESIGN_PARTS, DesignParameter, design_parameters, load_design
 
 __all__ = [
@@ -20,6 +23,8 @@ __all__ = [
     "DesignParameter",
     "countermeasures",
     "design_parameters",
+    "doe_points",
+    "doe_sweep",
     "eigen_derivatives",
     "eigenvalue_derivatives",
     "left_eigenvectors",
