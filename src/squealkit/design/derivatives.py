@@ -50,9 +50,10 @@ __all__ = ["eigen_derivatives", "eigenvalue_derivatives", "left_eigenvectors"]
 def left_eigenvectors(M: Any, C: Any, K: Any, lam: Any, *, iterations: int = 2) -> NDArray[np.complex128]:
     """Left eigenvectors ``y`` (``y^H P(lambda) = 0``) of the given eigenvalues, by inverse iteration.
 
-    One LU of ``P(lambda_k)`` per eigenvalue (singular only to rounding at an eigenvalue, so a
-    solve with its adjoint is dominated by the left null vector): ``iterations`` solves with
-    ``P^H``, from a fixed start vector.
+    One LU of ``P(s_k)`` per eigenvalue, at ``s_k = lambda_k (1 + 1e-10 (1 + j))`` (an exact eigenvalue
+    would make it exactly singular), so that a solve with its adjoint is dominated by the left null
+    vector: ``iterations`` solves with ``P^H`` from a fixed start vector leave the other left
+    eigenvectors in it at ``(1e-10 |lambda| / gap)^iterations``.
 
     Parameters
     ----------
@@ -73,7 +74,8 @@ def left_eigenvectors(M: Any, C: Any, K: Any, lam: Any, *, iterations: int = 2) 
     start = rng.standard_normal(n) + 1j * rng.standard_normal(n)
     Y = np.empty((n, lam.size), dtype=complex)
     for k, lk in enumerate(lam):
-        P = lk * lk * M + lk * C + K
+        sk = lk + 1e-10 * (abs(lk) or 1.0) * (1 + 1j)
+        P = sk * sk * M + sk * C + K
         y = start / np.linalg.norm(start)
         if sp.issparse(P):
             lu = spla.splu(sp.csc_matrix(P, dtype=complex))

@@ -46,6 +46,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from .._threads import honour_thread_limit
 from .._validation import InputError
 from ..fe.model import FE_MATRICES, FEModel
 
@@ -112,6 +113,7 @@ class DesignParameter:
                 "unit": self.unit, "n_dofs": None if self.dofs is None else len(self.dofs)}
 
     # -- the model at a value ---------------------------------------------------------------
+    @honour_thread_limit
     def apply(self, model: Any, value: float) -> Any:
         """The model with this parameter at ``value`` (``model`` is the nominal one).
 
