@@ -181,13 +181,18 @@ def test_reduced_derivatives_are_those_of_the_reduced_model(demo):
         assert abs(exact - fd) <= 1e-5 * abs(exact)
 
 
-def test_predicted_stabilising_change_is_confirmed_by_a_solve(demo):
+@pytest.fixture(scope="module")
+def demo_countermeasures(demo):
+    return countermeasures(demo, {"friction": "KR", "damping": "D1"}, RPM, MU, method="sparse", band=BAND)
+
+
+def test_predicted_stabilising_change_is_confirmed_by_a_solve(demo, demo_countermeasures):
     """Done-when of issue #26: on the built-in brake the first-order stabilising change of the friction
     scale is confirmed by solves within 5 %, and an independent full solve at the confirmed value finds
     the mode on the stability boundary."""
     from squealkit.stability import fe_modes
 
-    ds = countermeasures(demo, {"friction": "KR", "damping": "D1"}, RPM, MU, method="sparse", band=BAND)
+    ds = demo_countermeasures
     assert ds.attrs["kind"] == "countermeasures" and ds.sizes["mode"] == 1
     assert list(ds.status.values[0]) == ["confirmed", "confirmed"]
     assert float(ds.prediction_error.sel(parameter="friction")[0]) < 0.05
@@ -201,6 +206,18 @@ def test_predicted_stabilising_change_is_confirmed_by_a_solve(demo):
         check = fe_modes(params[0].apply(demo, value + shift), RPM, MU, method="sparse", band=BAND)
         near = np.abs(check.frequency_hz.values - f0) < 0.02 * f0
         assert (check.growth_rate.values[near].max() < 0) == stable
+
+
+def test_report_sentences_are_made_from_the_numbers(demo_countermeasures):
+    from squealkit.report.design import design_section, design_sentences
+
+    ds = demo_countermeasures
+    text = design_sentences(ds)
+    change = float(ds.confirmed_change.sel(parameter="friction")[0])
+    assert text[0].startswith("1 mode is unstable at 500 rpm and mu = 0.6")
+    assert f"is removed at the smallest cost by changing friction by {change:+.3g}" in text[1]
+    assert "also removed by changing damping by +" in text[1]
+    assert design_section(ds).tables[0].rows[0][1] == "friction"
 
 
 def test_doe_on_the_reduced_model_matches_full_solves(demo):

@@ -44,10 +44,11 @@ _WINDOW = 0.1
 _DENSE_CONFIRM = 300
 
 
-def _track(modes: _Modes, lam_pred: complex, x_ref: Any) -> int | None:
+def _track(modes: _Modes, lam_pred: complex, x_ref: Any, move: float) -> int | None:
     """The mode of ``modes`` that continues the reference mode: the best MAC with ``x_ref`` among the
-    eigenvalues within the window around the predicted ``lam_pred``."""
-    near = np.abs(modes.lam - lam_pred) <= _WINDOW * abs(lam_pred)
+    eigenvalues within the window around the predicted ``lam_pred`` (a tenth of it, plus the
+    predicted ``move`` of the eigenvalue: first order may be off by as much)."""
+    near = np.abs(modes.lam - lam_pred) <= _WINDOW * abs(lam_pred) + move
     if not near.any():
         return None
     score = mac(modes.X, np.asarray(x_ref).reshape(-1, 1))[:, 0]
@@ -105,7 +106,7 @@ def _stabilise(model: Any, param: DesignParameter, pt: _Point, lam0: complex, x0
         lam_pred = lam + dl * (p_new - p) if math.isfinite(abs(dl)) else lam
         modes = solve(changed, lam_pred)
         out["solves"] += 1
-        j = _track(modes, lam_pred, x)
+        j = _track(modes, lam_pred, x, abs(lam_pred - lam))
         if j is None:
             return {**out, "status": "lost"}
         step, p, lam, x = p_new - p, p_new, complex(modes.lam[j]), modes.X[:, j]

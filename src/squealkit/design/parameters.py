@@ -82,6 +82,8 @@ class DesignParameter:
         The size of change the countermeasure study compares parameters by (> 0).
     unit : str
         Unit of the parameter (``"1"`` for a scale, ``"kg"`` for a mass).
+    spec : dict
+        The declaration as given in the ``[design]`` table.
     """
 
     name: str
