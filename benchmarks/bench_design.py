@@ -5,7 +5,7 @@ Run:  PYTHONPATH=src python benchmarks/bench_design.py [--n-theta 16] [--points 
 Design parameters: the pad and disc stiffness K1 (scale 0.8-1.4), the friction stiffness KR
 (0.6-1.1) and the material damping D1 (1-3), a full factorial grid of ``--points`` values each
 (10: 1000 points) at 500 rpm, mu = 0.6, 1-16 kHz. The DOE is :func:`squealkit.design.doe_sweep`
-(a POD basis at the nominal design, enriched with the full model's modes at the 8 corners, then
+(a POD basis at the nominal design, enriched with what it misses of the full model's modes at the 8 corners, then
 one small dense solve per point with the exact full-model backward error of every pair). In the
 same run ``--full-points`` points of the grid, drawn at random (seed 1), are solved in the full
 model by the sparse band solver (:func:`squealkit.solvers.band.band_eigs`); their mean time gives
@@ -53,7 +53,7 @@ def main() -> None:
         ds = doe_sweep(model, table, values, rpm, mu, band=band)
         c_doe, w_doe = time.process_time() - c0, time.perf_counter() - w0
         n = ds.sizes["point"]
-        print(f"DOE: {n} points, basis {ds.attrs['basis_size']} vectors (pod + 8 corners), "
+        print(f"DOE: {n} points, basis {ds.attrs['basis_size']} vectors (pod + what 8 corners add), "
               f"CPU {c_doe:.1f} s, wall {w_doe:.1f} s ({1e3 * c_doe / n:.1f} ms CPU a point, offline included); "
               f"trusted points {int(ds.all_trusted.sum())}/{n}, largest residual {float(ds.max_residual.max()):.2g}, "
               f"unstable points {int((ds.n_unstable > 0).sum())}, Pareto points {int(ds.pareto.sum())}")

@@ -170,7 +170,7 @@ def scheduler_option(f: F) -> F:
 
 
 #: Subcommands that work on FE models (model = "fe").
-FE_COMMANDS = ("stability", "critical", "modes", "tolerance")
+FE_COMMANDS = ("stability", "critical", "modes", "tolerance", "design")
 
 #: One-line notes for stderr, printed by the CLI's main only after the command succeeded (so a
 #: user error stays one line).

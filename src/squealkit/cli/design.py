@@ -129,7 +129,7 @@ def design(preset, config, sets, mu, theta_deg, rpm_spec, band_spec, method, n_m
         click.echo(f"{'f [Hz]':>9} {'sigma':>9} {'parameter':>12} {'rank':>4} {'effect/step':>12} {'predicted':>10} "
                    f"{'confirmed':>10}  status")
         for r in rows:
-            click.echo(f"{r['frequency_hz']:9.1f} {r['growth_rate']:9.4g} {r['parameter']:>12} {r['rank']:4d} "
+            click.echo(f"{r['frequency_hz']:9.4g} {r['growth_rate']:9.4g} {r['parameter']:>12} {r['rank']:4d} "
                        f"{r['effect']:12.4g} {r['predicted_change']:10.4g} {r['confirmed_change']:10.4g}  "
                        f"{r['status']}")
     if out_dir is not None:

@@ -82,7 +82,7 @@ def design_sentences(ds: Any) -> list[str]:
         f, s = float(ds["frequency_hz"].values[i]), float(ds["growth_rate"].values[i])
         conf = ds["confirmed_change"].values[i]
         steps = np.abs(conf) / step
-        head = f"The mode at {f:.0f} Hz (growth rate {s:.3g} 1/s)"
+        head = f"The mode at {f:.4g} Hz (growth rate {s:.3g} 1/s)"
         if np.isfinite(steps).any():
             j = int(np.nanargmin(steps))
             pred = float(ds["predicted_change"].values[i, j])
