@@ -55,9 +55,9 @@ def test_json_gives_the_unstable_modes_with_their_sensitivities(brake, study):
     # this low-frequency mode of the (scaled) NLEVP brake is not removed by any one of these changes: less
     # friction or more stiffness turn it into a diverging real root, more damping only slows it
     # (a dense solve at 2x D1 still has sigma = 5.3e-4 1/s); the study says so rather than claim a fix
-    from squealkit.design import STATUS
+    from squealkit.design import COUNTERMEASURE_STATUS
 
-    assert {r["status"] for r in rows} <= set(STATUS) - {"confirmed"}
+    assert {r["status"] for r in rows} <= set(COUNTERMEASURE_STATUS) - {"confirmed"}
     damping = next(r for r in rows if r["parameter"] == "damping")
     assert damping["predicted_change"] > 0 and 0 < damping["confirmed_growth_rate"] < mode["growth_rate"]
 

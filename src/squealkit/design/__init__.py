@@ -12,14 +12,14 @@ and the countermeasure study built on them.
   eigenpair checked by its backward error in the full model.
 """
 
-from .countermeasures import STATUS, countermeasures
+from .countermeasures import COUNTERMEASURE_STATUS, countermeasures
 from .derivatives import eigen_derivatives, eigenvalue_derivatives, left_eigenvectors
 from .doe import doe_points, doe_sweep
 from .parameters import DESIGN_PARTS, DesignParameter, design_parameters, load_design
 
 __all__ = [
+    "COUNTERMEASURE_STATUS",
     "DESIGN_PARTS",
-    "STATUS",
     "DesignParameter",
     "countermeasures",
     "design_parameters",

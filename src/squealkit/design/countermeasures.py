@@ -34,10 +34,10 @@ from ..solvers.mac import mac
 from .derivatives import _fe_solver, _Modes, _parameter_coords, _params, _Point, _point, _solve, _solve_fe, _solve_small
 from .parameters import DesignParameter
 
-__all__ = ["STATUS", "countermeasures"]
+__all__ = ["COUNTERMEASURE_STATUS", "countermeasures"]
 
 #: Outcomes of the search for a stabilising change (``not_confirmed``: ``confirm=False``).
-STATUS = ("confirmed", "not_converged", "not_confirmed", "beyond_range", "no_effect", "lost")
+COUNTERMEASURE_STATUS = ("confirmed", "not_converged", "not_confirmed", "beyond_range", "no_effect", "lost")
 #: Relative frequency window in which a changed model's mode is looked for.
 _WINDOW = 0.1
 #: Up to this many DOFs a confirmation solve is dense, above it a band solve around the mode.
@@ -175,7 +175,7 @@ def countermeasures(
         first order), ``confirmed_value``, ``confirmed_change``, ``confirmed_growth_rate`` and
         ``confirmed_frequency_hz`` (of the last solve), ``prediction_error``
         (``|predicted - confirmed| / |confirmed|`` change), ``solves`` and ``status`` (one of
-        :data:`STATUS`). Coordinates as :func:`~squealkit.design.eigen_derivatives`;
+        :data:`COUNTERMEASURE_STATUS`). Coordinates as :func:`~squealkit.design.eigen_derivatives`;
         ``kind = "countermeasures"``.
 
     Examples
@@ -240,7 +240,8 @@ def countermeasures(
                                        {"units": "Hz", "long_name": "frequency at the last solve"}),
             "prediction_error": (mp, error, {"long_name": "|predicted - confirmed| / |confirmed| change"}),
             "solves": (mp, solves, {"long_name": "confirming solves"}),
-            "status": (mp, status.astype(str), {"long_name": "outcome of the search", "flag_values": list(STATUS)}),
+            "status": (mp, status.astype(str), {"long_name": "outcome of the search",
+                                                "allowed": " ".join(COUNTERMEASURE_STATUS)}),
         },
         coords={"mode": ("mode", index, {"long_name": "index of the mode in the solve"}), **_parameter_coords(params)},
         attrs={
