@@ -440,7 +440,7 @@ def test_cli_critical_modes_tolerance_fe(run, brake_toml):
         (("stability", "--config", "{toml}", "--rpm", "60", "--theta", "-8:8:3"), "one angle"),
         (("modes", "--config", "{toml}", "--rpm", "60:120:2"), "one disc speed"),
         (("report", "--config", "{toml}", "--out-dir", "r"), "FE models (model = \"fe\") work with stability"),
-        (("simulate", "--config", "{toml}"), "work with stability, critical, modes, tolerance only"),
+        (("simulate", "--config", "{toml}"), "work with stability, critical, modes, tolerance, design only"),
     ],
 )
 def test_cli_fe_bad_input(run, brake_toml, args, message):
