@@ -212,6 +212,19 @@ def test_predicted_stabilising_change_is_confirmed_by_a_solve(demo, demo_counter
         assert (check.growth_rate.values[near].max() < 0) == stable
 
 
+def test_mode_coupling_is_removed_at_the_closed_form_friction():
+    """Two DOFs ``K = diag(1, 1.2) + mu p [[0, 1], [-1, 0]]``, ``C = c I``: the stiffness eigenvalues are
+    ``kappa = 1.1 +- sqrt(0.01 - (mu p)^2)``; the pair is on the stability boundary where
+    ``lambda = j omega``, i.e. ``Im kappa = c sqrt(1.1)`` (closed form): ``p = sqrt(0.01 + 1.1 c^2) / mu``.
+    The growth rate goes as a square root there (Newton crawls; the bracket confirms it)."""
+    c, mu = 1e-3, 0.2
+    m = FEModel.from_matrices(M=np.eye(2), K1=np.diag([1.0, 1.2]), KR=[[0.0, 1.0], [-1.0, 0.0]], D1=c * np.eye(2))
+    ds = countermeasures(m, {"friction": "KR"}, rpm=60.0, mu=mu)
+    assert str(ds.status.values[0, 0]) == "confirmed"
+    assert float(ds.confirmed_value[0, 0]) == pytest.approx(math.sqrt(0.01 + 1.1 * c * c) / mu, abs=1e-4)
+    assert float(ds.confirmed_growth_rate[0, 0]) <= 0.0
+
+
 def test_report_sentences_are_made_from_the_numbers(demo_countermeasures):
     from squealkit.report.design import design_section, design_sentences
 

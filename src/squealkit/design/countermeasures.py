@@ -9,7 +9,10 @@ For each unstable mode k and design parameter p (growth rate ``sigma_k(p)``, nom
   smallest change of the parameter along the line to ``sigma_k = 0``;
 - the **confirmed** change is the root of ``sigma_k(p) = 0`` found by Newton's method from the
   nominal design, each step a solve of the changed model (the mode followed by its shape, MAC)
-  with the derivative from that solve's eigenvectors. It is the change that a solve shows to
+  with the derivative from that solve's eigenvectors; once a step has crossed the root it is
+  kept bracketed, and a bracket narrower than 1e-4 of the change confirms its stable end (the
+  growth rate of a mode-coupling pair goes as the square root of the distance to its onset,
+  where Newton crawls). It is the change that a solve shows to
   stabilise the mode; the relative difference of the two says how far first order carries.
 
 A change that would take a scale or a mass below zero is not a countermeasure (``status
@@ -42,17 +45,22 @@ COUNTERMEASURE_STATUS = ("confirmed", "not_converged", "not_confirmed", "beyond_
 _WINDOW = 0.1
 #: Up to this many DOFs a confirmation solve is dense, above it a band solve around the mode.
 _DENSE_CONFIRM = 300
+#: A bracket [sigma > 0, sigma <= 0] this narrow, relative to the change, confirms its stable end.
+_BRACKET_RTOL = 1e-4
 
 
 def _track(modes: _Modes, lam_pred: complex, x_ref: Any, move: float) -> int | None:
-    """The mode of ``modes`` that continues the reference mode: the best MAC with ``x_ref`` among the
-    eigenvalues within the window around the predicted ``lam_pred`` (a tenth of it, plus the
-    predicted ``move`` of the eigenvalue: first order may be off by as much)."""
+    """The mode of ``modes`` that continues the reference mode: among the eigenvalues within the window
+    around the predicted ``lam_pred`` (a tenth of it, plus the predicted ``move``: first order may be
+    off by as much), those whose shape matches ``x_ref`` about as well as the best (MAC within 0.1),
+    the one that grows fastest: the two roots of a mode-coupling pair have one shape, and the mode
+    is stable only when both are."""
     near = np.abs(modes.lam - lam_pred) <= _WINDOW * abs(lam_pred) + move
     if not near.any():
         return None
-    score = mac(modes.X, np.asarray(x_ref).reshape(-1, 1))[:, 0]
-    return int(np.argmax(np.where(near, score, -1.0)))
+    score = np.where(near, mac(modes.X, np.asarray(x_ref).reshape(-1, 1))[:, 0], -1.0)
+    alike = score >= score.max() - 0.1
+    return int(np.argmax(np.where(alike, modes.lam.real, -np.inf)))
 
 
 def _confirming_solver(model: Any, pt: _Point, modes: _Modes, solver: Any):
@@ -94,6 +102,7 @@ def _stabilise(model: Any, param: DesignParameter, pt: _Point, lam0: complex, x0
     p, lam, x = p0, lam0, x0
     up = (p0, s0)  # the last value with sigma > 0
     down: tuple[float, float] | None = None  # the value nearest to it with sigma <= 0
+    at_down: dict[str, float] = {}
     for _ in range(max_solves):
         p_new = p - lam.real / dl.real if math.isfinite(dl.real) and dl.real != 0.0 else math.nan
         if down is not None and not (min(up[0], down[0]) < p_new < max(up[0], down[0])):
@@ -115,9 +124,15 @@ def _stabilise(model: Any, param: DesignParameter, pt: _Point, lam0: complex, x0
             up = (p, lam.real)
         else:
             down = (p, lam.real)
+            at_down = dict(confirmed_value=p, confirmed_growth_rate=lam.real,
+                           confirmed_frequency_hz=lam.imag / (2 * math.pi))
         tiny = 1e-7 * max(abs(p - p0), param.step * 1e-3)
-        if abs(lam.real) <= 1e-9 * abs(lam) or abs(step) <= tiny or (down is not None and abs(up[0] - down[0]) <= tiny):
+        if abs(lam.real) <= 1e-9 * abs(lam) or abs(step) <= tiny:
             return {**out, "status": "confirmed"}
+        if down is not None and abs(up[0] - down[0]) <= _BRACKET_RTOL * abs(down[0] - p0):
+            # a root where sigma is steep (the square root of a mode-coupling onset): the stable end
+            # of a bracket narrower than _BRACKET_RTOL of the change is the confirmed value
+            return {**out, **at_down, "status": "confirmed"}
         # the derivative matrices of a scale or a mass are those of the nominal model at any value
         at = changed if param.kind == "model" else model
         dl = complex(modes.derivatives(at, [param], pt, [j])[0, 0])
@@ -136,7 +151,7 @@ def countermeasures(
     band: tuple[float, float] | None = None,
     n_modes: int | None = None,
     confirm: bool = True,
-    max_solves: int = 8,
+    max_solves: int = 16,
 ) -> xr.Dataset:
     """Rank the declared changes for each unstable mode, with the smallest change that stabilises it.
 
@@ -162,8 +177,9 @@ def countermeasures(
     confirm : bool, default True
         Confirm each predicted change by solves (Newton on ``sigma = 0``); False gives the
         first-order predictions only.
-    max_solves : int, default 8
-        Solves per mode and parameter at most.
+    max_solves : int, default 16
+        Solves per mode and parameter at most (Newton converges in a few; a bisection of a
+        bracket, where sigma is steep at its root as at a mode-coupling onset, takes more).
 
     Returns
     -------

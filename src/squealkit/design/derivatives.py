@@ -122,7 +122,7 @@ def eigenvalue_derivatives(M: Any, C: Any, lam: Any, X: Any, Y: Any, dM: Any, dC
     X, Y = np.asarray(X, dtype=complex), np.asarray(Y, dtype=complex)
     num = np.einsum("ik,ik->k", Y.conj(), (dM @ X) * lam**2 + (dC @ X) * lam + dK @ X)
     den = np.einsum("ik,ik->k", Y.conj(), (M @ X) * (2 * lam) + C @ X)
-    return -num / den
+    return -num / den + 0.0  # + 0.0: no negative zeros
 
 
 # -- one operating point ------------------------------------------------------------------
