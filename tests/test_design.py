@@ -18,7 +18,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from squealkit._validation import InputError
+from squealkit import InputError
 from squealkit.design import (
     countermeasures,
     design_parameters,
@@ -45,11 +45,11 @@ DEMO_DESIGN = {
 
 
 @pytest.fixture(scope="module", autouse=True)
-def _bounded_blas():
-    """The reference solves below run outside squealkit's entry points: bound their BLAS threads too."""
-    from squealkit._threads import bounded_blas
+def _one_blas_thread():
+    """The reference solves below run outside squealkit's entry points: one BLAS thread for them too."""
+    from threadpoolctl import threadpool_limits
 
-    with bounded_blas():
+    with threadpool_limits(1, user_api="blas"):
         yield
 
 
@@ -157,30 +157,28 @@ def test_derivatives_match_central_differences_on_nlevp_disk_brake100(nlevp):
 
 
 def test_reduced_derivatives_are_those_of_the_reduced_model(demo, demo_derivatives):
-    """method="pod": the derivatives are those of the reduced eigenvalue on the fixed basis (central
-    differences of :func:`squealkit.solvers.reduction.reduced_solve`), and close to the full model's.
-    (The steps of :func:`eigen_derivatives`, taken one by one so that the basis is built once.)"""
-    from squealkit.design.derivatives import _fe_solver, _point, _solve_fe
+    """On a POD basis the derivatives are those of the reduced eigenvalue on that fixed basis (central
+    differences of :func:`squealkit.solvers.reduction.reduced_solve`), and near the full model's."""
     from squealkit.solvers.reduction import reduce, reduced_solve
+    from squealkit.stability.fe_sweep import FESolver
 
+    w = float(rpm_to_disc_speed(RPM))
+    V = FESolver(demo, "pod", BAND, samples=(np.array([w]), np.array([MU]))).reduced.V  # fe_modes' POD basis
     design = {"friction": "KR", "inboard": DEMO_DESIGN["inboard"]}
-    params = design_parameters(design, demo)
-    pt = _point(demo, RPM, MU, 0.0)
-    solver = _fe_solver(demo, pt, "pod", BAND, None)
-    modes = _solve_fe(demo, pt, solver)
-    (k,) = np.flatnonzero(modes.unstable)
-    assert modes.V is not None and modes.residual[k] < 1e-8
-    d = modes.derivatives(demo, params, pt, [k])[0]
+    ds = eigen_derivatives(demo, design, RPM, MU, band=BAND, basis=V)
+    assert ds.attrs["method"] == "basis" and ds.attrs["basis_size"] == V.shape[1]
+    assert ds.sizes["mode"] == 1 and ds.residual.values[0] < 1e-8
+    d = ds.dgrowth_rate_dp.values[0] + 2j * math.pi * ds.dfrequency_hz_dp.values[0]
     full = demo_derivatives.sel(parameter=["friction", "inboard"])
     full = full.dgrowth_rate_dp.values[0] + 2j * math.pi * full.dfrequency_hz_dp.values[0]
     # the basis holds the mode: the reduced derivatives are near the full ones (3 % on this narrow band's basis)
     np.testing.assert_allclose(d, full, rtol=0.05)
-    w, h = float(rpm_to_disc_speed(RPM)), 1e-4
-    for j, p in enumerate(params):
+    lam0, h = ds.growth_rate.values[0] + 2j * math.pi * ds.frequency_hz.values[0], 1e-4
+    for j, p in enumerate(design_parameters(design, demo)):
         ev = []
         for s in (1, -1):
-            lam, _, _ = reduced_solve(reduce(p.apply(demo, 1.0 + s * h), modes.V), w, MU, *BAND)
-            ev.append(lam[np.argmin(np.abs(lam - modes.lam[k]))])
+            lam, _, _ = reduced_solve(reduce(p.apply(demo, 1.0 + s * h), V), w, MU, *BAND)
+            ev.append(lam[np.argmin(np.abs(lam - lam0))])
         fd = (ev[0] - ev[1]) / (2 * h)
         assert abs(d[j] - fd) <= 1e-5 * abs(d[j])
 

@@ -228,7 +228,8 @@ def _solve_fe(model: FEModel, pt: _Point, solver: Any, V: NDArray | None = None)
     with threadpool_limits(1, user_api="blas"):
         if V is not None or solver.reduced is not None:
             red = solver.reduced if V is None else reduction.reduce(model, V)
-            lam, Yc, res = reduction.reduced_solve(red, pt.disc_speed, pt.mu + pt.tan_theta, *solver.band)
+            lo, hi = solver.band if solver.band is not None else (0.0, math.inf)
+            lam, Yc, res = reduction.reduced_solve(red, pt.disc_speed, pt.mu + pt.tan_theta, lo, hi)
             proj = red.projected
             M, C, K = (np.asarray(A.toarray()) for A in (proj.mass_matrix(),
                                                           proj.damping_matrix(pt.disc_speed, pt.mu, pt.tan_theta),
@@ -256,10 +257,25 @@ def _solve_small(model: Any, pt: _Point) -> _Modes:
                   "dense")
 
 
-def _solve(model: Any, pt: _Point, method: str, band: Any, n_modes: int | None) -> tuple[_Modes, Any]:
+def _solve(model: Any, pt: _Point, method: str, band: Any, n_modes: int | None,
+           basis: Any = None) -> tuple[_Modes, Any]:
     if isinstance(model, FEModel):
+        if basis is not None:
+            V = np.asarray(basis, dtype=np.float64)
+            if V.ndim != 2 or V.shape[0] != model.n_dof or not np.all(np.isfinite(V)):
+                raise InputError(f"Parameter basis must be a finite {model.n_dof} x r matrix, got shape {V.shape}.")
+            if method not in ("auto", "modal", "pod") or n_modes is not None:
+                raise InputError("With basis=..., method and n_modes do not apply (the basis is the reduction).")
+            from types import SimpleNamespace
+
+            from ..solvers.band import validate_band
+
+            solver = SimpleNamespace(method="basis", band=None if band is None else validate_band(band), reduced=None)
+            return _solve_fe(model, pt, solver, V=V), solver
         solver = _fe_solver(model, pt, method, band, n_modes)
         return _solve_fe(model, pt, solver), solver
+    if basis is not None:
+        raise InputError(f"Parameter basis applies to FE models only, not to a {model.kind!r} model.")
     if method != "auto" or band is not None or n_modes is not None:
         raise InputError(f"method, band and n_modes apply to FE models only, not to a {model.kind!r} model.")
     return _solve_small(model, pt), None
@@ -294,6 +310,7 @@ def eigen_derivatives(
     band: tuple[float, float] | None = None,
     n_modes: int | None = None,
     unstable_only: bool = True,
+    basis: Any = None,
 ) -> xr.Dataset:
     """Derivatives of the growth rate and frequency of each unstable mode w.r.t. each design parameter.
 
@@ -321,6 +338,10 @@ def eigen_derivatives(
         Reduced basis size for ``modal``/``pod``.
     unstable_only : bool, default True
         Keep the unstable modes only; False keeps every mode found.
+    basis : array_like, shape (n, r), optional
+        A reduced basis of the FE model's DOFs to take the derivatives on (the reduced model
+        ``V^T A V`` of an orthonormalised V, each pair checked in the full model), instead of one
+        built by ``method``; the ``band`` then defaults to all modes of the reduced model.
 
     Returns
     -------
@@ -344,7 +365,7 @@ def eigen_derivatives(
     validate_model(model)
     params = _params(model, parameters)
     pt = _point(model, rpm, mu, theta)
-    modes, solver = _solve(model, pt, method, band, n_modes)
+    modes, solver = _solve(model, pt, method, band, n_modes, basis)
     index = np.flatnonzero(modes.unstable) if unstable_only else np.arange(modes.lam.size)
     d = modes.derivatives(model, params, pt, index)
     return _dataset(model, params, pt, modes, index, d, solver)
