@@ -440,7 +440,7 @@ def test_cli_critical_modes_tolerance_fe(run, brake_toml):
         (("stability", "--config", "{toml}", "--rpm", "60", "--theta", "-8:8:3"), "one angle"),
         (("modes", "--config", "{toml}", "--rpm", "60:120:2"), "one disc speed"),
         (("report", "--config", "{toml}", "--recording", "x.wav"), "--recording applies to the paper's model"),
-        (("simulate", "--config", "{toml}"), "work with stability, critical, modes, tolerance, report only"),
+        (("simulate", "--config", "{toml}"), "work with stability, critical, modes, tolerance, report, design only"),
     ],
 )
 def test_cli_fe_bad_input(run, brake_toml, args, message):

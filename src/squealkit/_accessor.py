@@ -43,6 +43,9 @@ PLOTS: dict[str, tuple[str, str, str]] = {
     "uncertainty": ("uncertainty", "uncertainty_plot", "fig"),
     "propensity": ("uncertainty", "propensity_plot", "ax"),
     "sensitivity": ("uncertainty", "sensitivity_plot", "ax"),
+    "pareto": ("design", "pareto_plot", "ax"),
+    "countermeasures": ("design", "countermeasures_plot", "ax"),
+    "robust_margins": ("design_robust", "robust_margins_plot", "ax"),
 }
 
 
@@ -79,6 +82,12 @@ _RESULTS: dict[str, tuple[Callable[[xr.Dataset], bool], tuple[str, ...]]] = {
     ),
     # squealkit.uncertainty.squeal_propensity
     "propensity": (lambda ds: "probability_unstable" in ds.data_vars, ("uncertainty", "propensity", "sensitivity")),
+    # squealkit.design.doe_sweep
+    "doe_sweep": (lambda ds: {"change_size", "pareto"} <= set(ds.data_vars), ("pareto",)),
+    # squealkit.design.countermeasures
+    "countermeasures": (lambda ds: {"effect", "predicted_change"} <= set(ds.data_vars), ("countermeasures",)),
+    # squealkit.design.robust_margins (always saved with its kind)
+    "robust_margins": (lambda ds: False, ("robust_margins",)),
 }
 
 
@@ -88,6 +97,7 @@ _UNPLOTTED: dict[str, str] = {
     "fe_critical_friction": "squealkit.stability.fe_critical_friction",
     "fe_mode_surface": "squealkit.fe.mode_surface (a 3D view: squealkit.plotting.fe_modes.mode_view)",
     "eigenvalue_sensitivity": "squealkit.stability.eigenvalue_sensitivity",
+    "eigen_derivatives": "squealkit.design.eigen_derivatives",
     "reduced_sweep": "squealkit.solvers.reduced_sweep",
     "simulation_batch": "squealkit.transient.simulate_batch",
 }

@@ -170,7 +170,7 @@ def scheduler_option(f: F) -> F:
 
 
 #: Subcommands that work on FE models (model = "fe").
-FE_COMMANDS = ("stability", "critical", "modes", "tolerance", "report")
+FE_COMMANDS = ("stability", "critical", "modes", "tolerance", "report", "design")
 
 #: One-line notes for stderr, printed by the CLI's main only after the command succeeded (so a
 #: user error stays one line).
@@ -633,7 +633,7 @@ OPTIONS: dict[str, Term] = {
 #: Old spellings kept for one release: (command, old option) -> the option that now says it. Each
 #: is a hidden alias that prints one deprecation line on stderr (:func:`deprecated_alias`).
 DEPRECATED_OPTIONS: dict[tuple[str, str], str] = {
-    **{(c, "--band"): "--eigen-band" for c in ("stability", "critical", "modes", "tolerance")},
+    **{(c, "--band"): "--eigen-band" for c in ("stability", "critical", "modes", "tolerance", "design")},
     ("synth", "--tacho-ppr"): "--pulses-per-rev",
     **{(c, "--out"): "--out-dir" for c in ("campaign", "fe-demo", "report", "reproduce")},
 }

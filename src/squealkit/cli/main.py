@@ -28,6 +28,7 @@ from .._validation import InputError
 COMMANDS: dict[str, str] = {
     "stability": "squealkit.cli.stability:stability",
     "critical": "squealkit.cli.critical:critical",
+    "design": "squealkit.cli.design:design",
     "fe-demo": "squealkit.cli.fe_demo:fe_demo",
     "modes": "squealkit.cli.modes:modes",
     "presets": "squealkit.cli.presets:presets",

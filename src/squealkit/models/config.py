@@ -77,8 +77,8 @@ _PRESET_KIND = {"lv2013": "pin_on_disc", "hoffmann2002": "hoffmann"}
 _TOP_KEYS = {"model", "preset", "parameters", "rig", "matrices", "fe", "description"}
 #: Tables a model file may hold for other commands (``montecarlo`` reads ``[uncertain]``, ``report``
 #: reads ``[report]``: see :mod:`squealkit.report.settings`; ``correlate`` reads ``[correlate]``:
-#: see :mod:`squealkit.correlate.conditions`).
-_OTHER_TABLES = {"uncertain", "report", "correlate"}
+#: see :mod:`squealkit.correlate.conditions`; ``design`` reads ``[design]``: see :mod:`squealkit.design.parameters`).
+_OTHER_TABLES = {"uncertain", "report", "correlate", "design"}
 #: A model file is text of a few kB (large matrices go in the files an [fe] table names).
 _MAX_FILE_BYTES = 16 * 2**20
 
