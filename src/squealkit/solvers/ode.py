@@ -274,7 +274,7 @@ def _interp(z, z1, St, Co, h, th, rosenbrock, out):
         _dense(z, St, Co, h, th, out)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy")  # called at events only: compiled once, not inlined at each call
 def _locate(slip, side_old, n_iter, z, z1, St, Co, h, rosenbrock, t, tg0, hg, qg, tgr, v, b, fhat, kc, s, kin,
             v_reg, zd):
     """Fraction of the step at which the contact force changes sign (``slip`` False) or the sliding
@@ -449,7 +449,7 @@ def integrate_adaptive(
                 _log_event(r, t + hi * h, EVENT_STICK if w_new < opts[4] else EVENT_SLIP, ev_t, ev_k, n_ev)
             # output samples inside (t, t_new] by dense output
             while o <= o_last and o / fs <= t_new * (1.0 + 1e-15):
-                _interp(z, znew, K, P, h, min((o / fs - t) / h, 1.0), False, zd)
+                _dense(z, K, P, h, min((o / fs - t) / h, 1.0), zd)
                 ncs, mes, _q, _t = _f(o / fs, zd, dzd, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r,
                                       Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r,
                                       s_r, opts, work, acc)
@@ -755,7 +755,7 @@ def integrate_rosenbrock(
                              b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
                 _log_event(r, t + hi * h, EVENT_STICK if w_new < opts[4] else EVENT_SLIP, ev_t, ev_k, n_ev)
             while o <= o_last and o / fs <= t_new * (1.0 + 1e-15):
-                _interp(z, znew, U, RDD, h, min((o / fs - t) / h, 1.0), True, zd)
+                _dense_ros(z, znew, U, RDD, min((o / fs - t) / h, 1.0), zd)
                 ncs, mes, _q, _t = _f(o / fs, zd, dzd, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r,
                                       Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r,
                                       s_r, opts, work, acc)
