@@ -813,39 +813,60 @@ def _slope_at(tg, u):
     return tg[j] + w * (tg[(j + 1) % M] - tg[j])
 
 
-@njit(cache=True)
+def _rk4_for(rhs):
+    """The RK4 monodromy kernel of one right-hand side ``rhs``, compiled and cached for it.
+
+    The right-hand side is a variable of the closure, not an argument: a compiled function passed
+    as an argument is a value numba's cache cannot keep ("dynamic globals"), so the kernel was
+    compiled again in every process; a closure's variables are part of its cache key instead.
+    """
+
+    @njit(cache=True)
+    def rk4(data, n_steps, h, m):
+        """Phi(T) by ``n_steps`` RK4 steps of ``h`` (see :func:`monodromy_rk4`)."""
+        Phi = np.eye(m)
+        k1 = np.empty((m, m))
+        k2 = np.empty((m, m))
+        k3 = np.empty((m, m))
+        k4 = np.empty((m, m))
+        Y = np.empty((m, m))
+        for step in range(n_steps):
+            rhs(data, step, 0, Phi, k1)
+            for i in range(m):
+                for j in range(m):
+                    Y[i, j] = Phi[i, j] + 0.5 * h * k1[i, j]
+            rhs(data, step, 1, Y, k2)
+            for i in range(m):
+                for j in range(m):
+                    Y[i, j] = Phi[i, j] + 0.5 * h * k2[i, j]
+            rhs(data, step, 1, Y, k3)
+            for i in range(m):
+                for j in range(m):
+                    Y[i, j] = Phi[i, j] + h * k3[i, j]
+            rhs(data, step, 2, Y, k4)
+            for i in range(m):
+                for j in range(m):
+                    Phi[i, j] += h / 6.0 * (k1[i, j] + 2.0 * k2[i, j] + 2.0 * k3[i, j] + k4[i, j])
+        return Phi
+
+    return rk4
+
+
+_RK4: dict[object, object] = {}
+
+
 def monodromy_rk4(rhs, data, n_steps, h, m):
     """Monodromy matrix Phi(T) of ``Phi' = A(t) Phi``, Phi(0) = I (m x m), by ``n_steps`` classical RK4 steps of ``h``.
 
-    ``rhs(data, step, stage, Y, out)`` sets ``out = A(t) Y`` at the start (``stage`` 0), the middle
-    (1) or the end (2) of step ``step``: :func:`_runout_rhs` (the transient model on a periodic
-    run-out, :func:`monodromy`) or :func:`sampled_rhs` (samples of A, the limit cycles'
-    variational equations).
+    ``rhs(data, step, stage, Y, out)``, a compiled function, sets ``out = A(t) Y`` at the start
+    (``stage`` 0), the middle (1) or the end (2) of step ``step``: :func:`_runout_rhs` (the transient
+    model on a periodic run-out, :func:`monodromy`) or :func:`sampled_rhs` (samples of A, the limit
+    cycles' variational equations). One kernel per ``rhs``, compiled once and kept in numba's cache.
     """
-    Phi = np.eye(m)
-    k1 = np.empty((m, m))
-    k2 = np.empty((m, m))
-    k3 = np.empty((m, m))
-    k4 = np.empty((m, m))
-    Y = np.empty((m, m))
-    for step in range(n_steps):
-        rhs(data, step, 0, Phi, k1)
-        for i in range(m):
-            for j in range(m):
-                Y[i, j] = Phi[i, j] + 0.5 * h * k1[i, j]
-        rhs(data, step, 1, Y, k2)
-        for i in range(m):
-            for j in range(m):
-                Y[i, j] = Phi[i, j] + 0.5 * h * k2[i, j]
-        rhs(data, step, 1, Y, k3)
-        for i in range(m):
-            for j in range(m):
-                Y[i, j] = Phi[i, j] + h * k3[i, j]
-        rhs(data, step, 2, Y, k4)
-        for i in range(m):
-            for j in range(m):
-                Phi[i, j] += h / 6.0 * (k1[i, j] + 2.0 * k2[i, j] + 2.0 * k3[i, j] + k4[i, j])
-    return Phi
+    kernel = _RK4.get(rhs)
+    if kernel is None:
+        kernel = _RK4[rhs] = _rk4_for(rhs)
+    return kernel(data, n_steps, h, m)
 
 
 @njit(cache=True, inline="always")
@@ -881,6 +902,10 @@ def _runout_rhs(data, step, stage, Y, out):
     out[:, :] = A @ Y
 
 
+#: The run-out's monodromy kernel, named for the parallel loop of :func:`monodromy`.
+_runout_rk4 = _RK4[_runout_rhs] = _rk4_for(_runout_rhs)
+
+
 @njit(cache=True, parallel=True)
 def monodromy(tg, mu, s, kin, MC, MK0, MKn, MKf, MKnx, MKfx, period, n_steps, out):
     """Monodromy matrices Phi(T) of z' = A(t) z over one ``period`` [s], by classical RK4 (``n_steps``).
@@ -896,4 +921,4 @@ def monodromy(tg, mu, s, kin, MC, MK0, MKn, MKf, MKnx, MKfx, period, n_steps, ou
     for bi in prange(B):
         data = (tg[bi], mu[bi], s[bi], kin[bi], MC[bi], MK0[bi], MKn[bi], MKf[bi], MKnx[bi], MKfx[bi], du,
                 np.empty((m, m)))
-        out[bi] = monodromy_rk4(_runout_rhs, data, n_steps, h, m)
+        out[bi] = _runout_rk4(data, n_steps, h, m)
