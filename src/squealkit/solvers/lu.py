@@ -214,11 +214,19 @@ def _mkl_pardiso():
     return fn
 
 
-def _is_symmetric(A: sp.csr_matrix) -> bool:
-    """Whether the sparse ``A`` equals its transpose exactly (pattern and values)."""
-    D = A - A.T
-    D.eliminate_zeros()
-    return D.nnz == 0
+def _is_symmetric(A) -> bool:
+    """Whether the sparse ``A`` equals its transpose exactly (pattern and values), by comparing
+    the arrays of ``A`` and of its transpose in canonical CSR (one transposed copy, no difference)."""
+    A = sp.csr_matrix(A)
+    if A.shape[0] != A.shape[1]:
+        return False
+    if not A.has_canonical_format:
+        A = A.copy()
+        A.sum_duplicates()
+    T = A.T.tocsr()
+    T.sort_indices()
+    return (np.array_equal(A.indptr, T.indptr) and np.array_equal(A.indices, T.indices)
+            and np.array_equal(A.data, T.data))
 
 
 class PardisoLU:
@@ -240,6 +248,8 @@ class PardisoLU:
         Real or complex.
     perm : ndarray of int, shape (n,), optional
         A fill-reducing ordering (:func:`fill_reducing_order`): ``P[perm][:, perm]`` is factorised.
+    symmetric : bool, optional
+        Whether ``P`` is symmetric, when the caller knows (else checked: one transposed copy).
 
     Attributes
     ----------
@@ -249,11 +259,11 @@ class PardisoLU:
         PARDISO's peak memory of analysis and factorisation [bytes].
     """
 
-    def __init__(self, P, perm: NDArray[np.intp] | None = None):
+    def __init__(self, P, perm: NDArray[np.intp] | None = None, *, symmetric: bool | None = None):
         A = sp.csr_matrix(P)
         self.dtype = np.result_type(A.dtype, np.float64)
         complex_ = np.issubdtype(self.dtype, np.complexfloating)
-        symmetric = _is_symmetric(A)
+        symmetric = _is_symmetric(A) if symmetric is None else bool(symmetric)
         self.mtype = (6 if complex_ else -2) if symmetric else (13 if complex_ else 11)
         if symmetric:
             A = sp.triu(A, format="csr")  # PARDISO's symmetric types read the upper triangle by rows
@@ -364,8 +374,8 @@ PARDISO_MIN_DOF = 20_000
 def _auto(P, perm: NDArray[np.intp] | None = None) -> Factor:
     """PARDISO for a large real symmetric sparse ``P`` where installed (:data:`PARDISO_MIN_DOF`), else SuperLU."""
     if (sp.issparse(P) and P.shape[0] >= PARDISO_MIN_DOF and not np.iscomplexobj(P.data)
-            and _available("pardiso") and _is_symmetric(sp.csr_matrix(P))):
-        return PardisoLU(P, perm)
+            and _available("pardiso") and _is_symmetric(P)):
+        return PardisoLU(P, perm, symmetric=True)
     return _superlu(P, perm)
 
 
