@@ -180,7 +180,7 @@ def subspace(n_theta: int, n_r: int | None, n_z: int) -> None:
           f"DOFs), LU backend {lu.lu_backend()}; {_load()}", flush=True)
     t = time.perf_counter()
     m = _model(n_theta, n_r, n_z)
-    nnz = m.K1.nnz + m.M.nnz
+    nnz = m.K1.nnz
     print(f"  model: {m.n_dof} DOFs, nnz(K1) {m.K1.nnz:.3g}, built in {time.perf_counter() - t:.1f} s; peak RSS "
           f"{_peak_gb():.2f} GB; {_load()}", flush=True)
     est = subspace_memory(m.n_dof, nnz, 100, backend="pardiso") / 2**30

@@ -574,7 +574,7 @@ def band_eigs(model: FEModel, disc_speed: float, mu: float, *, tan_theta: float 
     M = model.mass_matrix().tocsr()
     C = model.damping_matrix(disc_speed, mu, tan_theta)
     K = model.stiffness_matrix(disc_speed, mu, tan_theta)
-    workers = _walks_that_fit(n, sum(A.nnz for A in (M, C, K) if sp.issparse(A)), k, workers, lu)
+    workers = _walks_that_fit(n, max(A.nnz if sp.issparse(A) else n * n for A in (M, C, K)), k, workers, lu)
     perm = fill_reducing_order(M, C, K)
     edges = 2 * math.pi * np.linspace(lo, hi, (workers + 1) // 2 + 1)
     claims = [_Claims(a, b, top_closed=b == edges[-1]) for a, b in itertools.pairwise(edges)]

@@ -110,7 +110,7 @@ def band_memory(n: int, nnz: int, *, k: int, workers: int, backend: str = "super
     Parameters
     ----------
     n, nnz : int
-        Size of the model and entries of the pattern of ``M + C + K``.
+        Size of the model and entries of the pattern of ``M + C + K`` (about those of ``K``).
     k : int
         Eigenvalues per shift.
     workers : int
@@ -136,7 +136,7 @@ def subspace_memory(n: int, nnz: int, n_modes: int, *, n_band: int = 0, backend:
     Parameters
     ----------
     n, nnz : int
-        Size of the model and entries of its stiffness pattern.
+        Size of the model and entries of ``K_sym`` (the pattern of ``K_sym - s M``).
     n_modes : int
         Real modes of the basis.
     n_band : int
@@ -149,11 +149,12 @@ def subspace_memory(n: int, nnz: int, n_modes: int, *, n_band: int = 0, backend:
     float
     """
     pardiso = backend == "pardiso"
-    factor = _PEAK_PER_ENTRY["pardiso" if pardiso else "superlu"] * 8.0 * factor_entries(n, nnz) * (0.5 if pardiso
-                                                                                                     else 1.0)
+    triangle = 0.5 if pardiso else 1.0  # L D L^T keeps one triangle
+    factor = _PEAK_PER_ENTRY["pardiso" if pardiso else "superlu"] * 8.0 * triangle * factor_entries(n, nnz)
     lanczos = n * (2 * n_modes + 1) * 8.0
     modes = 2 * n * n_modes * 8.0
-    return factor + lanczos + modes + n * n_band * 16.0 + 8 * 12.0 * nnz
+    copies = 3 * 12.0 * nnz  # K_sym - s M, its triangle and the solver's own copy, 12 bytes an entry
+    return factor + lanczos + modes + n * n_band * 16.0 + copies
 
 
 def check_fits(nbytes: float, what: str, hint: str = "") -> None:

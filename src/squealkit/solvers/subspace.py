@@ -143,7 +143,7 @@ def subspace_basis(model: FEModel, *, freq_max: float, lu: str | _lu.Backend | N
     M = sp.csr_matrix(model.M)
     Ks = _symmetric_part(model.K1)
     backend = _backend_name(lu, n)
-    nnz = Ks.nnz + M.nnz
+    nnz = Ks.nnz
     # the factors first (the Lanczos basis is not allocated yet): refused before any work
     check_fits(subspace_memory(n, nnz, 0, backend=backend), f"The real modes of a model of {n} DOFs")
     perm = _lu.fill_reducing_order(Ks, M)

@@ -165,7 +165,7 @@ def _sparse_or_subspace(model: FEModel) -> str:
     """``"sparse"``, or ``"subspace"`` where even one walk of the band solve would not fit in memory."""
     from ..solvers.memory import band_memory, memory_limit
 
-    nnz = sum(getattr(model, name).nnz for name in model.present if hasattr(getattr(model, name), "nnz"))
+    nnz = max(getattr(getattr(model, name), "nnz", model.n_dof**2) for name in model.present)  # ~ the union
     fits = band_memory(model.n_dof, nnz, k=24, workers=1) <= memory_limit()
     return "sparse" if fits else "subspace"
 
