@@ -93,6 +93,20 @@ def test_modal_basis_with_pardiso_gives_superlu_frequencies(brake):
     np.testing.assert_allclose(f_got, f_ref, rtol=1e-10)
 
 
+@needs_pardiso
+def test_subspace_basis_with_pardiso_gives_superlu_modes(brake):
+    # one PARDISO L D L^T serves the inertia count and the solves; SuperLU counts by its pivots
+    from squealkit.solvers.subspace import subspace_basis, subspace_eigs
+
+    ref = subspace_basis(brake, freq_max=12000.0, lu="superlu")
+    got = subspace_basis(brake, freq_max=12000.0, lu="pardiso")
+    assert got.backend == "pardiso" and got.n_modes == ref.n_modes > 10
+    np.testing.assert_allclose(got.freq_hz, ref.freq_hz, rtol=1e-10)
+    a = subspace_eigs(brake, DISC_SPEED, MU, band=(1000.0, 8000.0), basis=ref, vectors=False)
+    b = subspace_eigs(brake, DISC_SPEED, MU, band=(1000.0, 8000.0), basis=got, vectors=False)
+    np.testing.assert_allclose(b.eigenvalues, a.eigenvalues, rtol=1e-10)
+
+
 def test_auto_rule_and_forcing_by_environment(monkeypatch):
     # auto: SuperLU for complex and for small matrices whatever is installed
     small = sp.csr_matrix(sp.eye(10) * 2.0)

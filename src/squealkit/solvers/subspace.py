@@ -150,7 +150,9 @@ def subspace_basis(model: FEModel, *, freq_max: float, lu: str | _lu.Backend | N
     nnz = Ks.nnz
     # the factors first (the Lanczos basis is not allocated yet): refused before any work
     check_fits(subspace_memory(n, nnz, 0, backend=backend), f"The real modes of a model of {n} DOFs")
-    perm = _lu.fill_reducing_order(Ks, M)
+    # PARDISO orders by its own METIS (one factorisation here: our ordering would only add the
+    # graph's copies, 5 GB at 10^6 DOFs); SuperLU and the count by its pivots need ours
+    perm = None if backend == "pardiso" else _lu.fill_reducing_order(Ks, M)
     # one factorisation, at the middle of the wanted range: sigma = w_max^2 / 2, so that the modes
     # nearest it are exactly those of [0, w_max^2] once the farthest found lies above w_max^2;
     # its inertia counts the modes below sigma, from which those below w_max^2 are guessed (Weyl:
