@@ -230,6 +230,21 @@ def test_subspace_refused_with_the_modes_that_fit(brake, monkeypatch):
         subspace_basis(brake, freq_max=16000.0)
 
 
+@needs_pardiso
+def test_pardiso_factor_refused_on_its_own_prediction(brake, monkeypatch):
+    # PARDISO's analysis predicts its peak (tens of MB at least: its work arrays); a 5 MB cap refuses
+    # the numerical factorisation before it starts
+    from squealkit.solvers.subspace import subspace_basis
+
+    seen = []
+    f = lu.PardisoLU(brake.K1, before_factor=seen.append)
+    assert seen == [f.peak_bytes] and f.peak_bytes > 5 * 2**20
+    monkeypatch.setenv("SQUEALKIT_MEMORY", "5M")
+    with pytest.raises(InputError, match=r"^The real modes of a model of 1422 DOFs needs about \d+ MiB of memory; the "
+                                         r"limit is 4 MiB \(80 % of SQUEALKIT_MEMORY=5M\)\.$"):
+        subspace_basis(brake, freq_max=12000.0, lu="pardiso")
+
+
 def test_auto_takes_the_subspace_path_when_the_band_solve_does_not_fit(brake, band_ref, monkeypatch):
     from squealkit.solvers.memory import band_memory, subspace_memory
     from squealkit.stability.fe_sweep import FESolver

@@ -250,6 +250,10 @@ class PardisoLU:
         A fill-reducing ordering (:func:`fill_reducing_order`): ``P[perm][:, perm]`` is factorised.
     symmetric : bool, optional
         Whether ``P`` is symmetric, when the caller knows (else checked: one transposed copy).
+    before_factor : callable, optional
+        Called with PARDISO's prediction of its peak memory [bytes] after the symbolic analysis
+        and before the numerical factorisation (the exact fill of the ordering), e.g. to refuse
+        a factorisation that will not fit.
 
     Attributes
     ----------
@@ -259,7 +263,8 @@ class PardisoLU:
         PARDISO's peak memory of analysis and factorisation [bytes].
     """
 
-    def __init__(self, P, perm: NDArray[np.intp] | None = None, *, symmetric: bool | None = None):
+    def __init__(self, P, perm: NDArray[np.intp] | None = None, *, symmetric: bool | None = None,
+                 before_factor: Callable[[int], None] | None = None):
         A = sp.csr_matrix(P)
         self.dtype = np.result_type(A.dtype, np.float64)
         complex_ = np.issubdtype(self.dtype, np.complexfloating)
@@ -287,11 +292,14 @@ class PardisoLU:
         iparm[17] = -1  # report the entries of the factors
         iparm[34] = 1  # zero-based indices
         self._iparm = iparm
-        self._factorised = False
-        self._call(12, np.zeros((self.n, 1), self.dtype))  # analysis and numerical factorisation
-        self._factorised = True
+        self._factorised = True  # from here on PARDISO holds memory for this handle (released in __del__)
+        self._call(11, np.zeros((self.n, 1), self.dtype))  # ordering and symbolic factorisation
         self.nnz = int(iparm[17])
-        self.peak_bytes = 1024 * int(max(iparm[14], iparm[15] + iparm[16]))
+        self.peak_bytes = 1024 * int(max(iparm[14], iparm[15] + iparm[16]))  # PARDISO's own prediction
+        if before_factor is not None:
+            before_factor(self.peak_bytes)
+        self._call(22, np.zeros((self.n, 1), self.dtype))  # numerical factorisation
+        self.nnz = int(iparm[17])
 
     def _call(self, phase: int, b: NDArray) -> NDArray:
         x = np.zeros_like(b)
@@ -307,7 +315,7 @@ class PardisoLU:
                        None if self._perm is None else self._perm.ctypes.data_as(ctypes.POINTER(i32)), ref(b.shape[1]),
                        self._iparm.ctypes.data_as(ctypes.POINTER(i32)), ref(0), b.ctypes.data, x.ctypes.data,
                        ctypes.byref(err))
-        if err.value == -4 or (phase == 12 and err.value == 0 and self._iparm[13] and self._zero_pivot()):
+        if err.value == -4 or (phase == 22 and err.value == 0 and self._iparm[13] and self._zero_pivot()):
             raise RuntimeError(f"Factor is exactly singular (PARDISO error {err.value})")
         if err.value != 0:
             raise RuntimeError(f"PARDISO failed with error {err.value} in phase {phase}")

@@ -128,7 +128,8 @@ def band_memory(n: int, nnz: int, *, k: int, workers: int, backend: str = "super
     return workers * (factor + basis) + 3 * 12.0 * nnz
 
 
-def subspace_memory(n: int, nnz: int, n_modes: int, *, n_band: int = 0, backend: str = "superlu") -> float:
+def subspace_memory(n: int, nnz: int, n_modes: int, *, n_band: int = 0, backend: str = "superlu",
+                    factor_bytes: float | None = None) -> float:
     """Peak bytes of :func:`~squealkit.solvers.subspace.subspace_eigs`: a real factor of the
     stiffness, the Lanczos basis of ARPACK (``n x (2 n_modes + 1)``), the modes and one
     product with them, and the complex eigenvectors in the band.
@@ -143,6 +144,9 @@ def subspace_memory(n: int, nnz: int, n_modes: int, *, n_band: int = 0, backend:
         Complex eigenvectors returned.
     backend : str
         ``"pardiso"`` (a symmetric factor: one triangle) or anything else (SuperLU's LU).
+    factor_bytes : float, optional
+        The factorisation's peak where known (PARDISO predicts it after its analysis), instead
+        of the fill estimate.
 
     Returns
     -------
@@ -151,9 +155,11 @@ def subspace_memory(n: int, nnz: int, n_modes: int, *, n_band: int = 0, backend:
     pardiso = backend == "pardiso"
     triangle = 0.5 if pardiso else 1.0  # L D L^T keeps one triangle
     factor = _PEAK_PER_ENTRY["pardiso" if pardiso else "superlu"] * 8.0 * triangle * factor_entries(n, nnz)
+    if factor_bytes is not None:
+        factor = float(factor_bytes)
     lanczos = n * (2 * n_modes + 1) * 8.0
     modes = 2 * n * n_modes * 8.0
-    copies = 3 * 12.0 * nnz  # K_sym - s M, its triangle and the solver's own copy, 12 bytes an entry
+    copies = 2 * 12.0 * nnz  # K_sym - s M and its triangle, 12 bytes an entry
     return factor + lanczos + modes + n * n_band * 16.0 + copies
 
 

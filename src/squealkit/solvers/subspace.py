@@ -90,13 +90,14 @@ def _symmetric_part(A) -> sp.csr_matrix:
     return A if _lu._is_symmetric(A) else sp.csr_matrix(0.5 * (A + A.T))
 
 
-def _factor_and_count(Ks, M, sigma: float, perm, lu, backend: str):
+def _factor_and_count(Ks, M, sigma: float, perm, lu, backend: str, before_factor=None):
     """The factorisation of ``Ks - sigma M`` and the modes of ``(Ks, M)`` below ``sigma`` [rad^2/s^2]
     by its inertia (Sylvester): PARDISO's count of negative pivots of its ``L D L^T`` (one
     factorisation for both), else SuperLU's with diagonal pivots and then the backend's own."""
     P = Ks - sigma * M
     if backend == "pardiso":
-        f = _lu.PardisoLU(P, perm, symmetric=True)
+        f = _lu.PardisoLU(P, perm, symmetric=True, before_factor=before_factor)
+        del P
         return f, int(f._iparm[22])  # PARDISO reports the negative eigenvalues of a symmetric indefinite matrix
     from .reduction import count_below
 
@@ -148,8 +149,13 @@ def subspace_basis(model: FEModel, *, freq_max: float, lu: str | _lu.Backend | N
     Ks = _symmetric_part(model.K1)
     backend = _backend_name(lu, n)
     nnz = Ks.nnz
-    # the factors first (the Lanczos basis is not allocated yet): refused before any work
-    check_fits(subspace_memory(n, nnz, 0, backend=backend), f"The real modes of a model of {n} DOFs")
+    what = f"The real modes of a model of {n} DOFs"
+    if backend == "pardiso":  # the factor's peak as PARDISO predicts it after its analysis (the exact fill)
+        def before_factor(nbytes: int) -> None:
+            check_fits(subspace_memory(n, nnz, 0, factor_bytes=nbytes), what)
+    else:  # the factor estimated first (the Lanczos basis is not allocated yet): refused before any work
+        before_factor = None
+        check_fits(subspace_memory(n, nnz, 0, backend=backend), what)
     # PARDISO orders by its own METIS (one factorisation here: our ordering would only add the
     # graph's copies, 5 GB at 10^6 DOFs); SuperLU and the count by its pivots need ours
     perm = None if backend == "pardiso" else _lu.fill_reducing_order(Ks, M)
@@ -160,7 +166,7 @@ def subspace_basis(model: FEModel, *, freq_max: float, lu: str | _lu.Backend | N
     sigma = 0.5 * (2 * math.pi * freq_max) ** 2
     for attempt in range(3):
         try:
-            factor, below_mid = _factor_and_count(Ks, M, sigma, perm, lu, backend)
+            factor, below_mid = _factor_and_count(Ks, M, sigma, perm, lu, backend, before_factor)
             break
         except RuntimeError as e:  # a mode exactly at sigma: move off it
             if attempt == 2:
@@ -170,10 +176,11 @@ def subspace_basis(model: FEModel, *, freq_max: float, lu: str | _lu.Backend | N
     if 2 * below_mid >= n - 2:
         raise InputError(f"freq_max={freq_max:g} Hz holds most of the model's {n} modes: a dense solve "
                          "(method='dense') is the way.")
-    need = subspace_memory(n, nnz, k, backend=backend)
+    fb = getattr(factor, "peak_bytes", None)
+    need = subspace_memory(n, nnz, k, backend=backend, factor_bytes=fb)
     if need > memory_limit():
-        per_mode = subspace_memory(n, nnz, k + 1, backend=backend) - need
-        fits = max(0, int((memory_limit() - subspace_memory(n, nnz, 0, backend=backend)) / per_mode))
+        per_mode = subspace_memory(n, nnz, k + 1, backend=backend, factor_bytes=fb) - need
+        fits = max(0, int((memory_limit() - subspace_memory(n, nnz, 0, backend=backend, factor_bytes=fb)) / per_mode))
         check_fits(need, f"The subspace basis of about {k} real modes up to {freq_max:g} Hz of a model of {n} DOFs",
                    f"About {fits} modes would fit: lower freq_max or narrow the band.")
     op = spla.LinearOperator((n, n), matvec=factor.solve, matmat=factor.solve, dtype=float)
