@@ -22,6 +22,24 @@ Parts (each prints its figures; run one at a time on a shared machine, with ``ni
     process's peak resident memory (``resource.getrusage`` ``ru_maxrss``) and the load average.
 
 Run:  nice -n 10 python benchmarks/bench_fe_scale.py --band 176
+
+Measured 2026-12-03 on the shared 2-core, 23 GB machine (SQUEALKIT_THREADS=2, nice 10; the load
+average, from the other users' jobs, is part of each figure):
+
+- ``--band 176`` (115 326 DOFs, load 8.6-11): SuperLU 397.9 s, peak 4.97 GB; PARDISO 556.1 s
+  (0.72x), peak 8.66 GB, the same 44 eigenvalues to 1.0e-13; the subspace path 115.7 s (3.44x
+  SuperLU's band solve), peak 1.92 GB, 99 real modes, eigenvalues within 4.8e-3 relative of the
+  band solve's, full-model residuals up to 3.4e-7.
+- ``--check 48`` (8 802 DOFs, load ~12): subspace to 1.5x the band's top (102 modes) 5.6e-3
+  largest relative difference (median 5.1e-4), to 2x (146 modes) 2.5e-3 (median 4.3e-4); the
+  same 5 unstable modes as the band solve; residuals 9.6e-11..1.2e-5.
+- ``--subspace 352`` (476 586 DOFs, load 3-5): built in 40 s, 102 real modes to 24 kHz in 382 s,
+  one operating point 18 s (44 eigenvalues, residuals 3.3e-13..4.2e-8, 7 unstable), total 440 s,
+  peak RSS 8.41 GB.
+- ``--subspace 560 --n-r 49`` (1 199 790 DOFs, load 2-3.6, run once): built in 136 s with a peak
+  RSS of 15.3 GB; PARDISO's analysis then predicted 7.3 GB for its factor (11.4 GiB with the
+  copies of K_sym) against a limit of 8.6 GiB (80 % of what was available with the model held),
+  and the solve was refused in one line before the numerical factorisation.
 """
 
 from __future__ import annotations
