@@ -37,7 +37,7 @@ average, from the other users' jobs, is part of each figure):
   one operating point 18 s (44 eigenvalues, residuals 3.3e-13..4.2e-8, 7 unstable), total 440 s,
   peak RSS 8.41 GB.
 - ``--subspace 560 --n-r 49`` (1 199 790 DOFs, load 2-3.6, run once): built in 136 s with a peak
-  RSS of 15.3 GB; PARDISO's analysis then predicted 7.3 GB for its factor (11.4 GiB with the
+  RSS of 15.3 GB; PARDISO's analysis then predicted about 7.6 GiB for its factor (11.4 GiB with the
   copies of K_sym) against a limit of 8.6 GiB (80 % of what was available with the model held),
   and the solve was refused in one line before the numerical factorisation.
 """
