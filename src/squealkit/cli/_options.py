@@ -385,12 +385,15 @@ def fe_options(*, band: bool = True, rpm_help: str = "Disc speed [rpm] (disc_spe
     def deco(f: F) -> F:
         f = click.option("--modes", "n_modes", type=int, default=None, metavar="N",
                          help="Reduced basis size for --method modal|pod (FE models).")(f)
-        f = click.option("--method", type=click.Choice(["auto", "dense", "sparse", "modal", "pod"]), default="auto",
+        f = click.option("--method", type=click.Choice(["auto", "dense", "sparse", "modal", "pod", "subspace"]),
+                         default="auto",
                          show_default=True,
                          help="FE solver: dense (all modes), sparse (a band, shift-invert), modal (real modes) or "
                          "pod (eigenvectors at the middle --rpm and the ends of the friction range, with the "
-                         "real modes: the fast path for large sweeps); reduced eigenpairs are each checked in the "
-                         "full model; auto = dense up to 1000 DOFs.")(f)
+                         "real modes: the fast path for large sweeps), subspace (projection on the real modes to 1.5x "
+                         "the band's top: the largest models); reduced eigenpairs are each checked in the full model; "
+                         "auto = dense up to 1000 DOFs, subspace where a band solve would not fit in memory "
+                         "($SQUEALKIT_MEMORY caps it).")(f)
         if band:
             f = deprecated_alias("--band", "--eigen-band", "band_spec", metavar="LO:HI")(f)
             f = click.option("--eigen-band", "band_spec", default=None, metavar="LO:HI",

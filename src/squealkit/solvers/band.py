@@ -574,6 +574,7 @@ def band_eigs(model: FEModel, disc_speed: float, mu: float, *, tan_theta: float 
     M = model.mass_matrix().tocsr()
     C = model.damping_matrix(disc_speed, mu, tan_theta)
     K = model.stiffness_matrix(disc_speed, mu, tan_theta)
+    workers = _walks_that_fit(n, max(A.nnz if sp.issparse(A) else n * n for A in (M, C, K)), k, workers, lu)
     perm = fill_reducing_order(M, C, K)
     edges = 2 * math.pi * np.linspace(lo, hi, (workers + 1) // 2 + 1)
     claims = [_Claims(a, b, top_closed=b == edges[-1]) for a, b in itertools.pairwise(edges)]
@@ -596,6 +597,21 @@ def band_eigs(model: FEModel, disc_speed: float, mu: float, *, tan_theta: float 
     X = X / np.linalg.norm(X, axis=0) if X.shape[1] else X
     res = pencil_backward_errors(M, C, K, lam, X)
     return EigenSolution(lam, X, res, covered_growth=min(p[2] for p in parts))
+
+
+def _walks_that_fit(n: int, nnz: int, k: int, workers: int, lu) -> int:
+    """The most walks up to ``workers`` whose estimated memory fits (:mod:`squealkit.solvers.memory`);
+    an InputError when even one walk does not."""
+    from . import lu as _lu
+    from .memory import band_memory, check_fits, memory_limit
+
+    name = lu if isinstance(lu, str) else (_lu.lu_backend() if lu is None else "superlu")
+    limit = memory_limit()
+    while workers > 1 and band_memory(n, nnz, k=k, workers=workers, backend=name) > limit:
+        workers -= 1  # fewer walks at once: each holds its own factor
+    check_fits(band_memory(n, nnz, k=k, workers=workers, backend=name), f"A band solve of {n} DOFs",
+               "Use the subspace projection (method='subspace') or set a larger SQUEALKIT_MEMORY.")
+    return workers
 
 
 #: A shift claims the band up to this fraction of its disc's radius r ahead of it, and the next

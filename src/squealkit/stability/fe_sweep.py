@@ -6,8 +6,12 @@ and friction ``mu`` (the run-out slope enters as ``mu_e = mu + tan(theta)``), th
 friction at each speed, and the modes at one operating point with their shapes. Solvers
 (``method``): ``dense`` (all modes, LAPACK), ``sparse`` (a frequency band by shift-invert),
 ``modal`` and ``pod`` (a reduced basis from :mod:`squealkit.solvers.reduction`, every
-eigenpair checked by its backward error in the full model); ``auto`` is dense up to
-:data:`DENSE_MAX_DOF` DOFs, sparse above.
+eigenpair checked by its backward error in the full model), ``subspace`` (the commercial codes'
+projection on the real modes of ``(M, K_sym)`` to 1.5 times the band's top, for the largest
+models: :mod:`squealkit.solvers.subspace`, also checked in the full model); ``auto`` is dense up
+to :data:`DENSE_MAX_DOF` DOFs, sparse above, and subspace where the band solve's estimated
+memory does not fit (:mod:`squealkit.solvers.memory`). A reduced basis is built once per sweep
+and serves every point; on a Dask cluster it is sent to each worker once.
 """
 
 from __future__ import annotations
@@ -47,13 +51,14 @@ from ..solvers.band import (
     validate_band,
 )
 from ..solvers.mac import MacTracker
+from ..solvers.subspace import FREQ_MAX_FACTOR, SubspaceBasis, subspace_basis, subspace_eigs
 from ._schema import UNSTABLE_RTOL, derived_variables, eigen_variables
 from ._solve import VERDICTS
 
 __all__ = ["DENSE_MAX_DOF", "METHODS", "FESolver", "fe_critical_friction", "fe_modes", "fe_stability_map"]
 
 #: Solvers for FE models.
-METHODS = ("auto", "dense", "sparse", "modal", "pod")
+METHODS = ("auto", "dense", "sparse", "modal", "pod", "subspace")
 #: Safety factor on backward error x |lambda| for a well-conditioned eigenvalue's error radius.
 _ERR_C = 16.0
 
@@ -95,10 +100,10 @@ class FESolver:
         if self.method not in METHODS:
             raise InputError(f"Parameter method={self.method!r}; known: {', '.join(METHODS)}.")
         if self.method == "auto":
-            self.method = "dense" if self.model.n_dof <= DENSE_MAX_DOF else "sparse"
+            self.method = "dense" if self.model.n_dof <= DENSE_MAX_DOF else _sparse_or_subspace(self.model)
         if self.band is not None:
             self.band = validate_band(self.band)
-        elif self.method in ("sparse", "modal", "pod"):
+        elif self.method in ("sparse", "modal", "pod", "subspace"):
             # a band solve, and a reduced basis (built for the band: outside it the reduced
             # eigenvalues are not the brake's), look at the squeal band unless told otherwise
             self.band = BAND_HZ
@@ -107,6 +112,14 @@ class FESolver:
             raise InputError(f"Parameter n_modes={self.n_modes!r} must be an integer >= 1.")
         self.sigma_reach = validate_positive("sigma_reach", self.sigma_reach, allow_zero=True)
         self.reduced = reduction.reduce(self.model, self._basis()) if self.method in ("modal", "pod") else None
+        self.subspace = None
+        if self.method == "subspace":
+            basis = subspace_basis(self.model, freq_max=FREQ_MAX_FACTOR * self.band[1])
+            if self.n_modes is not None:  # the lowest n_modes of them (the projected matrices are their blocks)
+                r = min(int(self.n_modes), basis.n_modes)
+                basis = SubspaceBasis(basis.V[:, :r], basis.freq_hz[:r], float(basis.freq_hz[r - 1]) if r else 0.0,
+                                      {k: v[:r, :r] for k, v in basis.mats.items()}, basis.backend)
+            self.subspace = basis
         self.parts = dense_parts(self.model) if self.method == "dense" else None
 
     def _basis(self) -> NDArray[np.float64]:
@@ -133,6 +146,9 @@ class FESolver:
         if self.method == "sparse":
             return band_eigs(self.model, omega, mu, tan_theta=tan_theta, band=self.band, sigma_reach=self.sigma_reach,
                              workers=self.band_workers)
+        if self.subspace is not None:
+            return subspace_eigs(self.model, omega, mu, tan_theta=tan_theta, band=self.band, basis=self.subspace,
+                                 vectors=vectors)
         if self.reduced is not None:
             self.model.factors(omega, mu, tan_theta)  # the same checks of omega, mu and tan_theta
             lam, Y, res = reduction.reduced_solve(self.reduced, omega, mu + tan_theta, *self.band)
@@ -143,6 +159,15 @@ class FESolver:
         f = sol.eigenvalues.imag / (2 * math.pi)
         keep = (f >= self.band[0]) & (f <= self.band[1])
         return EigenSolution(sol.eigenvalues[keep], sol.vectors[:, keep] if vectors else None, sol.residuals[keep])
+
+
+def _sparse_or_subspace(model: FEModel) -> str:
+    """``"sparse"``, or ``"subspace"`` where even one walk of the band solve would not fit in memory."""
+    from ..solvers.memory import band_memory, memory_limit
+
+    nnz = max(getattr(getattr(model, name), "nnz", model.n_dof**2) for name in model.present)  # ~ the union
+    fits = band_memory(model.n_dof, nnz, k=24, workers=1) <= memory_limit()
+    return "sparse" if fits else "subspace"
 
 
 def _validate_grid(name: str, values: ArrayLike) -> NDArray[np.float64]:
@@ -199,7 +224,7 @@ def fe_stability_map(
         Friction coefficients (default: the model's ``mu_ref``).
     theta : float
         Run-out incline [rad]: ``mu_e = mu + tan(theta)`` replaces mu in ``KR`` and ``DR``.
-    method : {"auto", "dense", "sparse", "modal", "pod"}
+    method : {"auto", "dense", "sparse", "modal", "pod", "subspace"}
         Solver (module docstring). ``pod`` builds its basis from the middle speed at the first and
         last friction (plus the real modes and left corrections).
     band : (float, float), optional
@@ -219,7 +244,8 @@ def fe_stability_map(
         thread limit of :mod:`squealkit._threads`.
     client : distributed.Client, optional
         Solve the rpm rows on this Dask cluster (one task per row, after the first column
-        here): the same numbers as the local run.
+        here): the same numbers as the local run. The solver, with its reduced basis, is
+        built here once and sent to each worker once (scattered), shared by all rows.
     progress : callable, optional
         ``progress(done, total)`` with point counts.
 
@@ -293,7 +319,9 @@ def fe_stability_map(
         if client is not None:
             from ..scale import map_tasks
 
-            items = [(solver, omegas[i], mu_a, t, firsts[i], track) for i in range(n_r)]
+            # the solver with its basis (and the model) goes to every worker once, not once per row
+            shared = client.scatter(solver, broadcast=True, hash=False)
+            items = [(shared, omegas[i], mu_a, t, firsts[i], track) for i in range(n_r)]
             rows = dict(map_tasks(_row_task, items, client=client, name="squealkit-fe-rows",
                                   progress=None if progress is None else lambda d, _t: progress(n_r + d, total),
                                   weights=[n_m - 1] * n_r))
