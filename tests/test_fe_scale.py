@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from squealkit._validation import InputError
+from squealkit import InputError
 from squealkit.fe import FEModel
 from squealkit.solvers import lu
 
