@@ -64,7 +64,7 @@ def countermeasures_plot(ds, *, ax=None):
     for j, name in enumerate(ds["parameter"].values):
         ax.bar(np.arange(n_mode) + (j - (n_par - 1) / 2) * width, effect[:, j], width, label=str(name))
     ax.axhline(0.0, color="k", lw=0.8)
-    ax.set_xticks(range(n_mode), [f"{f:.4g} Hz" for f in ds["frequency_hz"].values])
+    ax.set_xticks(range(n_mode), [f"{f:.0f} Hz" if f >= 100 else f"{f:.4g} Hz" for f in ds["frequency_hz"].values])
     ax.set_xlabel("unstable mode")
     ax.set_ylabel("change of growth rate per step [1/s]")
     ax.set_title("Countermeasures: effect of one declared step on each unstable mode", fontsize=10)

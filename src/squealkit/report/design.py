@@ -55,6 +55,15 @@ def countermeasure_table(ds: Any) -> list[dict[str, Any]]:
     return rows
 
 
+def _change(ds, k: int, change: float) -> str:
+    """``NAME by +0.2 (to 1.2 x nominal)`` for a scale, ``NAME by +0.05 kg`` for a quantity with a unit."""
+    name, unit = str(ds["parameter"].values[k]), str(ds["parameter_unit"].values[k])
+    nominal = float(ds["parameter_nominal"].values[k]) if "parameter_nominal" in ds.coords else math.nan
+    if unit == "1" and nominal == 1.0:
+        return f"{name} by {_g(change)}, to {nominal + change:.3g} x nominal,"
+    return f"{name} by {_g(change)}" + ("" if unit == "1" else f" {unit}")
+
+
 def design_sentences(ds: Any) -> list[str]:
     """Sentences, one per unstable mode and one overall, made from a countermeasure study's numbers.
 
@@ -82,18 +91,20 @@ def design_sentences(ds: Any) -> list[str]:
         f, s = float(ds["frequency_hz"].values[i]), float(ds["growth_rate"].values[i])
         conf = ds["confirmed_change"].values[i]
         steps = np.abs(conf) / step
-        head = f"The mode at {f:.4g} Hz (growth rate {s:.3g} 1/s)"
+        head = f"The mode at {f:.0f} Hz" if f >= 100 else f"The mode at {f:.4g} Hz"
+        head += f" (growth rate {s:.3g} 1/s)"
         if np.isfinite(steps).any():
             j = int(np.nanargmin(steps))
             pred = float(ds["predicted_change"].values[i, j])
             u = "" if unit[j] == "1" else f" {unit[j]}"
-            text = (f"{head} is removed at the smallest cost by changing {names[j]} by {_g(float(conf[j]))}{u} "
-                    f"({steps[j]:.2g} declared steps), confirmed by {int(ds['solves'].values[i, j])} solves; first "
-                    f"order predicted {_g(pred)}{u} ({100 * float(ds['prediction_error'].values[i, j]):.2g} % off).")
-            others = [f"{names[k]} by {_g(float(conf[k]))}" for k in np.argsort(steps) if k != j and np.isfinite(
-                steps[k])]
+            n_solves = int(ds["solves"].values[i, j])
+            text = (f"{head} is removed at the smallest cost by changing {_change(ds, j, float(conf[j])).rstrip(',')} "
+                    f"({steps[j]:.2g} declared steps), confirmed by {n_solves} solve{'s' if n_solves != 1 else ''}; "
+                    f"first order predicted {_g(pred)}{u} "
+                    f"({100 * float(ds['prediction_error'].values[i, j]):.2g} % off).")
+            others = [_change(ds, k, float(conf[k])) for k in np.argsort(steps) if k != j and np.isfinite(steps[k])]
             if others:
-                text += f" It is also removed by changing {', '.join(others)}."
+                text += f" It is also removed by changing {'; '.join(o.rstrip(',') for o in others)}."
         else:
             text = f"{head} is not removed by any single declared change within its range."
         beyond = [names[k] for k in range(len(names)) if ds["status"].values[i, k] == "beyond_range"]
