@@ -44,7 +44,7 @@ def test_docs_build_without_warnings(html):
     assert "**Required**" not in cli and "<strong>Required</strong>" in cli
     # long code lines wrap (docs/_static/wrap.css) instead of being cut at the page's edge
     assert "wrap.css" in cli and "pre-wrap" in (html / "_static" / "wrap.css").read_text()
-    for page in ("models", "stability", "fe-models", "transient", "measurement", "command-line", "speed"):
+    for page in ("models", "stability", "fe-models", "transient", "measurement", "design", "command-line", "speed"):
         assert (html / "guide" / f"{page}.html").stat().st_size > 5000  # the guide
     # the equations render offline: MathJax is bundled with the pages
     assert any((html / "_static").rglob("tex-chtml*.js"))
