@@ -177,6 +177,80 @@ def test_scheduler_that_is_not_dask_times_out_in_one_line(run, tmp_path, monkeyp
     server.close()
 
 
+def test_a_failed_connection_leaves_no_half_made_client(monkeypatch):
+    """A Client that failed to connect was left half made; garbage collection later closed it from
+    whatever thread it ran in, taking distributed's class-wide loop-runner lock, and when that thread
+    already held the lock (starting the next client or local cluster) it waited for itself for ever:
+    a whole test run hung in LocalCluster's start-up so (seen in py-spy: Client.__del__ inside
+    LoopRunner._start_unlocked). A failed attempt now closes its client itself."""
+    import gc
+    import socket
+    import threading
+
+    import distributed
+
+    from squealkit import scale
+
+    silent = socket.socket()  # accepts and never answers: the caller gives up, then the server hangs up
+    silent.bind(("127.0.0.1", 0))
+    silent.listen()
+    held = []
+    threading.Thread(target=lambda: held.append(silent.accept()), daemon=True).start()
+    address = f"tcp://127.0.0.1:{silent.getsockname()[1]}"
+    monkeypatch.setattr(scale, "CONNECT_TIMEOUT", 2.0)
+    with pytest.raises(io.InputError, match="No Dask scheduler answered"):
+        scale.get_client(address)
+    for conn, _ in held:
+        conn.close()
+    silent.close()
+    for t in threading.enumerate():
+        if t.name == "squealkit-connect":
+            t.join(30)
+    left = [c.status for c in gc.get_objects() if isinstance(c, distributed.Client)
+            and getattr(c, "_start_arg", None) == address and c.status != "closed"]
+    assert not left
+
+
+def test_no_garbage_collection_while_a_local_cluster_starts(monkeypatch):
+    """The other half of the hang above: a collection inside distributed's loop-runner lock (while a
+    local cluster starts) that meets an unclosed client waits for itself. Allocations inside the lock
+    would trigger automatic collection (as a busy process does); while squealkit starts a cluster
+    none runs there."""
+    import gc
+    import threading
+
+    from distributed.utils import LoopRunner
+
+    from squealkit import scale
+
+    inside = threading.local()
+    collected_inside = []
+    original = LoopRunner._start_unlocked
+
+    def busy_start(self):
+        inside.flag = True
+        try:
+            junk = [[{}] for _ in range(20000)]  # containers enough for generation-0 collections
+            del junk
+            return original(self)
+        finally:
+            inside.flag = False
+
+    def watch(phase, info):
+        if phase == "start" and getattr(inside, "flag", False):
+            collected_inside.append(info["generation"])
+
+    monkeypatch.setattr(LoopRunner, "_start_unlocked", busy_start)
+    gc.callbacks.append(watch)
+    try:
+        with scale.cluster_client("local", n_workers=1) as client:
+            assert client.submit(sum, [1, 2]).result() == 3
+    finally:
+        gc.callbacks.remove(watch)
+    assert gc.isenabled()
+    assert collected_inside == []
+
+
 def test_local_cluster_whose_workers_never_start_is_one_line(run, tmp_path, monkeypatch):
     """A local cluster whose worker processes never come up (seen once under heavy load: a whole CI run then
     waited in LocalCluster's start-up until it was killed) ends within the start-up bound, in one line."""

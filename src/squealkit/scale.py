@@ -20,6 +20,7 @@ of a given size uses.
 from __future__ import annotations
 
 import contextlib
+import gc
 import json
 import logging
 import os
@@ -27,6 +28,7 @@ import shutil
 import tempfile
 import threading
 import time
+import traceback
 import weakref
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
@@ -108,10 +110,11 @@ def get_client(scheduler: str, *, n_workers: int | None = None):
             with dask.config.set({**LOCAL_WORKER_CONFIG, "temporary-directory": scratch}):
                 # each worker's nanny gives up on a worker process that has not started within the bound,
                 # and the cluster's start then fails instead of waiting for ever
-                cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                                   dashboard_address=None, silence_logs=logging.CRITICAL,
-                                                   local_directory=scratch,
-                                                   death_timeout=f"{LOCAL_START_TIMEOUT:g}s")
+                with _collection_paused():
+                    cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                                       dashboard_address=None, silence_logs=logging.CRITICAL,
+                                                       local_directory=scratch,
+                                                       death_timeout=f"{LOCAL_START_TIMEOUT:g}s")
         except Exception as e:
             shutil.rmtree(scratch, ignore_errors=True)
             if time.monotonic() - t0 >= LOCAL_START_TIMEOUT:
@@ -124,7 +127,8 @@ def get_client(scheduler: str, *, n_workers: int | None = None):
             shutil.rmtree(scratch, ignore_errors=True)
             raise
         _SCRATCH[id(cluster)] = weakref.finalize(cluster, shutil.rmtree, scratch, ignore_errors=True)
-        client = distributed.Client(cluster)
+        with _collection_paused():
+            client = distributed.Client(cluster)
         return client
     if scheduler.endswith(".json"):
         if not os.path.isfile(scheduler):
@@ -147,6 +151,56 @@ def get_client(scheduler: str, *, n_workers: int | None = None):
 CONNECT_TIMEOUT = 20.0
 
 
+_PAUSE_LOCK = threading.Lock()
+_PAUSE = {"depth": 0, "was_enabled": True}
+
+
+@contextlib.contextmanager
+def _collection_paused() -> Iterator[None]:
+    """No automatic garbage collection while a Dask client or local cluster starts.
+
+    ``distributed`` starts every client's and cluster's event loop under one class-wide lock
+    (``LoopRunner._lock``), and a Client that is collected closes itself by taking the same lock. A
+    collection that runs in the starting thread, while it holds the lock, and finds an unclosed
+    client among the garbage, makes the thread wait for itself for ever (a whole test run hung so in
+    ``LocalCluster``'s start-up). Explicit ``gc.collect()`` calls still run; nested and concurrent
+    pauses count.
+    """
+    with _PAUSE_LOCK:
+        if _PAUSE["depth"] == 0:
+            _PAUSE["was_enabled"] = gc.isenabled()
+            gc.disable()
+        _PAUSE["depth"] += 1
+    try:
+        yield
+    finally:
+        with _PAUSE_LOCK:
+            _PAUSE["depth"] -= 1
+            if _PAUSE["depth"] == 0 and _PAUSE["was_enabled"]:
+                gc.enable()
+
+
+def _close_quietly(client) -> None:
+    with contextlib.suppress(Exception):
+        client.close()
+
+
+def _close_half_made_client(distributed, error: BaseException) -> None:
+    """Close the Client whose constructor raised ``error`` (found in the traceback's frames).
+
+    A Client that failed to connect is left half made; garbage collection later runs its
+    ``__del__``, which closes it by taking ``distributed``'s class-wide loop-runner lock. When
+    that collection happens in a thread that already holds the lock (starting another client or a
+    local cluster), the thread waits for itself for ever: whole test runs hung so. Closed here, in
+    this thread and holding no lock, its ``__del__`` has nothing left to do.
+    """
+    for frame, _ in traceback.walk_tb(error.__traceback__):
+        candidate = frame.f_locals.get("self")
+        if isinstance(candidate, distributed.Client):
+            _close_quietly(candidate)
+            return
+
+
 def _connect(distributed, address: str):
     """A client of the scheduler at ``address``, or a one-line InputError within the timeout."""
     import dask
@@ -165,16 +219,27 @@ def _connect(distributed, address: str):
         for k in set(distributed.client._global_clients) - defaults:
             distributed.client._global_clients.pop(k, None)
 
+    abandoned = threading.Event()
+
     def attempt() -> None:
         try:
-            result["client"] = distributed.Client(address, timeout=f"{CONNECT_TIMEOUT / 2:g}s")
+            # not paused: a scheduler that never answers would keep collection off for ever; the
+            # half-made clients this thread leaves are closed here instead (the lock's other half)
+            client = distributed.Client(address, timeout=f"{CONNECT_TIMEOUT / 2:g}s")
         except BaseException as e:  # reported below, in the caller's thread
+            _close_half_made_client(distributed, e)
             result["error"] = e
+            return
+        if abandoned.is_set():  # answered after the caller gave up: nobody will close it
+            _close_quietly(client)
+        else:
+            result["client"] = client
 
     worker = threading.Thread(target=attempt, name="squealkit-connect", daemon=True)
     worker.start()
     worker.join(CONNECT_TIMEOUT)
     if worker.is_alive():
+        abandoned.set()
         forget_the_client()
         raise InputError(f"No Dask scheduler answered at {address!r} within {CONNECT_TIMEOUT:g} s "
                          "(is a Dask scheduler listening there?).")
