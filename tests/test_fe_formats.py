@@ -356,6 +356,16 @@ def test_modes_and_stability_on_abaqus_matrices_with_an_inp(run, abaqus_brake, d
     r = run("stability", "--config", str(abaqus_brake), "--rpm", "1000", "--method", "sparse", "--band",
             "9000:13000", "--json")
     assert r.exit_code == 0, (r.output, r.exception)
+    # the report of the same files (issue #25: modes, stability and report on Abaqus matrices + an .inp):
+    # every unstable mode of the case drawn on the .inp's mesh
+    toml = abaqus_brake.parent / "brake_report.toml"
+    toml.write_text(abaqus_brake.read_text() + '\n[report]\nrpm = 1000\nmu = 0.5\neigen_band = [9000, 13000]\n'
+                    'method = "sparse"\nmax_views = 1\nn_frames = 4\n')
+    r = run("report", "--config", str(toml), "--out-dir", str(tmp_path / "rep"), "--quick", "--json")
+    assert r.exit_code == 0, (r.output, r.exception)
+    assert int(json.loads(r.stdout)["numbers"]["fe_modes"]["unstable"]) == len(unstable)
+    html = (tmp_path / "rep" / "report.html").read_text()
+    assert html.count("Mesh3d") >= 1 or html.count('"type":"mesh3d"') >= 1
 
 
 # ----------------------------------------------------------------------------- malformed files: one line, exit 2
