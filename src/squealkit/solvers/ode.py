@@ -881,6 +881,15 @@ def _mm(A, B, out):
             out[i, j] = acc
 
 
+@njit(cache=True, inline="always")
+def _copy2(src, dst):
+    """``dst[:, :] = src`` by a loop: an array assignment makes numba compile its shape-mismatch
+    message (string formatting, ~10 s on a first run) into the kernel."""
+    for i in range(src.shape[0]):
+        for j in range(src.shape[1]):
+            dst[i, j] = src[i, j]
+
+
 @njit(cache=True)
 def sampled_rhs(A, step, stage, Y, out):
     """``A(t) Y`` from samples ``A`` (2S+1, m, m) of A at the steps and their midpoints (``A[2 step + stage]``)."""
@@ -899,7 +908,7 @@ def _runout_rhs(data, step, stage, Y, out):
     elif stage == 2:
         u = u + du
     _state_matrix(_slope_at(tg, u), mu, s, kin, MC, MK0, MKn, MKf, MKnx, MKfx, A)
-    out[:, :] = A @ Y
+    _copy2(A @ Y, out)
 
 
 #: The run-out's monodromy kernel, named for the parallel loop of :func:`monodromy`.
@@ -921,4 +930,4 @@ def monodromy(tg, mu, s, kin, MC, MK0, MKn, MKf, MKnx, MKfx, period, n_steps, ou
     for bi in prange(B):
         data = (tg[bi], mu[bi], s[bi], kin[bi], MC[bi], MK0[bi], MKn[bi], MKf[bi], MKnx[bi], MKfx[bi], du,
                 np.empty((m, m)))
-        out[bi] = _runout_rk4(data, n_steps, h, m)
+        _copy2(_runout_rk4(data, n_steps, h, m), out[bi])
