@@ -10,10 +10,11 @@ them into the same cache while this process compiles and runs the stability step
 compile the same kernel, and the step then loads the kernel from the cache. A group the
 child has not begun when a step needs it is the step's: the step claims it (a file
 created exclusively, the child claims each group the same way before it begins it) and
-compiles it itself, the child skips it, and neither process waits for the other. The child
-starts with the stability grid's later kernels (verdicts, mode selection, tracking), which
-it compiles while this process compiles the grid's root finder: the two cores share the
-Fig. 2 step's compile, the longest of a first run.
+compiles it itself, the child skips it, and neither process waits for the other. After
+the transient integrator (the largest kernel, the child's longest group) the child compiles
+the stability grid's later kernels (verdicts, mode selection, tracking) this process has
+not reached yet: on a loaded machine the Fig. 2 step is still compiling when the child is
+done with the integrator (on an idle one it is past them, and the child merely loads them).
 
 Nothing is started when it would not pay: on one core, with ``SQUEALKIT_THREADS=1`` or
 ``--threads 1`` (the user capped squealkit to one thread), or when a stamp file says this
@@ -67,10 +68,13 @@ def _stability() -> None:
     """The kernels a stability grid needs after its roots, compiled for the types the grid passes.
 
     The parent compiles the roots' kernels (:func:`~squealkit.solvers.small.charpoly_table`,
-    :func:`~squealkit.solvers.small.quadratic_eigvals`, the largest) at the start of the
-    Fig. 2 step; meanwhile the child compiles, in the order the grid calls them, the root
-    finder's error radii, the verdicts, the mode selection, the tracking along mu and theta
-    and the derived quantities, and the parent loads them from the cache when it gets there. Compiled by
+    :func:`~squealkit.solvers.small.quadratic_eigvals`, the largest) in the Fig. 2 step;
+    the child compiles, in the order the grid calls them, the root finder's error radii,
+    the verdicts, the mode selection, the tracking along mu and theta and the derived
+    quantities, and the parent loads those the child got to first from the cache. Measured:
+    first in the child, this group delays the integrator, the child's critical path, more
+    than it saves the parent (an idle machine: 64.7 s against 55.8 s); after it, it helps
+    only where the parent is slower (a loaded machine). Compiled by
     signature, without a call: a kernel the parent reaches first it compiles itself, as
     without the child. ``tests/test_warmup_stability.py`` checks these are the grid's types.
     """
@@ -81,9 +85,8 @@ def _stability() -> None:
 
     c2, f2, i2 = nb.complex128[:, ::1], nb.float64[:, ::1], nb.int64[:, ::1]
     i1, f1 = nb.int8[::1], nb.float64[::1]
-    # the root finder's second half first: the parent reaches it after the first (~20 s) and
-    # then loads it (M, C, K0, Kn, Kf, g, e, perms, signs, table, Knx, Kfx, st, roots, radii,
-    # even, start, stop)
+    # the root finder's error radii, the second half of quadratic_eigvals (M, C, K0, Kn, Kf, g,
+    # e, perms, signs, table, Knx, Kfx, st, roots, radii, even, start, stop)
     small._radii_range.compile((f2, f2, f2, f2, f2, f1, f1, i2, f1, nb.float64[:, :, ::1], f2, f2, f1, c2, f2,
                                 nb.boolean[::1], nb.int64, nb.int64))
     small.classify_points.compile((c2, f2, nb.boolean[::1], nb.float64, i1, f1))
@@ -131,8 +134,8 @@ def _measurement() -> None:
 
 #: Kernel groups the child can compile, in the order a report needs them.
 GROUPS: dict[str, Callable[[], None]] = {
-    "stability": _stability,
     "transient": _transient,
+    "stability": _stability,
     "nonlinear": _nonlinear,
     "measurement": _measurement,
 }
@@ -188,6 +191,7 @@ def start(groups: Iterable[str]) -> bool:
     proc = _child["proc"]
     if proc is not None and proc.poll() is None:  # one child at a time
         return False
+    claims = None
     try:
         claims = tempfile.mkdtemp(prefix="squealkit-warmup-")
         proc = subprocess.Popen(
@@ -195,6 +199,8 @@ def start(groups: Iterable[str]) -> bool:
             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
         )
     except OSError:  # no process to spare: the steps compile their kernels themselves
+        if claims is not None:
+            shutil.rmtree(claims, ignore_errors=True)
         return False
     _child["proc"] = proc
     _child["pending"] = set(names)
@@ -254,14 +260,12 @@ def _main(claims: str, names: list[str]) -> int:
     import warnings
 
     warnings.simplefilter("ignore")
-    done = set()
     for name in names:
-        if not _claim(claims, name):  # the parent got there first and compiles it itself
+        if not _claim(claims, name):  # the parent got there first and compiles it into the same cache
             continue
         GROUPS[name]()
-        done.add(name)
         print(name, flush=True)
-    if done == set(GROUPS):
+    if set(names) == set(GROUPS):
         stamp = _stamp()
         if stamp is not None:
             try:
