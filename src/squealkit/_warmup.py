@@ -7,7 +7,14 @@ other, on one core. :func:`start` hands the kernels of the later steps (the tran
 integrator, the limit-cycle and the measurement kernels) to a child process that compiles
 them into the same cache while this process compiles and runs the stability steps;
 :func:`wait` blocks a step until the child has finished its group, so the two never
-compile the same kernel, and the step then loads the kernel from the cache.
+compile the same kernel, and the step then loads the kernel from the cache. A group the
+child has not begun when a step needs it is the step's: the step claims it (a file
+created exclusively, the child claims each group the same way before it begins it) and
+compiles it itself, the child skips it, and neither process waits for the other. After
+the transient integrator (the largest kernel, the child's longest group) the child compiles
+the stability grid's later kernels (verdicts, mode selection, tracking) this process has
+not reached yet: on a loaded machine the Fig. 2 step is still compiling when the child is
+done with the integrator (on an idle one it is past them, and the child merely loads them).
 
 Nothing is started when it would not pay: on one core, with ``SQUEALKIT_THREADS=1`` or
 ``--threads 1`` (the user capped squealkit to one thread), or when a stamp file says this
@@ -23,8 +30,10 @@ import atexit
 import contextlib
 import hashlib
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 import threading
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
@@ -55,6 +64,39 @@ def _lapack_eigenvalues(model, mu, tan_theta=0.0, *, damped=False, **_ignored):
     return out
 
 
+def _stability() -> None:
+    """The kernels a stability grid needs after its roots, compiled for the types the grid passes.
+
+    The parent compiles the roots' kernels (:func:`~squealkit.solvers.small.charpoly_table`,
+    :func:`~squealkit.solvers.small.quadratic_eigvals`, the largest) in the Fig. 2 step;
+    the child compiles, in the order the grid calls them, the root finder's error radii,
+    the verdicts, the mode selection, the tracking along mu and theta and the derived
+    quantities, and the parent loads those the child got to first from the cache. Measured:
+    first in the child, this group delays the integrator, the child's critical path, more
+    than it saves the parent (an idle machine: 64.7 s against 55.8 s); after it, it helps
+    only where the parent is slower (a loaded machine). Compiled by
+    signature, without a call: a kernel the parent reaches first it compiles itself, as
+    without the child. ``tests/test_warmup_stability.py`` checks these are the grid's types.
+    """
+    import numba as nb
+
+    from .solvers import small
+    from .stability import tracking
+
+    c2, f2, i2 = nb.complex128[:, ::1], nb.float64[:, ::1], nb.int64[:, ::1]
+    i1, f1 = nb.int8[::1], nb.float64[::1]
+    # the root finder's error radii, the second half of quadratic_eigvals (M, C, K0, Kn, Kf, g,
+    # e, perms, signs, table, Knx, Kfx, st, roots, radii, even, start, stop)
+    small._radii_range.compile((f2, f2, f2, f2, f2, f1, f1, i2, f1, nb.float64[:, :, ::1], f2, f2, f1, c2, f2,
+                                nb.boolean[::1], nb.int64, nb.int64))
+    small.classify_points.compile((c2, f2, nb.boolean[::1], nb.float64, i1, f1))
+    small.select_modes.compile((c2, f2, c2, f2))
+    tracking._track_column.compile((c2, i2))
+    tracking._track_rows.compile((nb.complex128[:, :, ::1], c2, i2))
+    tracking._carry.compile((c2, f2, c2, f2))
+    small.derived_quantities.compile((c2, f2, f1, i1, nb.float64))
+
+
 def _transient() -> None:
     import importlib
 
@@ -73,6 +115,13 @@ def _nonlinear() -> None:
 
     speed = ReportSettings.__dataclass_fields__["speed"].default
     limit_cycle_branch(get_preset("lv2013"), MU_RANGE, harmonics=HARMONICS, n_points=2, speed=speed)
+    # the branch's Floquet multipliers (one RK4 step over samples of A, the report's types): the
+    # two points above end before any cycle needs them
+    import numpy as np
+
+    from .solvers import ode
+
+    ode.monodromy_rk4(ode.sampled_rhs, np.zeros((3, 2, 2)), 1, 0.5, 2)
 
 
 def _measurement() -> None:
@@ -86,11 +135,23 @@ def _measurement() -> None:
 #: Kernel groups the child can compile, in the order a report needs them.
 GROUPS: dict[str, Callable[[], None]] = {
     "transient": _transient,
+    "stability": _stability,
     "nonlinear": _nonlinear,
     "measurement": _measurement,
 }
 
-_child: dict[str, object] = {"proc": None, "pending": set(), "lock": threading.Lock()}
+_child: dict[str, object] = {"proc": None, "pending": set(), "lock": threading.Lock(), "claims": None}
+
+
+def _claim(claims: str, name: str) -> bool:
+    """True for the first of the two processes to claim group ``name`` (an exclusive create)."""
+    try:
+        os.close(os.open(os.path.join(claims, name), os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+    except FileExistsError:
+        return False
+    except OSError:  # the folder is gone (the parent's run is over) or unwritable: the other one has it
+        return False
+    return True
 
 
 def _kernel_sources() -> list[Path]:
@@ -130,15 +191,20 @@ def start(groups: Iterable[str]) -> bool:
     proc = _child["proc"]
     if proc is not None and proc.poll() is None:  # one child at a time
         return False
+    claims = None
     try:
+        claims = tempfile.mkdtemp(prefix="squealkit-warmup-")
         proc = subprocess.Popen(
-            [sys.executable, "-m", "squealkit._warmup", *names], stdin=subprocess.DEVNULL,
+            [sys.executable, "-m", "squealkit._warmup", claims, *names], stdin=subprocess.DEVNULL,
             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
         )
     except OSError:  # no process to spare: the steps compile their kernels themselves
+        if claims is not None:
+            shutil.rmtree(claims, ignore_errors=True)
         return False
     _child["proc"] = proc
     _child["pending"] = set(names)
+    _child["claims"] = claims
     return True
 
 
@@ -153,12 +219,17 @@ def compiling(groups: Iterable[str]) -> Iterator[None]:
 
 
 def wait(groups: Iterable[str]) -> None:
-    """Return once the child has compiled ``groups`` (at once if there is no child or it died)."""
+    """Return once the child has compiled ``groups``, at once if there is no child, it died, or it
+    has not begun them (then they are the caller's to compile, and the child skips them)."""
     proc = _child["proc"]
     if proc is None:
         return
     want = set(groups) & _child["pending"]
     with _child["lock"]:
+        for name in sorted(want):
+            if _claim(_child["claims"], name):  # not begun: compiling it here beats waiting for it
+                _child["pending"].discard(name)
+                want.discard(name)
         while want and proc.stdout is not None:
             line = proc.stdout.readline()
             if not line:  # the child ended (done or failed): the steps compile what is left
@@ -175,18 +246,23 @@ def stop() -> None:
     if proc is not None and proc.poll() is None:
         proc.kill()
         proc.wait()
+    if _child["claims"] is not None:
+        shutil.rmtree(_child["claims"], ignore_errors=True)
     _child["proc"] = None
     _child["pending"] = set()
+    _child["claims"] = None
 
 
 atexit.register(stop)
 
 
-def _main(names: list[str]) -> int:
+def _main(claims: str, names: list[str]) -> int:
     import warnings
 
     warnings.simplefilter("ignore")
     for name in names:
+        if not _claim(claims, name):  # the parent got there first and compiles it into the same cache
+            continue
         GROUPS[name]()
         print(name, flush=True)
     if set(names) == set(GROUPS):
@@ -201,4 +277,4 @@ def _main(names: list[str]) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover - run as the child
-    sys.exit(_main(sys.argv[1:]))
+    sys.exit(_main(sys.argv[1], sys.argv[2:]))

@@ -200,7 +200,7 @@ def reproduce(
     from .steps_stability import figure_formats
 
     # a preview draws each figure once (PNG); the later steps' kernels compile on the other core meanwhile
-    with (_warmup.compiling(["transient", "nonlinear", "measurement"]),
+    with (_warmup.compiling(["transient", "stability", "nonlinear", "measurement"]),
           figure_formats(("png",) if quick else ("png", "svg")), output_folder(out, force=force) as stage):
         figures, data = stage / "figures", stage / "data"
         figures.mkdir(parents=True)

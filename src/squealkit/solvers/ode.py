@@ -818,7 +818,10 @@ def _rk4_for(rhs):
 
     The right-hand side is a variable of the closure, not an argument: a compiled function passed
     as an argument is a value numba's cache cannot keep ("dynamic globals"), so the kernel was
-    compiled again in every process; a closure's variables are part of its cache key instead.
+    compiled again in every process. The closure itself, called from Python, is no better: its
+    cache key holds its variables pickled, and a compiled function pickles with an id of its
+    process. So each kernel is called from a module-level compiled function
+    (:func:`monodromy`, :func:`_sampled_monodromy`), which numba's cache keeps with it.
     """
 
     @njit(cache=True)
@@ -863,6 +866,8 @@ def monodromy_rk4(rhs, data, n_steps, h, m):
     model on a periodic run-out, :func:`monodromy`) or :func:`sampled_rhs` (samples of A, the limit
     cycles' variational equations). One kernel per ``rhs``, compiled once and kept in numba's cache.
     """
+    if rhs is sampled_rhs:  # the cached one (see _rk4_for)
+        return _sampled_monodromy(data, n_steps, h, m)
     kernel = _RK4.get(rhs)
     if kernel is None:
         kernel = _RK4[rhs] = _rk4_for(rhs)
@@ -879,6 +884,15 @@ def _mm(A, B, out):
             for r in range(m):
                 acc += A[i, r] * B[r, j]
             out[i, j] = acc
+
+
+@njit(cache=True, inline="always")
+def _copy2(src, dst):
+    """``dst[:, :] = src`` by a loop: an array assignment makes numba compile its shape-mismatch
+    message (string formatting, ~10 s on a first run) into the kernel."""
+    for i in range(src.shape[0]):
+        for j in range(src.shape[1]):
+            dst[i, j] = src[i, j]
 
 
 @njit(cache=True)
@@ -899,7 +913,16 @@ def _runout_rhs(data, step, stage, Y, out):
     elif stage == 2:
         u = u + du
     _state_matrix(_slope_at(tg, u), mu, s, kin, MC, MK0, MKn, MKf, MKnx, MKfx, A)
-    out[:, :] = A @ Y
+    _copy2(A @ Y, out)
+
+
+_sampled_rk4 = _RK4[sampled_rhs] = _rk4_for(sampled_rhs)
+
+
+@njit(cache=True)
+def _sampled_monodromy(A, n_steps, h, m):
+    """:func:`monodromy_rk4` of :func:`sampled_rhs`, in numba's cache (see :func:`_rk4_for`)."""
+    return _sampled_rk4(A, n_steps, h, m)
 
 
 #: The run-out's monodromy kernel, named for the parallel loop of :func:`monodromy`.
@@ -921,4 +944,4 @@ def monodromy(tg, mu, s, kin, MC, MK0, MKn, MKf, MKnx, MKfx, period, n_steps, ou
     for bi in prange(B):
         data = (tg[bi], mu[bi], s[bi], kin[bi], MC[bi], MK0[bi], MKn[bi], MKf[bi], MKnx[bi], MKfx[bi], du,
                 np.empty((m, m)))
-        out[bi] = _runout_rk4(data, n_steps, h, m)
+        _copy2(_runout_rk4(data, n_steps, h, m), out[bi])

@@ -125,7 +125,7 @@ def charpoly_table(M, C, K0, Kn, Kf, perms, signs):
                         tb[d + 2, i, j] += a * m2
                         tb[d, i + 1, j] += a * kn
                         tb[d, i, j + 1] += a * kf
-            ta[:, :, :] = tb
+            ta, tb = tb, ta  # no array copy: numba compiles its shape-mismatch message (~10 s) for one
         sg = signs[p]
         for d in range(deg + 1):
             for i in range(n + 1):

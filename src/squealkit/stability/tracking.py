@@ -69,6 +69,14 @@ def _assign_step(pred, cand, perms, out):
         done[bk] = True
 
 
+@nb.njit(cache=True, nogil=True, inline="always")
+def _copy(src, dst):
+    """``dst[:] = src`` by a loop: an array assignment makes numba compile its shape-mismatch
+    message (string formatting, ~10 s on a first run) into every kernel that has one."""
+    for k in range(src.shape[0]):
+        dst[k] = src[k]
+
+
 @nb.njit(cache=True, nogil=True)
 def _extrapolate(a, b, have_b, out):
     for k in range(a.shape[0]):
@@ -100,7 +108,7 @@ def _track_column(col, perms):
     nmu, n = col.shape
     out = np.empty_like(col)
     p1 = np.empty(n, dtype=np.complex128)
-    out[0] = col[0]
+    _copy(col[0], out[0])
     _order_locked(out[0])
     for i in range(1, nmu):
         _extrapolate(out[i - 1], out[i - 2] if i > 1 else out[i - 1], i > 1, p1)
@@ -120,7 +128,7 @@ def _track_rows(lam, first, perms):
     out = np.empty_like(lam)
     for i in nb.prange(nmu):
         q = np.empty(n, dtype=np.complex128)
-        out[i, 0] = first[i]
+        _copy(first[i], out[i, 0])
         for j in range(1, nth):
             _extrapolate(out[i, j - 1], out[i, j - 2] if j > 1 else out[i, j - 1], j > 1, q)
             _assign_step(q, lam[i, j], perms, out[i, j])
