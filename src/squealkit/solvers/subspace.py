@@ -63,7 +63,7 @@ class SubspaceBasis:
     ----------
     V : ndarray, shape (n, r)
         Mass-normalised real modes (``V^T M V = I``), by frequency.
-    freq_hz : ndarray, shape (r,)
+    frequency_hz : ndarray, shape (r,)
         Their natural frequencies [Hz].
     freq_max : float
         The cut-off [Hz]: every mode of ``(M, K_sym)`` below it is in ``V``.
@@ -74,7 +74,7 @@ class SubspaceBasis:
     """
 
     V: NDArray[np.float64]
-    freq_hz: NDArray[np.float64]
+    frequency_hz: NDArray[np.float64]
     freq_max: float
     mats: dict[str, NDArray[np.float64]]
     backend: str

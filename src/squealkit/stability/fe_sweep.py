@@ -117,7 +117,8 @@ class FESolver:
             basis = subspace_basis(self.model, freq_max=FREQ_MAX_FACTOR * self.band[1])
             if self.n_modes is not None:  # the lowest n_modes of them (the projected matrices are their blocks)
                 r = min(int(self.n_modes), basis.n_modes)
-                basis = SubspaceBasis(basis.V[:, :r], basis.freq_hz[:r], float(basis.freq_hz[r - 1]) if r else 0.0,
+                top = float(basis.frequency_hz[r - 1]) if r else 0.0
+                basis = SubspaceBasis(basis.V[:, :r], basis.frequency_hz[:r], top,
                                       {k: v[:r, :r] for k, v in basis.mats.items()}, basis.backend)
             self.subspace = basis
         self.parts = dense_parts(self.model) if self.method == "dense" else None
