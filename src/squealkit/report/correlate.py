@@ -110,11 +110,8 @@ def write_correlation_report(ds: Any, out: Path, *, synthetic: bool = False) -> 
     Path
         The report.
     """
-    import matplotlib.pyplot as plt
-
-    from ..io import atomic_path, save_figure
     from ..plotting import correlate as cp
-    from .html import render_html
+    from .html import save_figures, write_report
 
     figures = out / "figures"
     figures.mkdir(exist_ok=True)
@@ -138,19 +135,11 @@ def write_correlation_report(ds: Any, out: Path, *, synthetic: bool = False) -> 
             figs[f"profile_{name}"] = (cp.calibration_profile_plot(ds, name),
                                        f"Profile of {name}: applications wrong at each value (others re-fitted); "
                                        "shaded: the interval the data allow.")
-    refs = []
-    for stem, (fig, caption) in figs.items():
-        save_figure(fig, figures / f"{stem}.png")
-        plt.close(fig)
-        refs.append(FigureRef(stem, caption))
-    section = correlation_section(ds, tuple(refs))
+    section = correlation_section(ds, save_figures(figs, figures))
     if synthetic:
         section = Section(section.key, section.title, ("SYNTHETIC DATA: the campaign's recordings were made by "
                                                        "squealkit with known truth; not a measurement.",
                                                        *section.paragraphs),
                           section.comparisons, section.tables, section.figures, numbers=section.numbers)
-    html = render_html([section], figures, title="squealkit test-versus-model correlation",
-                       subtitle=f"campaign {ds.attrs.get('campaign', '')}; frequency tolerance {tol:g} %")
-    with atomic_path(out / "report.html") as tmp:
-        tmp.write_text(html, encoding="utf-8")
-    return out / "report.html"
+    return write_report([section], out, title="squealkit test-versus-model correlation",
+                        subtitle=f"campaign {ds.attrs.get('campaign', '')}; frequency tolerance {tol:g} %")

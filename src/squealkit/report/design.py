@@ -175,11 +175,8 @@ def write_design_report(ds: Any, out: Path, *, doe: Any = None) -> Path:
     Path
         The report.
     """
-    import matplotlib.pyplot as plt
-
-    from ..io import atomic_path, save_figure
     from ..plotting import design as dp
-    from .html import render_html
+    from .html import save_figures, write_report
 
     figures = out / "figures"
     figures.mkdir(exist_ok=True)
@@ -190,14 +187,6 @@ def write_design_report(ds: Any, out: Path, *, doe: Any = None) -> Path:
     if doe is not None:
         figs["pareto"] = (dp.pareto_plot(doe), "Largest growth rate against the size of the change (declared steps) "
                                                "over the DOE; red: the Pareto front.")
-    refs = []
-    for stem, (fig, caption) in figs.items():
-        save_figure(fig, figures / f"{stem}.png")
-        plt.close(fig)
-        refs.append(FigureRef(stem, caption))
-    section = design_section(ds, doe, tuple(refs))
-    html = render_html([section], figures, title="squealkit design study",
-                       subtitle=f"{ds.attrs.get('model_kind', 'model')} model, method {ds.attrs.get('method')}")
-    with atomic_path(out / "report.html") as tmp:
-        tmp.write_text(html, encoding="utf-8")
-    return out / "report.html"
+    section = design_section(ds, doe, save_figures(figs, figures))
+    return write_report([section], out, title="squealkit design study",
+                        subtitle=f"{ds.attrs.get('model_kind', 'model')} model, method {ds.attrs.get('method')}")

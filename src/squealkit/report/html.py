@@ -10,7 +10,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from .. import __version__
-from .document import Comparison, Section, Table
+from .document import Comparison, FigureRef, Section, Table
 
 __all__ = ["render_html"]
 
@@ -135,3 +135,27 @@ def render_html(sections: Sequence[Section], figures_dir: Path, *, title: str, s
     )
     parts.append("</body></html>")
     return "\n".join(parts)
+
+
+def save_figures(figs: dict, figures_dir: Path) -> tuple[FigureRef, ...]:
+    """Save each ``stem -> (figure, caption)`` as ``figures_dir/stem.png``, close it, and return the references."""
+    import matplotlib.pyplot as plt
+
+    from ..io import save_figure
+
+    refs = []
+    for stem, (fig, caption) in figs.items():
+        save_figure(fig, figures_dir / f"{stem}.png")
+        plt.close(fig)
+        refs.append(FigureRef(stem, caption))
+    return tuple(refs)
+
+
+def write_report(sections: Sequence[Section], out: Path, *, title: str, subtitle: str = "") -> Path:
+    """``out/report.html`` rendered from ``sections`` (figures in ``out/figures``), written whole or not at all."""
+    from ..io import atomic_path
+
+    page = render_html(sections, out / "figures", title=title, subtitle=subtitle)
+    with atomic_path(out / "report.html") as tmp:
+        tmp.write_text(page, encoding="utf-8")
+    return out / "report.html"
