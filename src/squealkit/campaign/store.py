@@ -25,6 +25,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from .._optional import require
 from .._validation import InputError
 
 __all__ = ["APPLICATION_COLUMNS", "EVENT_COLUMNS", "CampaignStore"]
@@ -101,10 +102,7 @@ class CampaignStore:
     """
 
     def __init__(self, path: str | Path):
-        try:
-            import duckdb
-        except ImportError as e:
-            raise InputError("Campaigns need DuckDB: pip install 'squealkit[campaign]'.") from e
+        duckdb = require("duckdb", "A campaign store")
         self.path = Path(path)
         self._limited = False
         existed = self.path.exists()

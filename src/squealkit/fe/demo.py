@@ -57,6 +57,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._deprecation import renamed_kwargs
+from .._optional import require
 from .._validation import InputError, check_budget
 from .dofmap import DofMap
 from .mesh import FEMesh, abaqus_inp_text
@@ -131,7 +132,7 @@ def _default_n_r(n_theta: int, geom: FEDemoGeometry | None = None) -> int:
 
 def _annular_hex(r: np.ndarray, theta: np.ndarray, z: np.ndarray, periodic: bool):
     """Hexahedra of a (r, theta, z) tensor grid mapped to Cartesian; merges theta = 2 pi."""
-    from skfem import MeshHex
+    MeshHex = require("skfem", "The built-in FE brake").MeshHex
 
     box = MeshHex.init_tensor(r, theta, z)
     rr, tt, zz = box.p
@@ -156,7 +157,7 @@ def _annular_hex(r: np.ndarray, theta: np.ndarray, z: np.ndarray, periodic: bool
 
 def _build_mesh(geom: FEDemoGeometry, n_theta: int, n_r: int, n_z: int):
     """Disc + two pads as one (disconnected) MeshHex; returns mesh and element masks."""
-    from skfem import MeshHex
+    MeshHex = require("skfem", "The built-in FE brake").MeshHex
 
     r = np.linspace(geom.r_inner, geom.r_outer, n_r + 1)
     theta = np.linspace(0.0, 2 * math.pi, n_theta + 1)
@@ -322,7 +323,9 @@ def build_fe_demo(
         {"hexahedron": (e, 8)} of the element vertices, ``disc`` element mask) and
         ``n_dofs``.
     """
-    from skfem import Basis, BilinearForm, ElementHex2, FacetBasis, LinearForm
+    skfem = require("skfem", "The built-in FE brake")
+    Basis, BilinearForm, ElementHex2, FacetBasis, LinearForm = (
+        skfem.Basis, skfem.BilinearForm, skfem.ElementHex2, skfem.FacetBasis, skfem.LinearForm)
 
     geom = geometry or FEDemoGeometry()
     geom.validate()
@@ -347,7 +350,7 @@ def build_fe_demo(
 
     mesh, is_disc = _build_mesh(geom, int(n_theta), int(n_r), int(n_z))
     if not pads:
-        from skfem import MeshHex
+        MeshHex = require("skfem", "The built-in FE brake").MeshHex
 
         used = np.unique(mesh.t[:, is_disc])
         renumber = np.full(mesh.p.shape[1], -1, dtype=np.int64)
@@ -554,9 +557,9 @@ def write_fe_demo(model: Mapping[str, Any], out_dir: str | Path) -> Path:
         toml += 'dof_names = "dof_names.txt"  # node{k}.x/y/z: mesh point k\n'
         mesh = model.get("mesh")
         if mesh is not None:
-            try:
-                import meshio
-            except ImportError:  # pragma: no cover - optional
+            try:  # the mesh file is written when meshio is there; the matrices do not need it
+                meshio = require("meshio", "The demo's mesh file")
+            except InputError:  # pragma: no cover - optional
                 meshio = None
             if meshio is not None:
                 meshio.write(

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._optional import require
 from .._validation import InputError
 from ._bulk import bulk_cards, field_int, field_real
 from .dofmap import DofMap
@@ -119,7 +120,7 @@ class FEMesh:
 
     def to_meshio(self) -> Any:
         """The mesh as a ``meshio.Mesh`` (point data ``node_label``); needs meshio."""
-        import meshio
+        meshio = require("meshio", "A mesh for meshio")
 
         return meshio.Mesh(self.points, list(self.cells), point_data={"node_label": self.node_labels})
 
@@ -159,10 +160,7 @@ def read_mesh(path: str | Path) -> FEMesh:
 
 
 def _read_meshio(p: Path) -> FEMesh:
-    try:
-        import meshio
-    except ImportError:
-        raise InputError(f"{p.name}: reading a mesh needs meshio: pip install meshio.") from None
+    meshio = require("meshio", f"{p.name}: reading a mesh")
     try:
         m = meshio.read(p)
     except Exception as e:  # meshio raises many kinds on a malformed or unknown file
@@ -183,6 +181,7 @@ def _inp_params(line: str) -> tuple[str, dict[str, str]]:
 
 def _read_inp(p: Path) -> FEMesh:
     """Abaqus ``*NODE`` and ``*ELEMENT`` blocks of an input file (flat decks: parts are not instanced)."""
+    require("meshio", f"{p.name}: reading an Abaqus input file")
     from meshio._common import num_nodes_per_cell
     from meshio.abaqus._abaqus import abaqus_to_meshio_type
 
@@ -287,11 +286,8 @@ def _read_bdf(p: Path) -> FEMesh:
 
 def _read_cdb(p: Path) -> FEMesh:
     """An ANSYS archive (``CDWRITE``) through ansys-mapdl-reader."""
-    try:
-        from ansys.mapdl.reader import Archive
-    except ImportError:
-        raise InputError(f"{p.name}: reading an ANSYS .cdb needs ansys-mapdl-reader: "
-                         "pip install 'squealkit[ansys]'.") from None
+    Archive = require("ansys.mapdl.reader", f"{p.name}: reading an ANSYS .cdb").Archive
+    require("meshio", f"{p.name}: reading an ANSYS .cdb")
     try:
         archive = Archive(str(p))
         grid = archive.grid

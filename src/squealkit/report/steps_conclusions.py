@@ -47,20 +47,30 @@ def conclusions_step(sections: Sequence[Section], *, settings: ReportSettings | 
             "slightly.",
             f"Over mu 0-0.8 and theta -8..8 deg the unstable mode stays at {lo:.0f}-{hi:.0f} rad/s "
             f"({lo / (2 * math.pi):.0f}-{hi / (2 * math.pi):.0f} Hz): a spread of {100 * (hi / lo - 1):.1f} %."
-            if math.isfinite(lo) and math.isfinite(hi) else "No unstable mode over mu 0-0.8 and theta -8..8 deg.",
+            if math.isfinite(lo) and math.isfinite(hi) else
+            "No unstable mode over mu 0-0.8 and theta -8..8 deg"
+            + ((" undamped; with the model's damping a flat disc loses stability from mu_crit = "
+                f"{crit['mu_crit_damped']:.4f}." if math.isfinite(crit["mu_crit_damped"]) else
+                " undamped, and none with the model's damping on a flat disc.")
+               if not math.isnan(crit.get("tan_theta_max_damped", math.nan)) else "."),
         ))
         spread = crit["mu_e_spread"]
         lam = st.sro_wavelength
-        if crit.get("tolerance_flat_unstable"):
-            tol = (f"no run-out is tolerated at mu = {st.mu_design:g}: the model is already unstable on a flat disc "
-                   "there.")
-        elif math.isfinite(crit["q0_max"]):
-            tol = (f"the run-out tolerance is a slope (tan(theta) <= {crit['tan_theta_max']:.4f} at mu = "
-                   f"{st.mu_design:g}), met by q0 = {_um(crit['q0_max'])} at lambda = {lam * 1e3:g} mm or "
-                   f"{_um(crit['q0_max'] * 100)} at lambda = {lam * 1e5:g} mm alike.")
+        damped = not math.isnan(crit.get("tan_theta_max_damped", math.nan))  # the model has dampers
+        sfx = "_damped" if damped else ""  # with dampers the damped tolerance binds at the report's friction
+        with_damping = " (with the model's damping)" if damped else ""
+        if crit.get("tolerance_flat_unstable" + sfx):
+            tol = (f"no run-out is tolerated at mu = {st.mu_design:g}{with_damping}: the model is already unstable "
+                   "on a flat disc there.")
+        elif math.isinf(crit["tan_theta_max" + sfx]):
+            tol = f"every run-out slope searched stays stable at mu = {st.mu_design:g}{with_damping}."
+        elif math.isfinite(crit["q0_max" + sfx]):
+            tol = (f"the run-out tolerance is a slope (tan(theta) <= {crit['tan_theta_max' + sfx]:.4f} at mu = "
+                   f"{st.mu_design:g}{with_damping}), met by q0 = {_um(crit['q0_max' + sfx])} at lambda = "
+                   f"{lam * 1e3:g} mm or {_um(crit['q0_max' + sfx] * 100)} at lambda = {lam * 1e5:g} mm alike.")
         else:
-            tol = (f"the run-out tolerance is a slope: tan(theta) <= {crit['tan_theta_max']:.4f} at "
-                   f"mu = {st.mu_design:g}.")
+            tol = (f"the run-out tolerance is a slope: tan(theta) <= {crit['tan_theta_max' + sfx]:.4f} at "
+                   f"mu = {st.mu_design:g}{with_damping}.")
         rows.append((
             "Stability is not related to the SRO amplitude directly; its incline angle acts like friction.",
             ("Without an onset at every incline the spread of the critical mu + tan(theta) is not defined; "

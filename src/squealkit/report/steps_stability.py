@@ -195,6 +195,13 @@ def fig2_step(model: FrictionModel, figures: Path, data: Path, *, n_mu: int = 16
     else:
         first += (f" Unstable modes appear between {band[0]:.0f} and {band[1]:.0f} rad/s "
                   f"({band[0] / (2 * math.pi):.0f}-{band[1] / (2 * math.pi):.0f} Hz).")
+    if has_damping(model):  # the map leaves the dampers out: say so, and where they put the onset
+        cd = critical_friction(model, 0.0, damped=True)
+        damp = f" ({damping_text(model)})" if damping_text(model) else ""
+        first += (f" The map is undamped, as the paper's; with the model's damping{damp} "
+                  + (f"a flat disc loses stability from mu_crit = {cd.mu_critical:.4f} ({cd.frequency_hz:.0f} Hz; §3)."
+                     if math.isfinite(cd.mu_critical) else "a flat disc stays stable over the friction range searched "
+                     "(§3)."))
     paragraphs = (
         first,
         f"Grid {n_mu} x {n_theta}; unstable at {100 * s['unstable_fraction']:.1f} % of the points; largest "
@@ -225,6 +232,9 @@ def critical_step(model: FrictionModel, figures: Path, data: Path, *,
     c0 = critical_friction(model, 0.0, damped=False)
     cd = critical_friction(model, 0.0, damped=True)
     tol = runout_tolerance(model, mu_design, wavelength=wavelength, damped=False)
+    # the report's operating point is placed from the damped onset: with dampers the tolerance that binds
+    # there is the damped one, stated beside the paper's undamped one (eq. 7)
+    tol_d = runout_tolerance(model, mu_design, wavelength=wavelength, damped=True) if has_damping(model) else None
     fin = mu_e[np.isfinite(mu_e)]
     spread = float(np.ptp(fin) / np.mean(fin)) if fin.size == mu_e.size else math.nan
     rows = tuple((float(np.degrees(t)), float(m), float(me), float(f)) for t, m, me, f in zip(
@@ -233,7 +243,7 @@ def critical_step(model: FrictionModel, figures: Path, data: Path, *,
     if math.isfinite(spread):  # eqs. 5-6 are checked where there is an onset at every incline
         comps = (Comparison("spread of critical mu + tan(theta) over theta = -8..8 deg", None, 100 * spread, "%",
                             spread < 0.01, "eqs. 5-6 predict the SRO incline acts exactly like friction (0 % spread)"),)
-    paragraphs = (_onset_text(model, c0, cd), _tolerance_text(tol, settings))
+    paragraphs = (_onset_text(model, c0, cd), _tolerance_text(tol, settings, tol_d))
     tables = [Table("Critical friction over the SRO incline", ("theta [deg]", "mu_crit", "mu_crit + tan(theta)",
                                                              "onset frequency [Hz]"), rows)]
     if c0.status == "onset":  # a sensitivity of mu_crit needs a mu_crit
@@ -249,7 +259,11 @@ def critical_step(model: FrictionModel, figures: Path, data: Path, *,
                "mu_e_spread": spread, "tan_theta_max": tol.tan_theta_max,
                "q0_max": tol.q0_max if tol.q0_max is not None else math.nan,
                "mu_e_crit": float(np.mean(mu_e)), "mu_design": mu_design, "wavelength": wavelength,
-               "tolerance_flat_unstable": float(tol.limiting_side == "flat" or tol.tan_theta_max <= 0)}
+               "tolerance_flat_unstable": float(tol.limiting_side == "flat" or tol.tan_theta_max <= 0),
+               "tan_theta_max_damped": tol_d.tan_theta_max if tol_d is not None else math.nan,
+               "q0_max_damped": (tol_d.q0_max if tol_d is not None and tol_d.q0_max is not None else math.nan),
+               "tolerance_flat_unstable_damped": (float(tol_d.limiting_side == "flat" or tol_d.tan_theta_max <= 0)
+                                                  if tol_d is not None else math.nan)}
     refs: tuple[FigureRef, ...] = ()
     files: tuple[str, ...] = ()
     if c0.status == "onset":
@@ -300,28 +314,49 @@ def _onset_text(model: FrictionModel, c0, cd) -> str:
     return first + f" {with_damping} onset comes later, at mu_crit = {cd.mu_critical:.5f}."
 
 
-def _tolerance_text(tol, settings: ReportSettings) -> str:
-    """The run-out tolerance at the design friction, and how the report's Fig. 4 SRO compares with it."""
+def has_damping(model: FrictionModel) -> bool:
+    """Whether the model's damping matrix has a non-zero entry (its dampers change its stability)."""
+    return bool(np.any(np.asarray(model.damping_matrix()) != 0))
+
+
+def _tolerance_clause(tol, mu_design: float, wavelength: float) -> str:
+    """One tolerance in words, without its subject: "none; ...", "every slope ...", "slopes up to ..."."""
+    if tol.limiting_side == "flat" or tol.tan_theta_max <= 0:
+        return "none; the model is already unstable on a flat disc there, so no run-out slope is tolerated"
+    if math.isinf(tol.tan_theta_max):
+        return "every slope searched stays stable, so the run-out does not limit this model there"
+    text = (f"slopes up to tan(theta) = {tol.tan_theta_max:.4f} ({tol.theta_max_deg:.2f} deg) stay stable, limited "
+            f"by the {tol.limiting_side} run-out")
+    if tol.q0_max is not None and math.isfinite(tol.q0_max):
+        text += (f"; for a run-out wavelength of {wavelength * 1e3:g} mm this allows an amplitude of "
+                 f"q0 = {tol.q0_max * 1e6:.2f} um (eq. 11)")
+    return text
+
+
+def _tolerance_text(tol, settings: ReportSettings, tol_damped=None) -> str:
+    """The run-out tolerance at the design friction, and how the report's Fig. 4 SRO compares with it.
+
+    ``tol_damped`` (a model with dampers): the tolerance with its damping, stated after the
+    undamped one (the paper's eq. 7) and the one the Fig. 4 SRO is compared with."""
     mu_design, wavelength = settings.mu_design, settings.sro_wavelength
     fig4_slope = settings.sro_slope
     whose = "paper" if settings.is_paper else "report"
     sro = f"The {whose}'s Fig. 4 SRO (q0 = {settings.sro_amplitude * 1e6:.3g} um, lambda = {wavelength * 1e3:.3g} mm"
-    if tol.limiting_side == "flat" or tol.tan_theta_max <= 0:
-        return (f"Run-out tolerance at mu = {mu_design}: none; the model is already unstable on a flat disc there, "
-                "so no run-out slope is tolerated.")
-    if math.isinf(tol.tan_theta_max):
-        return (f"Run-out tolerance at mu = {mu_design}: every slope searched stays stable, so the run-out does not "
-                "limit this model there.")
-    text = (f"Run-out tolerance at mu = {mu_design}: slopes up to tan(theta) = {tol.tan_theta_max:.4f} "
-            f"({tol.theta_max_deg:.2f} deg) stay stable, limited by the {tol.limiting_side} run-out")
-    if tol.q0_max is not None and math.isfinite(tol.q0_max):
-        text += (f"; for a run-out wavelength of {wavelength * 1e3:g} mm this allows an amplitude of "
-                 f"q0 = {tol.q0_max * 1e6:.2f} um (eq. 11)")
-    text += "."
-    if tol.tan_theta_max < fig4_slope:
-        text += f" {sro}) has slopes up to {fig4_slope:.3f}: beyond it."
+    if tol_damped is None:
+        text = f"Run-out tolerance at mu = {mu_design}: {_tolerance_clause(tol, mu_design, wavelength)}."
+        binding = tol
     else:
-        text += f" {sro}, slopes up to {fig4_slope:.3f}) is within it."
+        text = (f"Run-out tolerance at mu = {mu_design}, undamped (eq. 7, as the paper): "
+                f"{_tolerance_clause(tol, mu_design, wavelength)}. With the model's damping: "
+                f"{_tolerance_clause(tol_damped, mu_design, wavelength)}.")
+        binding = tol_damped
+    if binding.limiting_side == "flat" or binding.tan_theta_max <= 0 or math.isinf(binding.tan_theta_max):
+        return text
+    against = " the damped tolerance" if tol_damped is not None else " it"
+    if binding.tan_theta_max < fig4_slope:
+        text += f" {sro}) has slopes up to {fig4_slope:.3f}: beyond{against}."
+    else:
+        text += f" {sro}, slopes up to {fig4_slope:.3f}) is within{against}."
     return text
 
 

@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from threadpoolctl import threadpool_limits
 
 from .. import __version__
+from .._optional import require
 from .._threads import honour_thread_limit, thread_limit
 from .._validation import (
     InputError,
@@ -713,7 +714,7 @@ def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any, *, energy: xr.Datase
     mesh = fe_mesh.to_meshio() if fe_mesh is not None else model.mesh
     n_pts = len(mesh.points)
     dof, point, c = dof_places(model)  # one placement for every view of the modes on the mesh
-    import meshio
+    meshio = require("meshio", "Writing mode shapes to VTK")
 
     data = {} if fe_mesh is None else {"node_label": fe_mesh.node_labels}  # the FE code's labels, for lookups
     numbers = ds["mode"].values

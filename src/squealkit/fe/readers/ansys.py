@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._optional import require
 from ..._validation import InputError
 from ..dofmap import LabelledMatrix
 
@@ -173,11 +174,7 @@ def read_full(path: str | Path) -> dict[str, LabelledMatrix]:
     import scipy.sparse as sp
 
     p = Path(path)
-    try:
-        from ansys.mapdl.reader.full import FullFile
-    except ImportError:
-        raise InputError(f"{p.name}: reading an ANSYS .full file needs ansys-mapdl-reader: "
-                         "pip install 'squealkit[ansys]'.") from None
+    FullFile = require("ansys.mapdl.reader.full", f"{p.name}: reading an ANSYS .full file").FullFile
     try:
         dof_ref, k, m = FullFile(str(p)).load_km(as_sparse=True, sort=False)
     except Exception as e:  # the reader raises many kinds on a damaged file

@@ -6,6 +6,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from ..._optional import require
 from ..._validation import InputError
 from ._common import as_sparse
 
@@ -28,10 +29,7 @@ def read_op4(path: str | Path) -> dict[str, Any]:
         The matrices by their names in the file, as read (not yet checked).
     """
     p = Path(path)
-    try:
-        from pyNastran.op4.op4 import read_op4 as _read
-    except ImportError:
-        raise InputError(f"{p.name}: reading Nastran OP4 needs pyNastran: pip install 'squealkit[nastran]'.") from None
+    _read = require("pyNastran.op4.op4", f"{p.name}: reading Nastran OP4").read_op4
     try:
         mats = _read(str(p), debug=False)
     except Exception as e:  # pyNastran raises many kinds on a malformed file

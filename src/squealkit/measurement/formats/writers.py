@@ -18,6 +18,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import NDArray
 
+from ..._optional import require
 from ..._validation import InputError, check_memory
 
 __all__ = ["FORMATS", "write_recording", "write_recording_blocks"]
@@ -126,7 +127,8 @@ def write_recording_blocks(blocks: Iterable[Block], path: str | Path, *, fs: flo
                                 "unit_string": units[n], "wf_increment": 1.0 / fs} if start == 0 else {})
                             for n in names])
         elif suffix in (".mf4", ".mdf"):
-            from asammdf import MDF, Signal
+            asammdf = require("asammdf", "Writing MDF4")
+            MDF, Signal = asammdf.MDF, asammdf.Signal
 
             mdf = MDF(version="4.10")
             mdf.header.comment = "SYNTHETIC recording (squealkit), not a measurement" if synthetic else ""
@@ -197,7 +199,7 @@ def _write_wav(tmp: Path, blocks: Iterable[Block], fs: float, n_samples: int, na
 def _write_uff(tmp: Path, blocks: Iterable[Block], fs: float, n_samples: int, names: list[str],
                units: Mapping[str, str], synthetic: bool) -> None:
     """UFF 58, one function per channel (ASCII; pyuff 2.5's binary 58b did not read back)."""
-    import pyuff
+    pyuff = require("pyuff", "Writing UFF 58")
 
     parts: dict[str, list] = {n: [] for n in names}
     for _start, data in blocks:
