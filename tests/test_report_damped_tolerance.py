@@ -11,6 +11,7 @@ against LAPACK; here the report's words are checked against them.
 """
 
 import math
+import re
 
 import pytest
 
@@ -77,3 +78,49 @@ def test_undamped_model_keeps_one_tolerance(tmp_path):
     crit = critical_step(model, tmp_path, tmp_path, settings=ReportSettings.for_model(model))
     assert math.isnan(crit.numbers["tan_theta_max_damped"])
     assert "With the model's damping" not in " ".join(crit.paragraphs[1:2])
+
+
+def test_unrealistic_undamped_onset_is_said_once_in_words_not_warned_when_damping_makes_it_realistic(tmp_path):
+    """The rig's undamped onset (mu 1.565) is beyond friction materials, its damped one (0.229) is not: the
+    report warned three times (once per undamped analysis) that mode coupling "needs mu_crit = 1.383 or
+    more", false for the rig as built. Now the critical section says it in words, with the damped onset, and
+    nothing is warned; a rig whose damped onset is unrealistic too is warned once."""
+    import warnings
+
+    from squealkit.report.steps_beyond import beyond_step
+    from squealkit.stability import UnrealisticFrictionWarning
+
+    model = model_from_dict(RIG)
+    settings = ReportSettings.for_model(model)
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        crit = critical_step(model, tmp_path, tmp_path, settings=settings)
+        fig2_step(model, tmp_path, tmp_path, n_mu=11, n_theta=5, published=False)
+        beyond_step(model, tmp_path, tmp_path, settings=settings)
+    assert not [w for w in seen if issubclass(w.category, UnrealisticFrictionWarning)]
+    text = " ".join(crit.paragraphs)
+    assert "beyond brake friction materials" in text and "0.2291" in text
+
+    stiff = model_from_dict({**RIG, "parameters": {"alpha_deg": 2.5, "c1": 0.0, "c2": 0.0, "c3": 0.0}})
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        critical_step(stiff, tmp_path, tmp_path, settings=ReportSettings.for_model(stiff))
+        fig2_step(stiff, tmp_path, tmp_path, n_mu=11, n_theta=5, published=False)
+    assert len([w for w in seen if issubclass(w.category, UnrealisticFrictionWarning)]) == 1
+
+
+def test_how_loud_says_how_far_the_slope_branch_got_instead_of_an_amplitude_of_no_cycle(tmp_path):
+    """On this rig the continuation of the cycles over the run-out slope stops (its corrector fails) at
+    tan(theta) = 0.0233, short of the Fig. 4 run-out's steepest slope 0.069: the report said "the cycle's x1
+    amplitude is no cycle". It now says how far the branch got and why (the full report's branch, whose finer
+    steps stop there; the quick report's coarser ones get past)."""
+    from squealkit.report.steps_nonlinear import nonlinear_step
+
+    model = model_from_dict(RIG)
+    sec = nonlinear_step(model, tmp_path, tmp_path, quick=False, settings=ReportSettings.for_model(model))
+    text = " ".join(sec.paragraphs)
+    assert "is no cycle" not in text
+    if "followed only up to tan(theta) = " in text:  # the branch stopped short: the reason is given
+        assert "is not computed" in text
+    else:  # the branch got there: an amplitude in um
+        assert re.search(r"the cycle's x1 amplitude is \d+\.\d+ um", text)

@@ -20,6 +20,7 @@ from ..models import FrictionModel
 from ..stability import critical_friction_curve, runout_tolerance, stability_verdict
 from .document import FigureRef, Section, Table
 from .settings import ReportSettings
+from .steps_stability import onset_said_in_words
 
 __all__ = ["beyond_step"]
 
@@ -121,7 +122,11 @@ def beyond_step(model: FrictionModel, figures: Path, data: Path, *,
     ``model`` must have the ``kinematics`` option (the pin-on-disc model); its other parameters
     are used unchanged for both. ``settings`` gives the tolerance's friction and wavelength.
     """
-    settings = settings or ReportSettings.paper()
+    with onset_said_in_words():  # the critical-friction section says it
+        return _beyond_step(model, figures, data, settings=settings or ReportSettings.paper())
+
+
+def _beyond_step(model: FrictionModel, figures: Path, data: Path, *, settings: ReportSettings) -> Section:
     mu_design, wavelength = settings.mu_design, settings.sro_wavelength
     from ..plotting.stability import kinematics_plot
     from .steps_stability import _save_fig

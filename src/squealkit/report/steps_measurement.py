@@ -12,7 +12,7 @@ from ..measurement import analyze_recording, squeal_views, synthetic_recording
 from ..models import FrictionModel
 from ..stability import critical_friction
 from .document import Comparison, FigureRef, Section, Table
-from .steps_stability import _save_fig
+from .steps_stability import _save_fig, onset_said_in_words
 
 # Paper §5: 900 rpm, 10 N, 40 kHz sampling; squeal main frequency about 2388 Hz, once per disc turn on the
 # rising SRO. The probe radius is not given; 50 mm is assumed.
@@ -61,6 +61,11 @@ def model_frequency(model: FrictionModel) -> tuple[float | None, str]:
     model that stays stable damped gives its undamped coalescence (lock-in) frequency
     instead (eq. 7, Fig. 2); None when it never loses stability up to mu = 2.
     """
+    with onset_said_in_words():  # the critical-friction section says whether onset is realistic
+        return _model_frequency(model)
+
+
+def _model_frequency(model: FrictionModel) -> tuple[float | None, str]:
     onset = critical_friction(model, 0.0, damped=True)
     if math.isfinite(onset.frequency_hz):
         return onset.frequency_hz, f"the model's damped onset (mu_crit = {onset.mu_critical:.4f}, flat disc)"
@@ -138,7 +143,8 @@ def measurement_step(model: FrictionModel, figures: Path, data: Path, *, quick: 
     comparison of its onset frequency with the paper's measured squeal."""
     from ..plotting.measurement import measurement_figures
 
-    onset = critical_friction(model, 0.0, damped=True)
+    with onset_said_in_words():
+        onset = critical_friction(model, 0.0, damped=True)
     f_model = onset.frequency_hz if math.isfinite(onset.frequency_hz) else F_PUBLISHED
     rec = synthetic_recording(duration=1.0 if quick else 2.0, fs=FS, rpm=RPM, radius=RADIUS, freq=f_model,
                               seed=seed)

@@ -82,9 +82,9 @@ def _settle_text(low: tuple[float, float, float, float], high: tuple[float, floa
     words true to each: loss of contact is named as the bound only where the contact opens."""
     (mu_1, a_1, open_1, l_1), (mu_2, a_2, open_2, l_2) = low, high
     return (f"The squeal then settles on a limit cycle: {DOF} swings {_um(a_1)} at mu = {mu_1:g} ({_open_text(open_1)})"
-            f" and {_um(a_2)} at mu = {mu_2:g} ({_open_text(open_2)}), while the frequency moves to {f_high:.1f} Hz. "
+            f" and {_um(a_2)} at mu = {mu_2:.4g} ({_open_text(open_2)}), while the frequency moves to {f_high:.1f} Hz. "
             f"As a vibration velocity level of {DOF} (dB re 1 nm/s, ISO 1683; the model has no acoustics): "
-            f"{_db(l_1)} at mu = {mu_1:g} and {_db(l_2)} at mu = {mu_2:g}.")
+            f"{_db(l_1)} at mu = {mu_1:g} and {_db(l_2)} at mu = {mu_2:.4g}.")
 
 
 def nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: bool = False,
@@ -196,14 +196,25 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
     if math.isfinite(t_c) and -t_max <= t_c <= t_max:
         p2 = (f"With run-out at {fig4} friction mu = {mu4:g}, squeal sets in where the slope reaches "
               f"tan(theta) = {t_c:.4f} ({math.degrees(math.atan(t_c)):.2f} deg): mu + tan(theta) = "
-              f"{mu4 + t_c:.4f} against the flat disc's {mu_c:.4f}. At the steepest slope of {fig4} "
-              f"({t_max:.3f}) the cycle's {DOF} amplitude is {_um(a_steep)}")
+              f"{mu4 + t_c:.4f} against the flat disc's {mu_c:.4f}. ")
+        if not math.isfinite(a_steep):  # the branch over the slope did not get there: say how far it got
+            reached = float(np.max(slope["tan_theta"].values)) if slope is not None else math.nan
+            why = str(slope.attrs.get("stop_reason", "")).replace("_", " ") if slope is not None else ""
+            p2 += (f"The cycles over the slope were followed only up to tan(theta) = {reached:.4f}"
+                   + (f" ({why})" if why else "") + f", short of the steepest slope of {fig4} ({t_max:.3f}): the "
+                   "amplitude there is not computed." if math.isfinite(reached) else
+                   f"The cycles over the slope were not followed, so the amplitude at the steepest slope of "
+                   f"{fig4} ({t_max:.3f}) is not computed.")
+    else:
+        p2 = ""
+    if p2 and math.isfinite(a_steep):
+        p2 += f"At the steepest slope of {fig4} ({t_max:.3f}) the cycle's {DOF} amplitude is {_um(a_steep)}"
         p2 += (f", and on a flat disc at mu = {mu4 + t_max:.3f} it is {_um(a_flat_same)}: "
                + (f"the limit cycles too depend on mu + tan(theta) alone (within {100 * same:.1f} %), as eq. (6) "
                   "says of the onset." if same < 0.02 else
                   f"they differ by {100 * same:.1f} %, so the slope is not simply added friction once the "
                   "contact opens.") if math.isfinite(same) else ".")
-    else:
+    elif not p2:
         p2 = (f"With run-out at {fig4} friction mu = {mu4:g} no slope within +-{t_max:.3f} starts "
               f"squeal in this model (its flat-disc threshold is mu = {mu_c:.4f}).")
     # the Fig. 4 transient with the nonlinear contact against the frozen-slope cycles: the envelope's

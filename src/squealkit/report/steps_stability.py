@@ -6,6 +6,7 @@ import contextlib
 import contextvars
 import math
 import re
+import warnings
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -14,6 +15,8 @@ import numpy as np
 from ..io import save_dataset
 from ..models import FrictionModel, PinOnDiscRig, cantilever_bending_frequency, rod_axial_frequency
 from ..stability import (
+    REALISTIC_MU_MAX,
+    UnrealisticFrictionWarning,
     critical_friction,
     critical_friction_curve,
     critical_friction_sensitivity,
@@ -170,7 +173,8 @@ def fig2_step(model: FrictionModel, figures: Path, data: Path, *, n_mu: int = 16
     mu = np.linspace(0.0, 0.8, n_mu)
     theta = np.radians(np.linspace(-8.0, 8.0, n_theta))
     ds = stability_map(model, mu, theta, damped=False)
-    crit = critical_friction_curve(model, theta[:: max(1, n_theta // 40)], damped=False)
+    with onset_said_in_words():
+        crit = critical_friction_curve(model, theta[:: max(1, n_theta // 40)], damped=False)
     save_dataset(ds, data / "fig2_eigenvalues.nc")
     save_dataset(crit, data / "critical_friction_curve.nc")
     _save_fig(fig2_plot(ds), figures, "fig2_eigenvalues")
@@ -223,14 +227,27 @@ def critical_step(model: FrictionModel, figures: Path, data: Path, *,
     """Critical friction, mu_e = mu + tan(theta), the run-out tolerance and sensitivities.
 
     A model without an onset on a flat disc gets no sensitivities and no onset mode, and the
-    text says so."""
-    settings = settings or ReportSettings.paper()
+    text says so. Onset beyond brake friction materials is said in the text, and warned once
+    when the model's damping does not bring it within them."""
+    with onset_said_in_words():
+        section = _critical_step(model, figures, data, settings=settings or ReportSettings.paper())
+    if section.numbers.get("onset_unrealistic"):
+        warnings.warn(f"Mode coupling needs friction mu_crit = {section.numbers['onset_unrealistic']:.4g} or more, "
+                      f"beyond brake friction materials (about 0.3-0.7, at most {REALISTIC_MU_MAX:g}), with or "
+                      "without the model's damping: the modes that couple are far apart in frequency (for a "
+                      "pin-on-disc rig compare the pin bending and disc frequencies).",
+                      UnrealisticFrictionWarning, stacklevel=2)
+    return section
+
+
+def _critical_step(model: FrictionModel, figures: Path, data: Path, *, settings: ReportSettings) -> Section:
     mu_design, wavelength = settings.mu_design, settings.sro_wavelength
     thetas = np.radians([-8.0, -4.0, 0.0, 4.0, 8.0])
     curve = critical_friction_curve(model, thetas, damped=False)
-    mu_e = curve.mu_e_critical.values
     c0 = critical_friction(model, 0.0, damped=False)
     cd = critical_friction(model, 0.0, damped=True)
+    mu_e = curve.mu_e_critical.values
+    unrealistic, beyond = _unrealistic(curve.mu_critical.values, cd)
     tol = runout_tolerance(model, mu_design, wavelength=wavelength, damped=False)
     # the report's operating point is placed from the damped onset: with dampers the tolerance that binds
     # there is the damped one, stated beside the paper's undamped one (eq. 7)
@@ -243,7 +260,7 @@ def critical_step(model: FrictionModel, figures: Path, data: Path, *,
     if math.isfinite(spread):  # eqs. 5-6 are checked where there is an onset at every incline
         comps = (Comparison("spread of critical mu + tan(theta) over theta = -8..8 deg", None, 100 * spread, "%",
                             spread < 0.01, "eqs. 5-6 predict the SRO incline acts exactly like friction (0 % spread)"),)
-    paragraphs = (_onset_text(model, c0, cd), _tolerance_text(tol, settings, tol_d))
+    paragraphs = (_onset_text(model, c0, cd) + unrealistic, _tolerance_text(tol, settings, tol_d))
     tables = [Table("Critical friction over the SRO incline", ("theta [deg]", "mu_crit", "mu_crit + tan(theta)",
                                                              "onset frequency [Hz]"), rows)]
     if c0.status == "onset":  # a sensitivity of mu_crit needs a mu_crit
@@ -260,6 +277,7 @@ def critical_step(model: FrictionModel, figures: Path, data: Path, *,
                "q0_max": tol.q0_max if tol.q0_max is not None else math.nan,
                "mu_e_crit": float(np.mean(mu_e)), "mu_design": mu_design, "wavelength": wavelength,
                "tolerance_flat_unstable": float(tol.limiting_side == "flat" or tol.tan_theta_max <= 0),
+               "onset_unrealistic": beyond,
                "tan_theta_max_damped": tol_d.tan_theta_max if tol_d is not None else math.nan,
                "q0_max_damped": (tol_d.q0_max if tol_d is not None and tol_d.q0_max is not None else math.nan),
                "tolerance_flat_unstable_damped": (float(tol_d.limiting_side == "flat" or tol_d.tan_theta_max <= 0)
@@ -312,6 +330,34 @@ def _onset_text(model: FrictionModel, c0, cd) -> str:
         return first + (f" {with_damping} onset comes earlier, at mu_crit = {cd.mu_critical:.5f}: damping that "
                         "differs between the coupled modes destabilises, a known effect of mode-coupling instability.")
     return first + f" {with_damping} onset comes later, at mu_crit = {cd.mu_critical:.5f}."
+
+
+@contextlib.contextmanager
+def onset_said_in_words() -> Iterator[None]:
+    """Within: no :class:`UnrealisticFrictionWarning` from the report's undamped analyses.
+
+    The critical-friction section says in words whether onset needs friction beyond brake
+    materials, with and without the model's damping (:func:`_unrealistic_text`), and warns once
+    when both are beyond; each undamped analysis of the report warned on its own before, even
+    where the model's damping brings onset down to a realistic friction."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UnrealisticFrictionWarning)
+        yield
+
+
+def _unrealistic(mu_undamped: np.ndarray, cd) -> tuple[str, float]:
+    """A sentence when the undamped onsets all need friction beyond brake materials ('' otherwise), and
+    the lowest such onset when the damped onset is beyond them too (0.0 otherwise: nothing to warn)."""
+    fin = mu_undamped[np.isfinite(mu_undamped)]
+    if not fin.size or fin.min() <= REALISTIC_MU_MAX:
+        return "", 0.0
+    text = (f" Undamped, mode coupling needs mu_crit = {fin.min():.4g} or more over the inclines searched, beyond "
+            f"brake friction materials (about 0.3-0.7, at most {REALISTIC_MU_MAX:g}): the modes that couple are far "
+            "apart in frequency.")
+    if math.isfinite(cd.mu_critical) and cd.mu_critical <= REALISTIC_MU_MAX:
+        return text + (f" With the model's damping onset comes at mu_crit = {cd.mu_critical:.4f}, within that "
+                       "range."), 0.0
+    return text, float(fin.min())
 
 
 def has_damping(model: FrictionModel) -> bool:
