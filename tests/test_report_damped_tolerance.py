@@ -13,6 +13,7 @@ against LAPACK; here the report's words are checked against them.
 import math
 import re
 
+import numpy as np
 import pytest
 
 from squealkit.models import model_from_dict
@@ -122,5 +123,14 @@ def test_how_loud_says_how_far_the_slope_branch_got_instead_of_an_amplitude_of_n
     assert "is no cycle" not in text
     if "followed only up to tan(theta) = " in text:  # the branch stopped short: the reason is given
         assert "is not computed" in text
+        # and the Fig. 4 comparison leaves out the slopes beyond the branch's end (it repeated the last
+        # amplitude there, a value nothing computed)
+        from squealkit.io import load_dataset
+
+        reached = float(re.search(r"followed only up to tan\(theta\) = ([0-9.]+)", text).group(1))
+        env = load_dataset(tmp_path / "fig4_nonlinear_envelope.nc")
+        beyond = env["tan_theta"].values > reached + 1e-4
+        assert beyond.any() and np.isnan(env["limit_cycle"].values[beyond]).all()
+        assert "is not known at" in text
     else:  # the branch got there: an amplitude in um
         assert re.search(r"the cycle's x1 amplitude is \d+\.\d+ um", text)

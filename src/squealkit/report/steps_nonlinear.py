@@ -147,7 +147,8 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
         ok = slope["stable"].values.astype(bool)
         order = np.argsort(tt[ok])
         t_c = float(slope.attrs["hopf_mu"])
-        cyc = np.where(inst > t_c, np.interp(inst, tt[ok][order], amp[ok][order]), 0.0)
+        # beyond the last cycle followed the amplitude is not known: nan (np.interp would repeat the last one)
+        cyc = np.where(inst > t_c, np.interp(inst, tt[ok][order], amp[ok][order], right=np.nan), 0.0)
     else:
         t_c, cyc = math.nan, np.zeros_like(inst)
     cycle = xr.DataArray(cyc, coords={"time": run["time"].values}, dims="time", name=f"{DOF}_limit_cycle",
@@ -219,7 +220,8 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
               f"squeal in this model (its flat-disc threshold is mu = {mu_c:.4f}).")
     # the Fig. 4 transient with the nonlinear contact against the frozen-slope cycles: the envelope's
     # median where the slope makes the quiet state unstable (its short bursts are reported apart)
-    cmax = float(cyc.max())
+    unknown = np.isnan(cyc)  # slopes beyond the branch's end
+    cmax = float(np.nanmax(cyc)) if not unknown.all() else math.nan
     unstable = cyc > 0
     emax = float(env.values.max())
     emed = float(np.median(env.values[unstable])) if unstable.any() else math.nan
@@ -240,6 +242,9 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
                "steady state of the instant's slope.")
     else:
         p3 += "no slope of the run reaches a limit cycle."
+    if unknown.any():
+        p3 += (f" The limit cycle is not known at {100 * unknown.mean():.0f} % of the run's instants, whose slopes lie "
+               "beyond the last cycle followed; the figure leaves them out.")
     every = max(1, branch.sizes["point"] // 12)
     rows = tuple((float(m), float(f), float(x) * 1e6, float(db), float(lf), "yes" if s else "no")
                  for m, f, x, db, lf, s in list(zip(branch["mu"].values, branch["frequency_hz"].values,
