@@ -30,7 +30,6 @@ Without it: the reference speed and friction of the matrices (``disc_speed_ref``
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -38,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from ..io import check_output, output_folder, save_dataset
+from ..io import check_output, save_dataset
 from .document import FigureRef, Section, Table
 from .settings import check_report_keys, report_key, report_table_values, settings_from_file
 
@@ -329,32 +328,16 @@ def fe_report(
     -------
     squealkit.report.ReproduceResult
     """
-    from .html import render_html
-    from .reproduce import REPORT_FILES, ReproduceResult
-    from .steps_stability import figure_formats
+    from .runner import REPORT_FILES, ReportStep, run_report
 
     out = Path(out_dir)
-    check_output(out, directory=True, force=force, names=REPORT_FILES)
+    check_output(out, directory=True, force=force, names=REPORT_FILES)  # before the work, not after
     settings = settings or load_fe_report_settings(config, model, quick=quick)
-    steps: list[tuple[str, Callable[[Path, Path], Section | list[Section]]]] = [
-        ("FE model", lambda fig, dat: model_step(model, settings)),
-        ("unstable modes", lambda fig, dat: modes_step(model, settings, fig, dat)),
-        ("tracking", lambda fig, dat: tracking_step(model, settings, fig, dat)),
+    steps = [
+        ReportStep("FE model", lambda fig, dat: model_step(model, settings)),
+        ReportStep("unstable modes", lambda fig, dat: modes_step(model, settings, fig, dat)),
+        ReportStep("tracking", lambda fig, dat: tracking_step(model, settings, fig, dat)),
     ]
-    start = time.perf_counter()
-    with figure_formats(("png",) if quick else ("png", "svg")), output_folder(out, force=force) as stage:
-        figures, data = stage / "figures", stage / "data"
-        figures.mkdir(parents=True)
-        data.mkdir()
-        sections = []
-        for i, (name, step) in enumerate(steps):
-            if progress is not None:
-                progress(i, len(steps), name)
-            made = step(figures, data)
-            sections.extend(made if isinstance(made, list) else [made])
-        if progress is not None:
-            progress(len(steps), len(steps), "report")
-        subtitle = f"FE model, {model.n_dof} DOFs" + (f", from {Path(config).name}" if config is not None else "")
-        (stage / "report.html").write_text(render_html(sections, figures, title="squealkit report: unstable modes "
-                                                       "of an FE brake", subtitle=subtitle), encoding="utf-8")
-    return ReproduceResult(out, tuple(sections), time.perf_counter() - start)
+    subtitle = f"FE model, {model.n_dof} DOFs" + (f", from {Path(config).name}" if config is not None else "")
+    return run_report(out, steps, title="squealkit report: unstable modes of an FE brake", subtitle=subtitle,
+                      quick=quick, force=force, progress=progress)
