@@ -16,8 +16,10 @@ import sys
 import time
 
 import pytest
+import xarray as xr
+from click.testing import CliRunner
 
-from squealkit.io import MANIFEST
+from squealkit.io import MANIFEST, save_dataset
 from squealkit.report.document import FigureRef, Section
 from squealkit.report.runner import REPORT_FILES, ReportStep, run_report
 
@@ -36,8 +38,8 @@ def _figure_step(figures, data):
     ax.plot([0, 1], [0, 1])
     _save_fig(fig, figures, "line")
     plt.close(fig)
-    (data / "numbers.txt").write_text("1 2 3")
-    return Section("one", "One", ("first",), figures=(FigureRef("line", "a line"),), data=("numbers.txt",),
+    save_dataset(xr.Dataset({"x": ("i", [1.0, 2.0, 3.0])}), data / "numbers.nc")
+    return Section("one", "One", ("first",), figures=(FigureRef("line", "a line"),), data=("numbers.nc",),
                    numbers={"x": 1.0})
 
 
@@ -63,9 +65,9 @@ def test_steps_run_in_order_into_one_complete_folder(tmp_path, quick, suffixes):
     assert sorted(p.name for p in out.iterdir()) == sorted([MANIFEST, *REPORT_FILES])
     assert sorted(p.name for p in (out / "figures").iterdir()) == sorted(f"line{s}" for s in suffixes)
     listed = json.loads((out / MANIFEST).read_text())["files"]
-    assert sorted(listed) == sorted(["report.html", "data/numbers.txt", *(f"figures/line{s}" for s in suffixes)])
+    assert sorted(listed) == sorted(["report.html", "data/numbers.nc", *(f"figures/line{s}" for s in suffixes)])
     html = result.report.read_text()
-    assert "<h1>T</h1>" in html and "After 3" in html and "data/numbers.txt" in html
+    assert "<h1>T</h1>" in html and "After 3" in html and "data/numbers.nc" in html
     assert oct(result.report.stat().st_mode & 0o777) == oct(0o666 & ~_umask())  # as a plain write would be
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no staging left
 
@@ -111,6 +113,21 @@ def test_a_foreign_folder_is_refused_before_any_step(tmp_path):
     with pytest.raises(InputError):
         run_report(tmp_path, [ReportStep("s", lambda f, d: ran.append(1))], title="T")
     assert ran == [] and sorted(p.name for p in tmp_path.iterdir()) == ["mine.txt"]
+
+
+@pytest.mark.parametrize(("quick", "kinds"), [(True, "PNG"), (False, "PNG and SVG")])
+def test_cli_names_the_kinds_of_file_it_wrote(tmp_path, monkeypatch, quick, kinds):
+    # `squealkit reproduce --quick` said "(PNG and SVG)" though a preview draws PNG only
+    import squealkit.report
+    from squealkit.cli.main import cli
+
+    def fake_reproduce(out_dir, *, quick, progress, force, **kw):
+        return run_report(out_dir, STEPS, title="T", quick=quick, progress=progress, force=force)
+
+    monkeypatch.setattr(squealkit.report, "reproduce", fake_reproduce)
+    r = CliRunner().invoke(cli, ["reproduce", "--out-dir", str(tmp_path / "rep"), *(["--quick"] if quick else [])])
+    assert r.exit_code == 0, (r.output, r.exception)
+    assert f"figures: {tmp_path / 'rep' / 'figures'} ({kinds}); data: {tmp_path / 'rep' / 'data'} (netCDF)" in r.output
 
 
 @pytest.fixture(scope="module")

@@ -37,17 +37,11 @@ def _given(ctx: click.Context, allowed: tuple[str, ...]) -> list[str]:
             and ctx.get_parameter_source(p.name) == click.core.ParameterSource.COMMANDLINE]
 
 
-#: What each file kind a report writes is called in the closing lines.
-_KINDS = {".png": "PNG", ".svg": "SVG", ".nc": "netCDF", ".vtu": "VTK"}
+#: What each kind of data file a report writes is called in its closing line.
+_DATA_KINDS = {".nc": "netCDF", ".vtu": "VTK"}
 
 
-def _kinds(folder: Path) -> str:
-    """The kinds of the files in ``folder``, as words: ``PNG and SVG``."""
-    found = {p.suffix for p in folder.iterdir()}
-    return " and ".join(name for suffix, name in _KINDS.items() if suffix in found)
-
-
-def _write(out_dir: Path, force: bool, as_json: bool, write) -> None:
+def _write(out_dir: Path, force: bool, quick: bool, as_json: bool, write) -> None:
     """Run ``write(progress)`` (a report function) under a progress bar, then print what it wrote.
 
     The output folder is checked before the bar appears, so an error stays one line.
@@ -74,15 +68,17 @@ def _write(out_dir: Path, force: bool, as_json: bool, write) -> None:
                    "numbers": result.numbers()})
         return
     click.echo(f"wrote {result.report} ({result.seconds:.1f} s)")
-    click.echo(f"figures: {result.out_dir / 'figures'} ({_kinds(result.out_dir / 'figures')}); "
-               f"data: {result.out_dir / 'data'} ({_kinds(result.out_dir / 'data')})")
+    # the kinds the sections list: the folder itself is moved into place when the command ends
+    data = {Path(name).suffix for s in result.sections for name in s.data}
+    click.echo(f"figures: {result.out_dir / 'figures'} ({'PNG' if quick else 'PNG and SVG'}); data: "
+               f"{result.out_dir / 'data'} ({', '.join(k for x, k in _DATA_KINDS.items() if x in data)})")
 
 
 def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = False, as_json: bool,
          force: bool = False, config: Path | None = None) -> None:
     from ..report import reproduce
 
-    _write(out_dir, force, as_json, lambda progress: reproduce(
+    _write(out_dir, force, quick, as_json, lambda progress: reproduce(
         out_dir, model=model, rig=rig, recording=recording, quick=quick, progress=progress, force=force,
         config=config))
 
@@ -193,5 +189,5 @@ def _fe_report(ctx: click.Context, model, config, out_dir: Path, force: bool, qu
         raise InputError(f"{given[0]} applies to the paper's model and its recording, not to an FE model; "
                          "an FE report takes its load cases from the [report] table of --config.")
     settings = load_fe_report_settings(config, model, quick=quick)  # a bad [report] table: one line, before work
-    _write(out_dir, force, as_json, lambda progress: fe_report(out_dir, model, settings=settings, config=config,
+    _write(out_dir, force, quick, as_json, lambda progress: fe_report(out_dir, model, settings=settings, config=config,
                                                                quick=quick, force=force, progress=progress))
