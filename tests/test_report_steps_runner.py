@@ -32,11 +32,13 @@ def _figure_step(figures, data):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from squealkit.report.steps_stability import _save_fig
+    from squealkit.io import save_figure
+    from squealkit.report.steps_stability import FIGURE_FORMATS
 
     fig, ax = plt.subplots()
     ax.plot([0, 1], [0, 1])
-    _save_fig(fig, figures, "line")
+    for fmt in FIGURE_FORMATS.get():  # the formats the run asks for (PNG alone for a preview)
+        save_figure(fig, figures / f"line.{fmt}")
     plt.close(fig)
     save_dataset(xr.Dataset({"x": ("i", [1.0, 2.0, 3.0])}), data / "numbers.nc")
     return Section("one", "One", ("first",), figures=(FigureRef("line", "a line"),), data=("numbers.nc",),
@@ -106,7 +108,7 @@ def test_a_failed_or_interrupted_run_leaves_the_folder_as_it_was(tmp_path, fail_
 
 
 def test_a_foreign_folder_is_refused_before_any_step(tmp_path):
-    from squealkit._validation import InputError
+    from squealkit import InputError
 
     (tmp_path / "mine.txt").write_text("the user's")
     ran = []

@@ -19,11 +19,14 @@ The load cases come from the model file's ``[report]`` table::
     rpm = [500, 1000]          # disc speeds of the load cases [rpm]
     mu = [0.4, 0.6]            # friction coefficients (every rpm x mu pair is a load case)
     eigen_band = [1000, 16000] # Hz: the band the eigenvalue solvers search
-    method = "pod"             # auto, dense, sparse, modal, pod
+    method = "pod"             # auto, dense, sparse, modal, pod, subspace
     mu_sweep = [0.0, 0.8, 9]   # START, STOP, N of the tracking over friction
     rpm_sweep = [200, 2000, 7] # START, STOP, N of the tracking over disc speed
     max_views = 8              # unstable modes drawn per load case (the most unstable first)
+    n_frames = 16              # frames per cycle of the animations
 
+A value may carry its unit as text (``eigen_band = ["1 kHz", "16 kHz"]``); the table is parsed
+as the small-model report's is (:func:`squealkit.report.settings.report_table_values`).
 Without it: the reference speed and friction of the matrices (``disc_speed_ref``, ``mu_ref``).
 """
 
@@ -64,7 +67,7 @@ class FEReportSettings:
     eigen_band : (float, float) or None
         Frequency band [Hz] the eigenvalue solvers search (None: the solver's default).
     method : str
-        Solver: ``auto``, ``dense``, ``sparse``, ``modal`` or ``pod``.
+        Solver: ``auto``, ``dense``, ``sparse``, ``modal``, ``pod`` or ``subspace``.
     mu_sweep, rpm_sweep : (float, float, int)
         START, STOP, N of the tracking over friction (at the first speed) and over disc speed
         (at the first friction).
