@@ -104,3 +104,17 @@ class _FakeFE:
 
     disc_speed_ref = 100.0
     mu_ref = 0.4
+
+
+def test_a_bad_table_is_refused_before_the_defaults_are_placed(run, tmp_path):
+    # examples/myrig.toml's onset is placed from its damped critical friction, which warns (mu_crit beyond
+    # brake materials): the table was parsed only after that work, so its error came second, after the warning
+    from pathlib import Path
+
+    cfg = tmp_path / "rig.toml"
+    cfg.write_text((Path(__file__).parents[1] / "examples" / "myrig.toml").read_text()
+                   + '\n[report]\nspeed = "20 kHz"\n')
+    r = run("report", "--config", str(cfg), "--out-dir", str(tmp_path / "r"), "--quick")
+    assert r.exit_code == 2
+    assert r.stderr.strip().splitlines() == [r.stderr.strip()]  # one line: the error, nothing before it
+    assert "speed" in r.stderr and "not in a unit of 'm/s'" in r.stderr

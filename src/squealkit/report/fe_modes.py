@@ -36,7 +36,7 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -88,6 +88,8 @@ class FEReportSettings:
                                                      doc="tracking over disc speed")
     max_views: int = report_key(8, unit="", kind="count", doc="unstable modes drawn per load case")
     n_frames: int = report_key(16, unit="", kind="count", doc="frames per cycle of the animations")
+    #: Whose ``[report]`` table this is, in messages.
+    table_of: ClassVar[str] = "an FE model's report"
 
     def __post_init__(self) -> None:
         check_report_keys(self)
@@ -107,7 +109,7 @@ class FEReportSettings:
         Parsed as the small-model report's table is (:func:`~squealkit.report.settings.report_table_values`):
         a value may carry its unit as text (``eigen_band = ["9 kHz", "20 kHz"]``).
         """
-        return replace(base, **report_table_values(cls, table, what="an FE model's report"))
+        return replace(base, **report_table_values(cls, table, what=cls.table_of))
 
     @property
     def load_cases(self) -> list[tuple[float, float]]:
@@ -117,7 +119,7 @@ class FEReportSettings:
 
 def load_fe_report_settings(path: str | Path | None, model: Any, *, quick: bool = False) -> FEReportSettings:
     """The FE report's settings: a model file's ``[report]`` table over :meth:`FEReportSettings.for_model`."""
-    return settings_from_file(path, FEReportSettings.for_model(model, quick=quick))
+    return settings_from_file(path, FEReportSettings, lambda: FEReportSettings.for_model(model, quick=quick))
 
 
 # ----------------------------------------------------------------------------- steps

@@ -27,7 +27,7 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import MISSING, Field, dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 from .._validation import InputError, validate_finite, validate_int, validate_positive
 from ..models import FrictionModel
@@ -188,15 +188,20 @@ def read_report_table(path: str | Path | None) -> Mapping[str, Any] | None:
     return table
 
 
-def settings_from_file(path: str | Path | None, base: Any) -> Any:
-    """``base`` with the ``[report]`` table of the model file ``path`` (``base.from_table``); errors name the file."""
+def settings_from_file(path: str | Path | None, cls: type, default: Callable[[], Any]) -> Any:
+    """``default()`` with the ``[report]`` table of the model file ``path`` (``cls.from_table``); errors name the file.
+
+    The table is checked before ``default()`` places the defaults (that may be work, and may warn),
+    so a bad table is refused first, in one line.
+    """
     table = read_report_table(path)
     if table is None:
-        return base
+        return default()
     try:
-        return type(base).from_table(table, base)
+        report_table_values(cls, table, what=cls.table_of)
     except InputError as e:
         raise InputError(f"{Path(path).name}: {e}") from e  # type: ignore[arg-type]
+    return cls.from_table(table, default())
 
 
 # ----------------------------------------------------------------------------- the small model's operating point
@@ -234,6 +239,8 @@ class ReportSettings:
     sro_wavelength: float = report_key(1e-3, unit="m", kind="positive", doc="sine run-out wavelength")
     speed: float = report_key(0.02, unit="m/s", kind="positive", doc="sliding speed")
     source: str = "the paper's operating point (§4, Fig. 4)"
+    #: Whose ``[report]`` table this is, in messages.
+    table_of: ClassVar[str] = "a small model's report"
 
     def __post_init__(self) -> None:
         check_report_keys(self)
@@ -304,7 +311,7 @@ class ReportSettings:
         -------
         ReportSettings
         """
-        values = report_table_values(cls, table, what="a small model's report", name=name)
+        values = report_table_values(cls, table, what=cls.table_of, name=name)
         rest = [f.name for f in fields(cls) if "report_kind" in f.metadata and f.name not in values]
         return replace(base, **values, source=f"the model file's {name} table"
                        + (f"; {', '.join(rest)}: {base.source}" if rest else ""))
@@ -331,4 +338,5 @@ def load_report_settings(path: str | Path | None, model: FrictionModel, *, paper
     -------
     ReportSettings
     """
-    return settings_from_file(path, ReportSettings.paper() if paper else ReportSettings.for_model(model))
+    return settings_from_file(path, ReportSettings,
+                              ReportSettings.paper if paper else lambda: ReportSettings.for_model(model))
