@@ -160,9 +160,9 @@ def report(ctx: click.Context, preset, config, sets, out_dir: Path, force: bool,
         return _fe_report(ctx, model, config, out_dir, force, quick, as_json)
     rig = load_rig(config, parse_assignments(sets)) if config is not None else None
     if damping_names(model):
-        PENDING_NOTES.append(f"squealkit: the report's eigenvalue map, critical friction and run-out tolerance "
-                             f"follow the paper (undamped, eq. 7); the model's damping ({damping_names(model)}) "
-                             "enters its damped onset and transients.")
+        PENDING_NOTES.append(f"squealkit: the report's eigenvalue map and critical-friction curve follow the paper "
+                             f"(undamped, eq. 7); the model's damping ({damping_names(model)}) enters its damped "
+                             "onset, a second run-out tolerance and the transients.")
     spec = None
     if recording is None:  # a recording option without a recording would be silently ignored
         given = _given(ctx, ("preset", "config", "sets", "out_dir", "force", "recording", "quick", "as_json"))

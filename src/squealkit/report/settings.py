@@ -24,6 +24,7 @@ placed from its own damped onset on a flat disc (:meth:`ReportSettings.for_model
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import MISSING, Field, dataclass, field, fields, replace
 from pathlib import Path
@@ -280,9 +281,11 @@ class ReportSettings:
         ReportSettings
             With ``source`` saying where the values come from.
         """
-        from ..stability import critical_friction
+        from ..stability import UnrealisticFrictionWarning, critical_friction
 
-        crit = critical_friction(model, 0.0, damped=True)
+        with warnings.catch_warnings():  # an onset beyond friction materials: the report's §3 says so
+            warnings.simplefilter("ignore", UnrealisticFrictionWarning)
+            crit = critical_friction(model, 0.0, damped=True)
         if crit.status != "onset" or not math.isfinite(crit.mu_critical) or crit.mu_critical <= 0:
             return replace(cls(), source="the paper's operating point: this model has no damped onset on a flat "
                                          "disc up to mu = 2 to place one from")
