@@ -15,16 +15,43 @@ from ._options import (
 )
 
 
-def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = False, as_json: bool,
-         force: bool = False, config: Path | None = None) -> None:
+def _out_dir_options(f):
+    """``--out-dir`` (and its old name ``--out``) and ``--force``: where a report goes."""
+    f = click.option("--force", is_flag=True, help="Write into a folder that holds other files, leaving them alone (a "
+                     "file of the same name as one the report writes is refused, never replaced).")(f)
+    f = deprecated_alias("--out", "--out-dir", "out_dir", type=click.Path(file_okay=False, path_type=Path))(f)
+    return click.option("--out-dir", "out_dir", type=click.Path(file_okay=False, path_type=Path),
+                        default=Path("squealkit-report"), show_default=True, help="Output folder (replaced as a whole "
+                        "when the run succeeds; a folder holding files squealkit did not write is refused).")(f)
+
+
+def _run_options(f):
+    """``--quick`` and ``--json``."""
+    f = click.option("--json", "as_json", is_flag=True, help="Print the computed numbers as JSON on stdout.")(f)
+    return click.option("--quick", is_flag=True, help="Coarser grids and shorter runs: a preview in seconds.")(f)
+
+
+def _given(ctx: click.Context, allowed: tuple[str, ...]) -> list[str]:
+    """The options given on the command line other than ``allowed`` (parameter names)."""
+    return [p.opts[0] for p in ctx.command.params if p.name not in allowed
+            and ctx.get_parameter_source(p.name) == click.core.ParameterSource.COMMANDLINE]
+
+
+#: What each kind of data file a report writes is called in its closing line.
+_DATA_KINDS = {".nc": "netCDF", ".vtu": "VTK"}
+
+
+def _write(out_dir: Path, force: bool, quick: bool, as_json: bool, write) -> None:
+    """Run ``write(progress)`` (a report function) under a progress bar, then print what it wrote.
+
+    The output folder is checked before the bar appears, so an error stays one line.
+    """
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     from ..io import check_output
-    from ..report import reproduce
-    from ..report.reproduce import REPORT_FILES
+    from ..report.runner import REPORT_FILES
 
-    # before the progress bar: the error stays one line
     check_output(out_dir, directory=True, force=force, names=REPORT_FILES)
     progress = Progress(TextColumn("{task.description:<28}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
                         TimeElapsedColumn(), console=Console(stderr=True), disable=as_json,
@@ -35,25 +62,30 @@ def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = F
         def update(done: int, total: int, name: str) -> None:
             progress.update(task, completed=done, total=total, description=name)
 
-        result = reproduce(out_dir, model=model, rig=rig, recording=recording, quick=quick, progress=update,
-                           force=force, config=config)
+        result = write(update)
     if as_json:
         emit_json({"out_dir": str(result.out_dir), "report": str(result.report), "seconds": result.seconds,
                    "numbers": result.numbers()})
         return
     click.echo(f"wrote {result.report} ({result.seconds:.1f} s)")
-    click.echo(f"figures: {result.out_dir / 'figures'} (PNG and SVG); data: {result.out_dir / 'data'} (netCDF)")
+    # the kinds the sections list: the folder itself is moved into place when the command ends
+    data = {Path(name).suffix for s in result.sections for name in s.data}
+    click.echo(f"figures: {result.out_dir / 'figures'} ({'PNG' if quick else 'PNG and SVG'}); data: "
+               f"{result.out_dir / 'data'} ({', '.join(k for x, k in _DATA_KINDS.items() if x in data)})")
+
+
+def _run(out_dir: Path, *, model=None, rig=None, recording=None, quick: bool = False, as_json: bool,
+         force: bool = False, config: Path | None = None) -> None:
+    from ..report import reproduce
+
+    _write(out_dir, force, quick, as_json, lambda progress: reproduce(
+        out_dir, model=model, rig=rig, recording=recording, quick=quick, progress=progress, force=force,
+        config=config))
 
 
 @click.command()
-@click.option("--out-dir", "out_dir", type=click.Path(file_okay=False, path_type=Path),
-              default=Path("squealkit-report"), show_default=True, help="Output folder (replaced as a whole when the "
-              "run succeeds; a folder holding files squealkit did not write is refused).")
-@deprecated_alias("--out", "--out-dir", "out_dir", type=click.Path(file_okay=False, path_type=Path))
-@click.option("--force", is_flag=True, help="Write into a folder that holds other files, leaving them alone (a file of "
-              "the same name as one the report writes is refused, never replaced).")
-@click.option("--quick", is_flag=True, help="Coarser grids and shorter runs: a preview in seconds.")
-@click.option("--json", "as_json", is_flag=True, help="Print the computed numbers as JSON on stdout.")
+@_out_dir_options
+@_run_options
 def reproduce(out_dir: Path, force: bool, quick: bool, as_json: bool) -> None:
     """Rebuild every result of the paper, with a report, on the paper's rig.
 
@@ -79,17 +111,11 @@ def reproduce(out_dir: Path, force: bool, quick: bool, as_json: bool) -> None:
 
 @click.command()
 @model_options
-@click.option("--out-dir", "out_dir", type=click.Path(file_okay=False, path_type=Path),
-              default=Path("squealkit-report"), show_default=True, help="Output folder (replaced as a whole when the "
-              "run succeeds; a folder holding files squealkit did not write is refused).")
-@deprecated_alias("--out", "--out-dir", "out_dir", type=click.Path(file_okay=False, path_type=Path))
-@click.option("--force", is_flag=True, help="Write into a folder that holds other files, leaving them alone (a file of "
-              "the same name as one the report writes is refused, never replaced).")
+@_out_dir_options
 @click.option("--recording", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Your rig recording (CSV, WAV, netCDF, TDMS), analysed for §5 instead of a synthetic one.")
 @recording_options(required=False)
-@click.option("--quick", is_flag=True, help="Coarser grids and shorter runs: a preview in seconds.")
-@click.option("--json", "as_json", is_flag=True, help="Print the computed numbers as JSON on stdout.")
+@_run_options
 @click.pass_context
 def report(ctx: click.Context, preset, config, sets, out_dir: Path, force: bool, recording, quick: bool,
            as_json: bool, mic: str, displacement: str, rpm: float | None, radius: float | None, fs: float | None,
@@ -139,9 +165,7 @@ def report(ctx: click.Context, preset, config, sets, out_dir: Path, force: bool,
                              "onset, a second run-out tolerance and the transients.")
     spec = None
     if recording is None:  # a recording option without a recording would be silently ignored
-        given = [p.opts[0] for p in ctx.command.params if p.name not in ("preset", "config", "sets", "out_dir",
-                                                                          "force", "recording", "quick", "as_json")
-                 and ctx.get_parameter_source(p.name) == click.core.ParameterSource.COMMANDLINE]
+        given = _given(ctx, ("preset", "config", "sets", "out_dir", "force", "recording", "quick", "as_json"))
         if given:
             raise InputError(f"{given[0]} applies to --recording; give the recording, or leave {given[0]} out.")
     else:
@@ -157,29 +181,13 @@ def report(ctx: click.Context, preset, config, sets, out_dir: Path, force: bool,
 
 def _fe_report(ctx: click.Context, model, config, out_dir: Path, force: bool, quick: bool, as_json: bool) -> None:
     """``squealkit report`` on an FE model: the report of its unstable modes."""
-    from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
     from .._validation import InputError
     from ..report.fe_modes import fe_report, load_fe_report_settings
 
-    given = [p.opts[0] for p in ctx.command.params if p.name not in ("preset", "config", "sets", "out_dir", "force",
-                                                                      "quick", "as_json")
-             and ctx.get_parameter_source(p.name) == click.core.ParameterSource.COMMANDLINE]
+    given = _given(ctx, ("preset", "config", "sets", "out_dir", "force", "quick", "as_json"))
     if given:
         raise InputError(f"{given[0]} applies to the paper's model and its recording, not to an FE model; "
                          "an FE report takes its load cases from the [report] table of --config.")
     settings = load_fe_report_settings(config, model, quick=quick)  # a bad [report] table: one line, before work
-    progress = Progress(TextColumn("{task.description:<28}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                        TimeElapsedColumn(), console=Console(stderr=True), disable=as_json, transient=True)
-    with progress:
-        task = progress.add_task("starting", total=None)
-        result = fe_report(out_dir, model, settings=settings, config=config, quick=quick, force=force,
-                           progress=lambda d, t, n: progress.update(task, completed=d, total=t, description=n))
-    if as_json:
-        emit_json({"out_dir": str(result.out_dir), "report": str(result.report), "seconds": result.seconds,
-                   "numbers": result.numbers()})
-        return
-    click.echo(f"wrote {result.report} ({result.seconds:.1f} s)")
-    click.echo(f"figures: {result.out_dir / 'figures'} ({'PNG' if quick else 'PNG and SVG'}); data: "
-               f"{result.out_dir / 'data'} (netCDF, VTK)")
+    _write(out_dir, force, quick, as_json, lambda progress: fe_report(out_dir, model, settings=settings, config=config,
+                                                               quick=quick, force=force, progress=progress))

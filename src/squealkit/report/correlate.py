@@ -113,8 +113,6 @@ def write_correlation_report(ds: Any, out: Path, *, synthetic: bool = False) -> 
     from ..plotting import correlate as cp
     from .html import save_figures, write_report
 
-    figures = out / "figures"
-    figures.mkdir(exist_ok=True)
     tol = ds.attrs["tolerance_percent"]
     figs = {
         "noise_matrices_temperature": (cp.noise_matrices_plot(ds, by="temperature", synthetic=synthetic),
@@ -135,7 +133,7 @@ def write_correlation_report(ds: Any, out: Path, *, synthetic: bool = False) -> 
             figs[f"profile_{name}"] = (cp.calibration_profile_plot(ds, name),
                                        f"Profile of {name}: applications wrong at each value (others re-fitted); "
                                        "shaded: the interval the data allow.")
-    section = correlation_section(ds, save_figures(figs, figures))
+    section = correlation_section(ds, save_figures(figs, out / "figures"))
     if synthetic:
         section = Section(section.key, section.title, ("SYNTHETIC DATA: the campaign's recordings were made by "
                                                        "squealkit with known truth; not a measurement.",

@@ -178,8 +178,6 @@ def write_design_report(ds: Any, out: Path, *, doe: Any = None) -> Path:
     from ..plotting import design as dp
     from .html import save_figures, write_report
 
-    figures = out / "figures"
-    figures.mkdir(exist_ok=True)
     figs = {}
     if ds.sizes["mode"]:
         figs["countermeasures"] = (dp.countermeasures_plot(ds), "Change of each unstable mode's growth rate per "
@@ -187,6 +185,6 @@ def write_design_report(ds: Any, out: Path, *, doe: Any = None) -> Path:
     if doe is not None:
         figs["pareto"] = (dp.pareto_plot(doe), "Largest growth rate against the size of the change (declared steps) "
                                                "over the DOE; red: the Pareto front.")
-    section = design_section(ds, doe, save_figures(figs, figures))
+    section = design_section(ds, doe, save_figures(figs, out / "figures"))
     return write_report([section], out, title="squealkit design study",
                         subtitle=f"{ds.attrs.get('model_kind', 'model')} model, method {ds.attrs.get('method')}")

@@ -19,34 +19,41 @@ The load cases come from the model file's ``[report]`` table::
     rpm = [500, 1000]          # disc speeds of the load cases [rpm]
     mu = [0.4, 0.6]            # friction coefficients (every rpm x mu pair is a load case)
     eigen_band = [1000, 16000] # Hz: the band the eigenvalue solvers search
-    method = "pod"             # auto, dense, sparse, modal, pod
+    method = "pod"             # auto, dense, sparse, modal, pod, subspace
     mu_sweep = [0.0, 0.8, 9]   # START, STOP, N of the tracking over friction
     rpm_sweep = [200, 2000, 7] # START, STOP, N of the tracking over disc speed
     max_views = 8              # unstable modes drawn per load case (the most unstable first)
+    n_frames = 16              # frames per cycle of the animations
 
+A value may carry its unit as text (``eigen_band = ["1 kHz", "16 kHz"]``); the table is parsed
+as the small-model report's is (:func:`squealkit.report.settings.report_table_values`).
 Without it: the reference speed and friction of the matrices (``disc_speed_ref``, ``mu_ref``).
 """
 
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
-from .._validation import InputError, validate_finite, validate_positive
-from ..io import check_output, output_folder, save_dataset
+from ..io import check_output, save_dataset
 from .document import FigureRef, Section, Table
+from .settings import check_report_keys, report_key, report_table_values, settings_from_file
 
 __all__ = ["FEReportSettings", "fe_report", "load_fe_report_settings"]
 
 #: Coordinates per 3D view [bytes] (before base64): frames are dropped (down to 6 a cycle) to stay near it.
 _VIEW_BYTES = 1_500_000
-_KEYS = ("rpm", "mu", "eigen_band", "method", "mu_sweep", "rpm_sweep", "max_views", "n_frames")
+
+
+def _methods() -> tuple[str, ...]:
+    from ..stability.fe_sweep import METHODS
+
+    return METHODS
 
 
 @dataclass(frozen=True)
@@ -60,7 +67,7 @@ class FEReportSettings:
     eigen_band : (float, float) or None
         Frequency band [Hz] the eigenvalue solvers search (None: the solver's default).
     method : str
-        Solver: ``auto``, ``dense``, ``sparse``, ``modal`` or ``pod``.
+        Solver: ``auto``, ``dense``, ``sparse``, ``modal``, ``pod`` or ``subspace``.
     mu_sweep, rpm_sweep : (float, float, int)
         START, STOP, N of the tracking over friction (at the first speed) and over disc speed
         (at the first friction).
@@ -70,14 +77,22 @@ class FEReportSettings:
         Frames per cycle of the animations.
     """
 
-    rpm: tuple[float, ...]
-    mu: tuple[float, ...]
-    eigen_band: tuple[float, float] | None = None
-    method: str = "auto"
-    mu_sweep: tuple[float, float, int] = (0.0, 1.0, 9)
-    rpm_sweep: tuple[float, float, int] = (100.0, 2000.0, 5)
-    max_views: int = 8
-    n_frames: int = 16
+    rpm: tuple[float, ...] = report_key(unit="rpm", kind="values", doc="disc speeds of the load cases")
+    mu: tuple[float, ...] = report_key(unit="1", kind="values", doc="friction coefficients of the load cases")
+    eigen_band: tuple[float, float] | None = report_key(None, unit="Hz", kind="band",
+                                                        doc="band the eigenvalue solvers search")
+    method: str = report_key("auto", unit="", kind="choice", choices=_methods, doc="eigenvalue solver")
+    mu_sweep: tuple[float, float, int] = report_key((0.0, 1.0, 9), unit="1", kind="sweep",
+                                                    doc="tracking over friction")
+    rpm_sweep: tuple[float, float, int] = report_key((100.0, 2000.0, 5), unit="rpm", kind="sweep",
+                                                     doc="tracking over disc speed")
+    max_views: int = report_key(8, unit="", kind="count", doc="unstable modes drawn per load case")
+    n_frames: int = report_key(16, unit="", kind="count", doc="frames per cycle of the animations")
+    #: Whose ``[report]`` table this is, in messages.
+    table_of: ClassVar[str] = "an FE model's report"
+
+    def __post_init__(self) -> None:
+        check_report_keys(self)
 
     @classmethod
     def for_model(cls, model: Any, *, quick: bool = False) -> FEReportSettings:
@@ -89,47 +104,12 @@ class FEReportSettings:
 
     @classmethod
     def from_table(cls, table: Mapping[str, Any], base: FEReportSettings) -> FEReportSettings:
-        """``base`` with the values of a ``[report]`` table; one line naming a bad key or value."""
-        unknown = [k for k in table if k not in _KEYS]
-        if unknown:
-            raise InputError(f"[report]: unknown key {unknown[0]!r} for an FE model; known: {', '.join(_KEYS)}.")
-        kw: dict[str, Any] = {}
-        for key in ("rpm", "mu"):
-            if key in table:
-                values = table[key] if isinstance(table[key], list | tuple) else [table[key]]
-                if not values:
-                    raise InputError(f"[report] {key} is empty; give one value or a list.")
-                kw[key] = tuple(validate_finite(f"[report] {key}", v) for v in values)
-        if "eigen_band" in table:
-            band = table["eigen_band"]
-            if not (isinstance(band, list | tuple) and len(band) == 2):
-                raise InputError(f"[report] eigen_band = {band!r} must be [LOW, HIGH] in Hz.")
-            lo, hi = (validate_positive("[report] eigen_band", v) for v in band)
-            if not lo < hi:
-                raise InputError(f"[report] eigen_band = {band!r}: LOW must be below HIGH.")
-            kw["eigen_band"] = (lo, hi)
-        if "method" in table:
-            from ..stability.fe_sweep import METHODS
+        """``base`` with the values of a ``[report]`` table; one line naming a bad key or value.
 
-            if table["method"] not in METHODS:
-                raise InputError(f"[report] method = {table['method']!r}; known: {', '.join(METHODS)}.")
-            kw["method"] = table["method"]
-        for key in ("mu_sweep", "rpm_sweep"):
-            if key in table:
-                v = table[key]
-                if not (isinstance(v, list | tuple) and len(v) == 3 and int(v[2]) == v[2] and v[2] >= 2):
-                    raise InputError(f"[report] {key} = {v!r} must be [START, STOP, N] with N >= 2.")
-                kw[key] = (validate_finite(f"[report] {key}", v[0]), validate_finite(f"[report] {key}", v[1]),
-                           int(v[2]))
-        for key in ("max_views", "n_frames"):
-            if key in table:
-                v = table[key]
-                if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-                    raise InputError(f"[report] {key} = {v!r} must be an integer >= 1.")
-                kw[key] = v
-        from dataclasses import replace
-
-        return replace(base, **kw)
+        Parsed as the small-model report's table is (:func:`~squealkit.report.settings.report_table_values`):
+        a value may carry its unit as text (``eigen_band = ["9 kHz", "20 kHz"]``).
+        """
+        return replace(base, **report_table_values(cls, table, what=cls.table_of))
 
     @property
     def load_cases(self) -> list[tuple[float, float]]:
@@ -139,20 +119,7 @@ class FEReportSettings:
 
 def load_fe_report_settings(path: str | Path | None, model: Any, *, quick: bool = False) -> FEReportSettings:
     """The FE report's settings: a model file's ``[report]`` table over :meth:`FEReportSettings.for_model`."""
-    base = FEReportSettings.for_model(model, quick=quick)
-    if path is None:
-        return base
-    from ..models.config import _read_toml
-
-    table = _read_toml(path).get("report")
-    if table is None:
-        return base
-    if not isinstance(table, Mapping):
-        raise InputError(f"{Path(path).name}: [report] must be a table of NAME = VALUE.")
-    try:
-        return FEReportSettings.from_table(table, base)
-    except InputError as e:
-        raise InputError(f"{Path(path).name}: {e}") from e
+    return settings_from_file(path, FEReportSettings, lambda: FEReportSettings.for_model(model, quick=quick))
 
 
 # ----------------------------------------------------------------------------- steps
@@ -366,32 +333,16 @@ def fe_report(
     -------
     squealkit.report.ReproduceResult
     """
-    from .html import render_html
-    from .reproduce import REPORT_FILES, ReproduceResult
-    from .steps_stability import figure_formats
+    from .runner import REPORT_FILES, ReportStep, run_report
 
     out = Path(out_dir)
-    check_output(out, directory=True, force=force, names=REPORT_FILES)
+    check_output(out, directory=True, force=force, names=REPORT_FILES)  # before the work, not after
     settings = settings or load_fe_report_settings(config, model, quick=quick)
-    steps: list[tuple[str, Callable[[Path, Path], Section | list[Section]]]] = [
-        ("FE model", lambda fig, dat: model_step(model, settings)),
-        ("unstable modes", lambda fig, dat: modes_step(model, settings, fig, dat)),
-        ("tracking", lambda fig, dat: tracking_step(model, settings, fig, dat)),
+    steps = [
+        ReportStep("FE model", lambda fig, dat: model_step(model, settings)),
+        ReportStep("unstable modes", lambda fig, dat: modes_step(model, settings, fig, dat)),
+        ReportStep("tracking", lambda fig, dat: tracking_step(model, settings, fig, dat)),
     ]
-    start = time.perf_counter()
-    with figure_formats(("png",) if quick else ("png", "svg")), output_folder(out, force=force) as stage:
-        figures, data = stage / "figures", stage / "data"
-        figures.mkdir(parents=True)
-        data.mkdir()
-        sections = []
-        for i, (name, step) in enumerate(steps):
-            if progress is not None:
-                progress(i, len(steps), name)
-            made = step(figures, data)
-            sections.extend(made if isinstance(made, list) else [made])
-        if progress is not None:
-            progress(len(steps), len(steps), "report")
-        subtitle = f"FE model, {model.n_dof} DOFs" + (f", from {Path(config).name}" if config is not None else "")
-        (stage / "report.html").write_text(render_html(sections, figures, title="squealkit report: unstable modes "
-                                                       "of an FE brake", subtitle=subtitle), encoding="utf-8")
-    return ReproduceResult(out, tuple(sections), time.perf_counter() - start)
+    subtitle = f"FE model, {model.n_dof} DOFs" + (f", from {Path(config).name}" if config is not None else "")
+    return run_report(out, steps, title="squealkit report: unstable modes of an FE brake", subtitle=subtitle,
+                      quick=quick, force=force, progress=progress)

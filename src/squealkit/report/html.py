@@ -138,11 +138,13 @@ def render_html(sections: Sequence[Section], figures_dir: Path, *, title: str, s
 
 
 def save_figures(figs: dict, figures_dir: Path) -> tuple[FigureRef, ...]:
-    """Save each ``stem -> (figure, caption)`` as ``figures_dir/stem.png``, close it, and return the references."""
+    """Save each ``stem -> (figure, caption)`` as ``figures_dir/stem.png`` (the folder made if need be), close it,
+    and return the references."""
     import matplotlib.pyplot as plt
 
     from ..io import save_figure
 
+    figures_dir.mkdir(exist_ok=True)
     refs = []
     for stem, (fig, caption) in figs.items():
         save_figure(fig, figures_dir / f"{stem}.png")

@@ -1,66 +1,28 @@
 """``reproduce``: rebuild the paper's results, figures and a report in one call.
 
-Everything is written into a staging folder beside the output folder and moved into place
-only when the whole report is done, so an interrupted or failed run leaves no half-written
-file behind: either ``DIR`` holds a complete report or it is as it was.
+Its steps run through :func:`squealkit.report.runner.run_report`: written into a staging folder
+beside the output folder and moved into place only when the whole report is done, so an
+interrupted or failed run leaves no half-written file behind: either ``DIR`` holds a complete
+report or it is as it was.
 """
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .. import _warmup
-from ..io import check_output, output_folder
+from ..io import check_output
 from ..models import FrictionModel, PinOnDiscRig, get_preset
-from .document import Section
-from .html import render_html
+from .runner import REPORT_FILES, ReportStep, ReproduceResult, run_report
 from .settings import ReportSettings, load_report_settings
 
 __all__ = ["RecordingSpec", "ReportSettings", "ReproduceResult", "reproduce"]
 
-#: What a report writes in its folder: with ``force``, a file of the user's among them is refused up front.
-REPORT_FILES = ("report.html", "figures", "data")
-
-Step = Callable[[Path, Path], Section]
-
-#: The compiled kernels a step needs beyond the stability ones (see :mod:`squealkit._warmup`).
-_STEP_KERNELS: dict[str, tuple[str, ...]] = {
-    "Figs. 3-4 transients": ("transient",),
-    "how loud": ("transient", "nonlinear"),
-    "Figs. 6-13 measurement": ("measurement",),
-    "Figs. 6-13 your recording": ("measurement",),
-}
-
-
-@dataclass(frozen=True)
-class ReproduceResult:
-    """What a reproduce run wrote and computed.
-
-    Attributes
-    ----------
-    out_dir : Path
-        The output folder: ``report.html``, ``figures/`` (PNG and SVG), ``data/`` (netCDF).
-    sections : tuple of Section
-        The report's content, with the computed numbers of each section in ``numbers``.
-    seconds : float
-        Wall time of the run.
-    """
-
-    out_dir: Path
-    sections: tuple[Section, ...]
-    seconds: float
-
-    @property
-    def report(self) -> Path:
-        return self.out_dir / "report.html"
-
-    def numbers(self) -> dict[str, dict[str, float]]:
-        """The computed numbers by section key."""
-        return {s.key: dict(s.numbers) for s in self.sections}
+#: The compiled kernels compiled in the background while the first steps run (see :mod:`squealkit._warmup`);
+#: a step waits for those beyond the stability ones it needs (its ``kernels``).
+_KERNELS = ("transient", "stability", "nonlinear", "measurement")
 
 
 @dataclass(frozen=True)
@@ -101,35 +63,39 @@ class RecordingSpec:
 def _paper_steps(
     model: FrictionModel, rig: PinOnDiscRig | None, published: bool, quick: bool,
     recording: RecordingSpec | None = None, settings: ReportSettings | None = None,
-) -> list[tuple[str, Step]]:
+) -> list[ReportStep]:
     from .steps_measurement import measurement_step, recording_step
     from .steps_stability import critical_step, fig2_step, parameters_step
     from .steps_transient import transient_step
 
     n = 41 if quick else 161
     op = settings or ReportSettings.paper()
-    steps: list[tuple[str, Step]] = [
-        ("parameters", lambda fig, dat: parameters_step(model, rig, fig, dat, settings=op)),
-        ("Fig. 2 eigenvalues", lambda fig, dat: fig2_step(model, fig, dat, n_mu=n, n_theta=n, published=published)),
-        ("critical friction", lambda fig, dat: critical_step(model, fig, dat, settings=op)),
-        ("Figs. 3-4 transients", lambda fig, dat: transient_step(model, fig, dat, quick=quick, settings=op,
-                                                                 published=published)),
+    steps = [
+        ReportStep("parameters", lambda fig, dat: parameters_step(model, rig, fig, dat, settings=op)),
+        ReportStep("Fig. 2 eigenvalues", lambda fig, dat: fig2_step(model, fig, dat, n_mu=n, n_theta=n,
+                                                                    published=published)),
+        ReportStep("critical friction", lambda fig, dat: critical_step(model, fig, dat, settings=op)),
+        ReportStep("Figs. 3-4 transients", lambda fig, dat: transient_step(model, fig, dat, quick=quick, settings=op,
+                                                                           published=published),
+                   kernels=("transient",)),
     ]
     if "kinematics" in model.parameter_info():
         from .steps_beyond import beyond_step
 
-        steps.append(("beyond the paper", lambda fig, dat: beyond_step(model, fig, dat, settings=op)))
+        steps.append(ReportStep("beyond the paper", lambda fig, dat: beyond_step(model, fig, dat, settings=op)))
         from .steps_nonlinear import nonlinear_step
 
-        steps.append(("how loud", lambda fig, dat: nonlinear_step(model, fig, dat, quick=quick, settings=op)))
+        steps.append(ReportStep("how loud", lambda fig, dat: nonlinear_step(model, fig, dat, quick=quick,
+                                                                            settings=op),
+                                kernels=("transient", "nonlinear")))
     if recording is None:
-        steps.append(("Figs. 6-13 measurement", lambda fig, dat: measurement_step(model, fig, dat, quick=quick,
-                                                                                  published=published)))
+        steps.append(ReportStep("Figs. 6-13 measurement", lambda fig, dat: measurement_step(
+            model, fig, dat, quick=quick, published=published), kernels=("measurement",)))
     else:
         r = recording
-        steps.append(("Figs. 6-13 your recording", lambda fig, dat: recording_step(
+        steps.append(ReportStep("Figs. 6-13 your recording", lambda fig, dat: recording_step(
             r.path, fig, dat, mic=r.mic, displacement=r.displacement, rpm=r.rpm, radius=r.radius, fs=r.fs,
-            model=model, scale=r.scale, units=r.units, options=r.options)))
+            model=model, scale=r.scale, units=r.units, options=r.options), kernels=("measurement",)))
     return steps
 
 
@@ -194,32 +160,13 @@ def reproduce(
     if settings is None:
         settings = load_report_settings(config, model, paper=paper_model)
     steps = _paper_steps(model, rig, published=paper_model, quick=quick, recording=recording, settings=settings)
-    start = time.perf_counter()
-    # a first run compiles the later steps' kernels on the other core while the first steps run
-    # staged and moved into place only when complete; never deletes what squealkit did not write
-    from .steps_stability import figure_formats
+    from .steps_conclusions import conclusions_step
 
-    # a preview draws each figure once (PNG); the later steps' kernels compile on the other core meanwhile
-    with (_warmup.compiling(["transient", "stability", "nonlinear", "measurement"]),
-          figure_formats(("png",) if quick else ("png", "svg")), output_folder(out, force=force) as stage):
-        figures, data = stage / "figures", stage / "data"
-        figures.mkdir(parents=True)
-        data.mkdir()
-        sections = []
-        for i, (name, step) in enumerate(steps):
-            if progress is not None:
-                progress(i, len(steps), name)
-            _warmup.wait(_STEP_KERNELS.get(name, ()))
-            sections.append(step(figures, data))
-        from .steps_conclusions import conclusions_step
-
-        sections.append(conclusions_step(sections, settings=settings, published=paper_model))
-        if progress is not None:
-            progress(len(steps), len(steps), "report")
-        title = title or ("Lv, Zhang & Yu (2013), reproduced by squealkit" if default else "squealkit report")
-        subtitle = ("Influence of surface run-out on disc brake squeal, J. Vibroeng. 15(2) 2013"
-                    if default else f"model: {model.kind}"
-                    + (f", from {Path(config).name}" if config is not None else ""))
-        (stage / "report.html").write_text(render_html(sections, figures, title=title, subtitle=subtitle),
-                                           encoding="utf-8")
-    return ReproduceResult(out, tuple(sections), time.perf_counter() - start)
+    title = title or ("Lv, Zhang & Yu (2013), reproduced by squealkit" if default else "squealkit report")
+    subtitle = ("Influence of surface run-out on disc brake squeal, J. Vibroeng. 15(2) 2013"
+                if default else f"model: {model.kind}" + (f", from {Path(config).name}" if config is not None else ""))
+    # a first run compiles the later steps' kernels on the other core while the first steps run;
+    # a preview draws each figure once (PNG)
+    return run_report(out, steps, title=title, subtitle=subtitle, quick=quick, force=force, progress=progress,
+                      compile_kernels=_KERNELS,
+                      closing=lambda sections: conclusions_step(sections, settings=settings, published=paper_model))

@@ -13,6 +13,10 @@ sit far from its onset. A model file's ``[report]`` table sets them::
     sro_wavelength = 1e-3   # m
     speed = 0.02            # m/s, sliding speed
 
+A value may carry its own unit as text (``sro_amplitude = "4 um"``, ``speed = "20 mm/s"``), as in
+the model file's other tables; a bare number is in the unit above. The FE report's keys
+(:mod:`squealkit.report.fe_modes`) are declared and parsed the same way (:func:`report_key`).
+
 Without the table, the paper's preset gets the paper's values and another model gets values
 placed from its own damped onset on a flat disc (:meth:`ReportSettings.for_model`).
 """
@@ -21,15 +25,187 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Mapping
-from dataclasses import dataclass, fields, replace
+from collections.abc import Callable, Mapping
+from dataclasses import MISSING, Field, dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
-from .._validation import InputError, validate_finite, validate_positive
+from .._validation import InputError, validate_finite, validate_int, validate_positive
 from ..models import FrictionModel
 
 __all__ = ["ReportSettings", "load_report_settings"]
+
+# ----------------------------------------------------------------------------- the [report] table's keys
+
+#: What a key of a ``[report]`` table holds, and the words of what it accepts.
+_KINDS = {
+    "finite": "a number",
+    "positive": "a number > 0",
+    "values": "a number or a list of numbers",
+    "band": "[LOW, HIGH] with 0 < LOW < HIGH",
+    "sweep": "[START, STOP, N] with an integer N >= 2",
+    "count": "an integer >= 1",
+    "choice": "one of the names",
+}
+
+
+def report_key(default: Any = MISSING, *, unit: str, doc: str, kind: str = "finite",
+               choices: Callable[[], tuple[str, ...]] | None = None) -> Any:
+    """Declare a key of a ``[report]`` table: a dataclass field with its unit, meaning and check.
+
+    One declaration drives the table's parsing (:func:`report_table_values`), the settings'
+    own check on construction (:func:`check_report_keys`) and the error messages, for the
+    small-model report (:class:`ReportSettings`) and the FE report
+    (:class:`~squealkit.report.fe_modes.FEReportSettings`) alike.
+
+    Parameters
+    ----------
+    default : object, optional
+        The field's default.
+    unit : str
+        SI unit the value is held in (``"1"`` dimensionless, ``"m"``, ``"m/s"``, ``"Hz"``, ``"rpm"``;
+        ``""`` for a count or a name). A value written with its own unit (``"80 um"``, ``"9 kHz"``)
+        is converted to it; a bare number is taken in it.
+    doc : str
+        What the key is, in words.
+    kind : str
+        ``finite``, ``positive``, ``values`` (one number or a list: a tuple), ``band`` ((LOW, HIGH)
+        or None), ``sweep`` ((START, STOP, N)), ``count`` (an integer >= 1) or ``choice``.
+    choices : callable, optional
+        For ``kind="choice"``: returns the accepted names (called when a value is checked, so a
+        heavy module is imported only then).
+    """
+    if kind not in _KINDS or (kind == "choice") != (choices is not None):
+        raise ValueError(f"report key kind {kind!r} with choices {choices!r}")
+    return field(default=default, metadata={"unit": unit, "doc": doc, "report_kind": kind, "choices": choices})
+
+
+def _number(name: str, value: object, unit: str) -> float:
+    """A finite number in ``unit``: a number, or text (a number, or a number with its unit: ``"80 um"``)."""
+    if unit in ("", "1"):
+        return validate_finite(name, value)
+    from .._units import parse_quantity
+
+    return validate_finite(name, parse_quantity(name, value, unit))
+
+
+def report_value(f: Field, value: Any, name: str) -> Any:
+    """``value`` of the declared key ``f``, converted to its unit and checked; one-line InputError naming ``name``.
+
+    Parameters
+    ----------
+    f : dataclasses.Field
+        A field declared with :func:`report_key`.
+    value : object
+        The value as written (a TOML value, or what the caller passed).
+    name : str
+        The key as the messages name it (``"[report] rpm"`` for a table, ``"rpm"`` for the API).
+
+    Returns
+    -------
+    float, tuple, int, str or None
+        The value in the key's unit and shape.
+    """
+    kind, unit = f.metadata["report_kind"], f.metadata["unit"]
+    accepted = _KINDS[kind] + (f" [{unit}]" if unit not in ("", "1") else "")
+    if kind == "finite":
+        return _number(name, value, unit)
+    if kind == "positive":
+        return validate_positive(name, _number(name, value, unit))
+    if kind == "count":
+        return validate_int(name, value, 1)
+    if kind == "choice":
+        known = f.metadata["choices"]()
+        if value not in known:
+            raise InputError(f"{name} = {value!r}; known: {', '.join(known)}.")
+        return value
+    if kind == "band" and value is None:
+        return None
+    many = isinstance(value, list | tuple)
+    if kind == "values":
+        values = value if many else [value]
+        if not values:
+            raise InputError(f"{name} is empty; give {accepted}.")
+        return tuple(_number(name, v, unit) for v in values)
+    if kind == "band":
+        if not (many and len(value) == 2):
+            raise InputError(f"{name} = {value!r} must be {accepted}.")
+        lo, hi = (validate_positive(name, _number(name, v, unit)) for v in value)
+        if not lo < hi:
+            raise InputError(f"{name} = {value!r}: LOW must be below HIGH.")
+        return (lo, hi)
+    if not (many and len(value) == 3):  # a sweep
+        raise InputError(f"{name} = {value!r} must be {accepted}.")
+    return (_number(name, value[0], unit), _number(name, value[1], unit), validate_int(f"{name} N", value[2], 2))
+
+
+def check_report_keys(settings: Any) -> None:
+    """Convert and check every declared key of a frozen settings dataclass in place (its ``__post_init__``)."""
+    for f in fields(settings):
+        if "report_kind" in f.metadata:
+            object.__setattr__(settings, f.name, report_value(f, getattr(settings, f.name), f.name))
+
+
+def report_table_values(cls: type, table: Mapping[str, Any], *, what: str, name: str = "[report]") -> dict[str, Any]:
+    """The values of a ``[report]`` table for the settings class ``cls``: each converted and checked.
+
+    Parameters
+    ----------
+    cls : type
+        A settings dataclass whose keys are declared with :func:`report_key`.
+    table : mapping
+        ``NAME = VALUE`` pairs.
+    what : str
+        Whose table it is, for the message on an unknown key (``"an FE model's report"``).
+    name : str
+        The table's name in messages.
+
+    Returns
+    -------
+    dict
+        Key to value, in the keys' units.
+
+    Raises
+    ------
+    InputError
+        One line naming an unknown key (and the known ones) or a bad value (and what is accepted).
+    """
+    declared = {f.name: f for f in fields(cls) if "report_kind" in f.metadata}
+    for key in table:
+        if key not in declared:
+            raise InputError(f"{name}: unknown key {key!r} for {what}; known: {', '.join(declared)}.")
+    return {key: report_value(declared[key], value, f"{name} {key}") for key, value in table.items()}
+
+
+def read_report_table(path: str | Path | None) -> Mapping[str, Any] | None:
+    """The ``[report]`` table of a model file (None: no file, or no table); not a table is an InputError."""
+    if path is None:
+        return None
+    from ..models.config import _read_toml
+
+    table = _read_toml(path).get("report")
+    if table is not None and not isinstance(table, Mapping):
+        raise InputError(f"{Path(path).name}: [report] must be a table of NAME = VALUE.")
+    return table
+
+
+def settings_from_file(path: str | Path | None, cls: type, default: Callable[[], Any]) -> Any:
+    """``default()`` with the ``[report]`` table of the model file ``path`` (``cls.from_table``); errors name the file.
+
+    The table is checked before ``default()`` places the defaults (that may be work, and may warn),
+    so a bad table is refused first, in one line.
+    """
+    table = read_report_table(path)
+    if table is None:
+        return default()
+    try:
+        report_table_values(cls, table, what=cls.table_of)
+    except InputError as e:
+        raise InputError(f"{Path(path).name}: {e}") from e  # type: ignore[arg-type]
+    return cls.from_table(table, default())
+
+
+# ----------------------------------------------------------------------------- the small model's operating point
 
 
 @dataclass(frozen=True)
@@ -56,24 +232,19 @@ class ReportSettings:
         Where the values come from, in words, for the report's text.
     """
 
-    mu_design: float = 0.3
-    mu_transient: float = 0.4
-    mu_unstable: float = 0.6
-    mu_cycle: float = 0.5
-    sro_amplitude: float = 80e-6
-    sro_wavelength: float = 1e-3
-    speed: float = 0.02
+    mu_design: float = report_key(0.3, unit="1", doc="friction of the run-out tolerance")
+    mu_transient: float = report_key(0.4, unit="1", doc="friction of Fig. 3's first case and Fig. 4")
+    mu_unstable: float = report_key(0.6, unit="1", doc="friction of Fig. 3's clearly unstable case")
+    mu_cycle: float = report_key(0.5, unit="1", doc="friction at which the limit-cycle amplitude is quoted")
+    sro_amplitude: float = report_key(80e-6, unit="m", kind="positive", doc="sine run-out amplitude q0")
+    sro_wavelength: float = report_key(1e-3, unit="m", kind="positive", doc="sine run-out wavelength")
+    speed: float = report_key(0.02, unit="m/s", kind="positive", doc="sliding speed")
     source: str = "the paper's operating point (§4, Fig. 4)"
+    #: Whose ``[report]`` table this is, in messages.
+    table_of: ClassVar[str] = "a small model's report"
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            if f.name == "source":
-                continue
-            value = getattr(self, f.name)
-            if f.name.startswith("mu_"):
-                validate_finite(f.name, value)
-            else:
-                validate_positive(f.name, value)
+        check_report_keys(self)
 
     @property
     def sro_slope(self) -> float:
@@ -132,7 +303,8 @@ class ReportSettings:
         Parameters
         ----------
         table : mapping
-            ``NAME = VALUE`` pairs, names of this class's fields (SI units: m, m/s).
+            ``NAME = VALUE`` pairs, names of this class's fields (SI units: m, m/s; a value may
+            carry its own unit as text, ``"80 um"``, ``"20 mm/s"``).
         base : ReportSettings
             The values the table does not set.
         name : str
@@ -142,15 +314,8 @@ class ReportSettings:
         -------
         ReportSettings
         """
-        known = [f.name for f in fields(cls) if f.name != "source"]
-        values = {}
-        for key, value in table.items():
-            if key not in known:
-                raise InputError(f"Unknown {name} key {key!r}; known: {', '.join(known)}.")
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                raise InputError(f"{name} {key} = {value!r} must be a number.")
-            values[key] = float(value)
-        rest = [k for k in known if k not in values]
+        values = report_table_values(cls, table, what=cls.table_of, name=name)
+        rest = [f.name for f in fields(cls) if "report_kind" in f.metadata and f.name not in values]
         return replace(base, **values, source=f"the model file's {name} table"
                        + (f"; {', '.join(rest)}: {base.source}" if rest else ""))
 
@@ -176,17 +341,5 @@ def load_report_settings(path: str | Path | None, model: FrictionModel, *, paper
     -------
     ReportSettings
     """
-    from ..models.config import _read_toml
-
-    base = ReportSettings.paper() if paper else ReportSettings.for_model(model)
-    if path is None:
-        return base
-    table = _read_toml(path).get("report")
-    if table is None:
-        return base
-    if not isinstance(table, Mapping):
-        raise InputError(f"{Path(path).name}: [report] must be a table of NAME = VALUE.")
-    try:
-        return ReportSettings.from_table(table, base)
-    except InputError as e:
-        raise InputError(f"{Path(path).name}: {e}") from e
+    return settings_from_file(path, ReportSettings,
+                              ReportSettings.paper if paper else lambda: ReportSettings.for_model(model))
