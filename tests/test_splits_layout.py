@@ -15,7 +15,7 @@ import pytest
 SRC = Path(__file__).resolve().parents[1] / "src" / "squealkit"
 
 
-@pytest.mark.parametrize("folder", ["transient"])
+@pytest.mark.parametrize("folder", ["transient", "solvers/small"])
 def test_no_module_over_800_lines(folder):
     long = {p.relative_to(SRC).as_posix(): n for p in sorted((SRC / folder).rglob("*.py"))
             if (n := len(p.read_text(encoding="utf-8").splitlines())) > 800}
@@ -41,3 +41,18 @@ def test_the_old_simulate_module_path_still_has_its_names():
 
     assert callable(simulate) and simulate is module.simulate  # the package's attribute is the function
     assert module.METHODS == ("dopri5", "rosenbrock", "rk4") and module.STEP_FACTOR == 0.25
+
+
+#: what ``from squealkit.solvers.small import ...`` gave the analyses and the warm-up before it became a package
+_SMALL_NAMES = ("DIVERGENCE", "FLUTTER", "INDETERMINATE", "STABLE", "UNDECIDED", "ZERO_ROOT_REACH", "charpoly_table",
+                "classify_points", "derived_quantities", "inclusion_radii", "permutations_table", "quadratic_eigvals",
+                "quadratic_eigvals_stack", "select_modes", "_radii_range", "_REAL_RTOL", "_locked_in")
+
+
+def test_the_small_kernels_keep_their_import_path():
+    small = importlib.import_module("squealkit.solvers.small")
+    for name in _SMALL_NAMES:
+        assert hasattr(small, name), name
+    from squealkit.solvers.small import modes, roots
+
+    assert small.classify_points is modes.classify_points and small.quadratic_eigvals is roots.quadratic_eigvals
