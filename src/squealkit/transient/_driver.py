@@ -25,6 +25,8 @@ from ._step import _step_size
 _FORCING_PER_SAMPLE = 4
 #: Output samples per compiled call of the adaptive integrator.
 _CHUNK_SAMPLES = 1 << 14
+#: Steps per compiled call (progress and divergence are checked between calls).
+_CHUNK_STEPS = 1 << 17
 #: Events recorded per run (contact loss/closure, stick/slip); later ones are counted only.
 _MAX_EVENTS = 4096
 
@@ -36,6 +38,8 @@ def _dopri_tableau():
     A[:, : RK45.A.shape[1]] = RK45.A
     return (np.ascontiguousarray(A), np.ascontiguousarray(RK45.B), np.ascontiguousarray(RK45.C),
             np.ascontiguousarray(RK45.E), np.ascontiguousarray(RK45.P))
+
+
 def _rodas4_tableau():
     """Rodas4 in the transformed form of Hairer & Wanner II, eq. (IV.7.25), coefficients of their
     code RODAS (method 1): a_ij, c_ij, alpha_i, d_i (f_t), m_j, dense output D2, D3 and gamma."""
@@ -59,10 +63,6 @@ def _rodas4_tableau():
     dense[0, :5] = [10.12623508344586, -7.487995877610167, -34.80091861555747, -7.992771707568823, 1.025137723295662]
     dense[1, :5] = [-0.6762803392801253, 6.087714651680015, 16.43084320892478, 24.76722511418386, -6.594389125716872]
     return A, Cm, alpha, d, m, dense, 0.25
-
-
-#: Steps per compiled call (progress and divergence are checked between calls).
-_CHUNK_STEPS = 1 << 17
 
 
 def _chunks(setup: dict[str, Any], progress: Progress | None) -> Iterator[tuple[int, tuple[np.ndarray, ...]]]:
