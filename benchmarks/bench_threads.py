@@ -33,9 +33,9 @@ from squealkit.models import get_preset
 from squealkit.stability import critical_friction, eigenvalues
 from squealkit.transient import simulate
 
-#: the modules that call threads_for (squealkit.transient.simulate is also a function's name)
+#: the modules that call threads_for
 _CALL_SITES = tuple(importlib.import_module(f"squealkit.{m}")
-                    for m in ("stability.eigen", "stability.ensemble", "transient.simulate"))
+                    for m in ("stability.eigen", "stability.ensemble", "transient._driver"))
 
 
 @contextlib.contextmanager

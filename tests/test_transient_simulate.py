@@ -230,7 +230,8 @@ def test_flat_disc_envelope_grows_at_sigma():
 
 # -- streaming (issue #15: long runs must not be held in memory) -------------------------------------
 
-_SIM = importlib.import_module("squealkit.transient.simulate")  # the module (the package exports the function)
+# the driver of the compiled integrators, whose chunk sizes these tests cut small
+_SIM = importlib.import_module("squealkit.transient._driver")
 
 
 @pytest.mark.parametrize(("method", "contact"), [("dopri5", "nonlinear"), ("rk4", "linear")])

@@ -23,12 +23,14 @@ def test_transient_group_compiles_no_stability_kernel(monkeypatch):
         for name in dir(module):
             if isinstance(getattr(module, name), numba.core.registry.CPUDispatcher):
                 monkeypatch.setattr(module, name, refuse)
-    # the child swaps simulate's eigenvalues for LAPACK's stand-in: undone after this test, so
-    # that later tests in this process (tests/test_stribeck.py's growth rates) see the real one
+    # the child swaps the eigenvalues a run calls (its step bound's and its growth rate's) for LAPACK's
+    # stand-in: undone after this test, so that later tests in this process (tests/test_stribeck.py's
+    # growth rates) see the real one
     import importlib
 
-    sim = importlib.import_module("squealkit.transient.simulate")
-    monkeypatch.setattr(sim, "eigenvalues", sim.eigenvalues)
+    for sim in (importlib.import_module("squealkit.transient._step"),
+                importlib.import_module("squealkit.transient._result")):
+        monkeypatch.setattr(sim, "eigenvalues", sim.eigenvalues)
     _warmup._transient()
 
 
