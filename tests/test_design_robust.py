@@ -18,15 +18,11 @@ from hypothesis import strategies as st
 from scipy import stats
 
 from squealkit import InputError
-from squealkit.design.robust import (
-    PerturbationWarning,
-    _fe_setup,
-    _linear_matrices,
-    _second_order_derivatives,
-    _state_eigvals,
-    _uncertain,
-    robust_margins,
-)
+from squealkit.design import PerturbationWarning, robust_margins
+from squealkit.design._pencil import _linear_matrices, _state_eigvals
+from squealkit.design._scatter import _uncertain
+from squealkit.design.perturbation import _second_order_derivatives
+from squealkit.design.robust import _fe_setup
 from squealkit.fe.model import FEModel, rpm_to_disc_speed
 
 RPM, MU = 500.0, 0.13  # the built-in brake's 11.7 kHz pair is just stable here (growth rate -3.7 1/s)
@@ -195,9 +191,9 @@ def test_same_result_in_batches_and_small_work_never_uses_the_cluster():
 
 def test_dask_client_gives_the_same_numbers(monkeypatch):
     distributed = pytest.importorskip("distributed")
-    import squealkit.design.robust as robust
+    import squealkit.design.montecarlo as montecarlo
 
-    monkeypatch.setattr(robust, "_CLUSTER_MIN_SECONDS", 0.0)  # send even this small work to the cluster
+    monkeypatch.setattr(montecarlo, "_CLUSTER_MIN_SECONDS", 0.0)  # send even this small work to the cluster
     model = _two_dof()
     kw = {"rpm": 0.0, "scatter": {"D1": 0.1}, "samples": 200, "seed": 7, "method": "montecarlo", "batch_size": 50}
     local = robust_margins(model, **kw)
