@@ -42,18 +42,30 @@ def _gamma(mats: NDArray) -> float:
     return math.sqrt(nk / nm) if nk > 0 and nm > 0 else 1.0
 
 
-def _state_eigvals(mats: NDArray, gamma: float) -> NDArray:
-    """All ``2n`` eigenvalues of each ``(M, C, K)`` of a batch (S, 3, n, n): shape (S, 2n).
-
-    The state matrix ``[[0, I], [-M^-1 K / g^2, -M^-1 C / g]]`` of ``lambda = g nu`` (scaled), one
-    LAPACK ``geev`` each (no vectors).
-    """
+def _state_matrices(mats: NDArray, gamma: float) -> NDArray:
+    """The state matrices ``[[0, I], [-M^-1 K / g^2, -M^-1 C / g]]`` of ``lambda = g nu`` (scaled) of each
+    ``(M, C, K)`` of a batch (S, 3, n, n): shape (S, 2n, 2n). An eigenvector is ``[x; nu x]``."""
     S, _, n, _ = mats.shape
     MK = np.linalg.solve(mats[:, 0], np.concatenate([mats[:, 2] / gamma**2, mats[:, 1] / gamma], axis=2))
     A = np.zeros((S, 2 * n, 2 * n))
     A[:, :n, n:] = np.eye(n)
     A[:, n:, :] = -MK
-    return gamma * np.linalg.eigvals(A)
+    return A
+
+
+def _state_eigvals(mats: NDArray, gamma: float) -> NDArray:
+    """All ``2n`` eigenvalues of each ``(M, C, K)`` of a batch (S, 3, n, n): shape (S, 2n), one LAPACK
+    ``geev`` each (no vectors)."""
+    return gamma * np.linalg.eigvals(_state_matrices(mats, gamma))
+
+
+def _state_eig(mats: NDArray, gamma: float) -> tuple[NDArray, NDArray]:
+    """Eigenvalues (S, 2n) and unit displacement eigenvectors ``x`` (S, n, 2n) of each ``(M, C, K)`` of a batch."""
+    n = mats.shape[-1]
+    w, Z = np.linalg.eig(_state_matrices(mats, gamma))
+    x = Z[:, :n, :]
+    norm = np.linalg.norm(x, axis=1, keepdims=True)
+    return gamma * w, x / np.where(norm > 0, norm, 1.0)
 
 
 def _pencil(mats: NDArray, gamma: float) -> tuple[NDArray, NDArray]:

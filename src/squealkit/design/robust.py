@@ -11,9 +11,11 @@ growth rate. Two methods, side by side, each with its interval and its cost:
     (:mod:`squealkit.design.montecarlo`). An FE model is reduced once, for its nominal
     parameters (:func:`~squealkit.solvers.reduction.reduce` on a POD basis, as
     :func:`~squealkit.stability.fe_stability_map` builds it): each scattered matrix part ``A``
-    enters as ``V^T A V``, so a sample costs an eigen solve of ``2 r`` unknowns. The eigenpairs
-    of a subset of samples are checked by their backward error in the FULL model (from the
-    basis' residual factor, no full-size product), which says whether the basis still holds the
+    enters as ``V^T A V``, so a sample costs an eigen solve of ``2 r`` unknowns. Each sample's
+    modes are matched to the nominal ones by shape (MAC) and eigenvalue in one assignment, a
+    match between near-equal candidates reported as indeterminate, never picked; the eigenpairs
+    of every sample are checked by their backward error in the FULL model (from the basis'
+    residual factor, no full-size product), which says whether the basis still holds the
     scattered models. The interval is the Clopper-Pearson (exact binomial) one, as in
     :func:`~squealkit.uncertainty.squeal_propensity`.
 
@@ -58,9 +60,9 @@ from .. import __version__
 from .._threads import honour_thread_limit
 from .._validation import InputError, validate_angle, validate_finite, validate_model
 from ..uncertainty import UncertainParameter, parse_uncertain, sample_parameters
-from ._pencil import _gamma, _linear_matrices, _model_matrices, _modes_in_band, _state_eigvals, _threshold
+from ._pencil import _gamma, _linear_matrices, _model_matrices, _modes_in_band, _state_eig, _threshold
 from ._scatter import _moments, _scatter_table, _uncertain
-from .montecarlo import _check_scatter_samples, _clopper_pearson, _montecarlo, _residuals
+from .montecarlo import _check_scatter_samples, _montecarlo, _montecarlo_summary, _nominal_residual, _residual_check
 from .perturbation import (
     _FD_STEP,
     COUPLING_MAX,
@@ -78,8 +80,6 @@ METHODS = ("montecarlo", "perturbation")
 _FULL_MAX_DOF = 200
 #: Samples per Monte Carlo task (results never depend on it).
 _BATCH = 256
-#: Samples whose eigenpairs are checked in the full model (the first ones drawn, and the nominal).
-_CHECKED = 16
 
 
 # ----------------------------------------------------------------------------- an FE model's reduced parts
@@ -239,15 +239,18 @@ def robust_margins(
         ``frequency_hz`` [Hz], ``growth_rate`` [1/s] (at the parameters' mean); over
         ``(estimator, mode)`` (``estimator`` the methods run, named as in ``method``; not called
         ``method``, which is a keyword of ``Dataset.sel``): ``growth_rate_mean``, ``growth_rate_std``
-        [1/s] and ``probability_unstable`` (Monte Carlo: each sample's eigenvalue matched to the
-        nominal mode by least total distance); over ``estimator``: ``propensity``, ``propensity_ci_lower``,
+        [1/s] and ``probability_unstable`` (Monte Carlo: each sample's mode matched to the nominal
+        one by shape and eigenvalue; NaN where a match is indeterminate, see
+        :mod:`squealkit.design.montecarlo`); over ``estimator``: ``propensity``, ``propensity_ci_lower``,
         ``propensity_ci_upper`` and ``cost_seconds``. With the perturbation estimate:
         ``growth_rate_sensitivity`` (mode, parameter) [1/s per unit], ``perturbation_status``
         (codes of :data:`PERTURBATION_STATUS`) and ``coupling_ratio`` (mode). With Monte Carlo:
         ``parameter_value`` (sample, parameter), ``max_growth_rate`` and ``unstable`` (sample),
-        ``sampled_growth_rate`` (sample, mode). ``attrs``: the operating point, band, scatter,
-        seed, basis, ``n_reduced``, the largest full-model backward error of the checked samples
-        ``max_residual`` and ``trusted``.
+        ``sampled_growth_rate`` and ``match_indeterminate`` (sample, mode), for an FE model
+        ``sample_residual`` (sample). ``attrs``: the operating point, band, scatter, seed, basis,
+        ``n_reduced``, ``residual_checked`` (the nominal and every sample of an FE model; 0 for a
+        small model, solved whole), the largest full-model backward error ``max_residual`` and
+        ``trusted``.
 
     Raises
     ------
@@ -260,7 +263,8 @@ def robust_margins(
     PerturbationWarning
         A mode is beyond the perturbation estimate's reach (its propensity is NaN).
     UserWarning
-        The reduced basis does not hold the scattered models (``trusted`` is 0).
+        The reduced basis does not hold the scattered models (``trusted`` is 0); a Monte Carlo
+        match is indeterminate in some samples.
 
     Examples
     --------
@@ -337,9 +341,9 @@ def robust_margins(
     mean_p, std_p, m3, m4 = _moments(unc)
     nominal_mats = builder(payload, mean_p[None])[0]
     gamma = _gamma(nominal_mats)
-    lam_all = _state_eigvals(nominal_mats[None], gamma)[0]
+    lam_all, vec_all = (a[0] for a in _state_eig(nominal_mats[None], gamma))
     modes = _modes_in_band(lam_all, lo, hi)
-    lam0 = lam_all[modes]
+    lam0, X0 = lam_all[modes], vec_all[:, modes]
     tol = float(_threshold(lam_all[None])[0])
     setup_seconds = time.perf_counter() - t_setup
 
@@ -347,22 +351,18 @@ def robust_margins(
     with threadpool_limits(1, user_api="blas"):
         results: dict[str, dict[str, Any]] = {}
         X = None
-        checked = np.zeros(0)
+        names = [p.name for p in unc]
+        check = _residual_check(setup, names)
+        checked = np.zeros(0) if check is None else np.array([_nominal_residual(setup, names, mean_p, gamma, lo, hi)])
         if "montecarlo" in methods:
             t0 = time.perf_counter()
             X = sample_parameters(unc, samples, np.random.default_rng(np.random.SeedSequence(seed)))
             _check_scatter_samples(unc, X, model, is_fe)
-            unstable, top, matched = _montecarlo(builder, payload, X, lam0, lo, hi, gamma, batch_size, client)
-            if is_fe:
-                rows = np.vstack([mean_p[None], X[:_CHECKED]])
-                checked = _residuals(setup, [p.name for p in unc], rows, gamma, lo, hi)
-            k = int(unstable.sum())
-            growth = matched.real
-            results["montecarlo"] = {
-                "mean": growth.mean(axis=0), "std": growth.std(axis=0, ddof=1),
-                "probability": np.mean(growth > tol, axis=0), "propensity": k / samples,
-                "ci": _clopper_pearson(k, samples, confidence), "unstable": unstable, "top": top, "growth": growth,
-                "seconds": time.perf_counter() - t0}
+            mc = _montecarlo(builder, payload, X, lam0, X0, tol, lo, hi, gamma, check, batch_size, client)
+            if check is not None:
+                checked = np.concatenate([checked, mc["residual"]])
+            results["montecarlo"] = _montecarlo_summary(mc, lam0, confidence)
+            results["montecarlo"]["seconds"] = time.perf_counter() - t0
         if "perturbation" in methods:
             t0 = time.perf_counter()
             if is_fe:
@@ -384,8 +384,8 @@ def robust_margins(
     trusted = bool(max_res <= eta_max)
     if not trusted:
         warnings.warn(f"The reduced basis does not hold the scattered models: the largest full-model backward "
-                      f"error of the checked samples is {max_res:.3g} (above eta_max={eta_max:g}); pass a richer "
-                      "basis= or a narrower scatter.", UserWarning, stacklevel=2)
+                      f"error of the nominal model and the samples is {max_res:.3g} (above eta_max={eta_max:g}); "
+                      "pass a richer basis= or a narrower scatter.", UserWarning, stacklevel=2)
     return _dataset(model, unc, units, methods, results, lam0, X, mean_p, std_p, attrs={
         "rpm": rpm if is_fe else math.nan, "disc_speed": disc_speed if is_fe else math.nan, "mu": mu,
         "theta": theta, "tan_theta": tan_t, "band_hz": [lo, hi], "seed": seed,
@@ -394,6 +394,8 @@ def robust_margins(
         "n_reduced": int(nominal_mats.shape[-1]),
         "n_full": int(model.n_dof),
         "residual_checked": int(checked.size), "max_residual": max_res, "eta_max": eta_max,
+        "residual_scope": ("the nominal model and every sample" if is_fe else
+                           "none: a small model is solved whole, with no reduced basis to check"),
         "trusted": int(trusted), "setup_seconds": setup_seconds, "damped": int(bool(damped)) if not is_fe else 1})
 
 
@@ -443,8 +445,15 @@ def _dataset(model: Any, unc: Sequence[UncertainParameter], units: Sequence[str]
             "unstable": ("sample", mc["unstable"], {"long_name": "some mode in the band grows"}),
             "max_growth_rate": ("sample", mc["top"], {"units": "1/s", "long_name": "largest growth rate in the band"}),
             "sampled_growth_rate": (("sample", "mode"), mc["growth"],
-                                    {"units": "1/s", "long_name": "growth rate of the nominal mode in the sample"}),
+                                    {"units": "1/s", "long_name": "growth rate of the nominal mode in the sample "
+                                                                  "(NaN: match indeterminate)"}),
+            "match_indeterminate": (("sample", "mode"), mc["ambiguous"],
+                                    {"long_name": "the nominal mode could not be told apart in the sample (two "
+                                                  "candidates of near-equal shape and eigenvalue)"}),
         }
+        if np.isfinite(mc["residual"]).any():
+            data["sample_residual"] = ("sample", mc["residual"], {
+                "units": "1", "long_name": "largest full-model backward error of the sample's pairs in the band"})
     ci_method = {"montecarlo": "clopper-pearson", "perturbation": "bounds of the per-mode probabilities"}
     ds = xr.Dataset(
         data,
