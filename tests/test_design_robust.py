@@ -245,7 +245,7 @@ def test_bad_inputs_are_named():
         robust_margins(model, rpm=0.0, scatter={"K9": 0.1})
     with pytest.raises(InputError, match=r"cov=-0\.1 must be > 0"):
         robust_margins(model, rpm=0.0, scatter={"D1": -0.1})
-    with pytest.raises(InputError, match="rpm= or disc_speed="):
+    with pytest.raises(InputError, match="needs a disc speed: give rpm="):
         robust_margins(model, scatter={"D1": 0.1})
     with pytest.raises(InputError, match="method="):
         robust_margins(model, rpm=0.0, scatter={"D1": 0.1}, method="taylor")

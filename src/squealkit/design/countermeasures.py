@@ -21,7 +21,6 @@ A change that would take a scale or a mass below zero is not a countermeasure (`
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -31,10 +30,20 @@ import xarray as xr
 
 from .. import __version__
 from .._threads import honour_thread_limit
-from .._validation import validate_int, validate_model
+from .._validation import validate_int
 from ..fe.model import FEModel
 from ..solvers.mac import mac
-from .derivatives import _fe_solver, _Modes, _parameter_coords, _params, _Point, _point, _solve, _solve_fe, _solve_small
+from ._study import OperatingPoint, resolve_study
+from .derivatives import (
+    _fe_solver,
+    _mode_variables,
+    _Modes,
+    _nominal,
+    _solve_fe,
+    _solve_small,
+    _study_attrs,
+    _study_coords,
+)
 from .parameters import DesignParameter
 
 __all__ = ["COUNTERMEASURE_STATUS", "countermeasures"]
@@ -63,7 +72,7 @@ def _track(modes: _Modes, lam_pred: complex, x_ref: Any, move: float) -> int | N
     return int(np.argmax(np.where(alike, modes.lam.real, -np.inf)))
 
 
-def _confirming_solver(model: Any, pt: _Point, modes: _Modes, solver: Any):
+def _confirming_solver(model: Any, pt: OperatingPoint, modes: _Modes, solver: Any):
     """A function ``solve(changed_model, lam_pred)`` solving a changed model as the study solved the
     nominal one: on the same basis for a reduced study; for a full one densely (small models) or in
     a band around the predicted eigenvalue."""
@@ -81,7 +90,7 @@ def _confirming_solver(model: Any, pt: _Point, modes: _Modes, solver: Any):
     return solve
 
 
-def _stabilise(model: Any, param: DesignParameter, pt: _Point, lam0: complex, x0: Any, d0: complex, solve: Any,
+def _stabilise(model: Any, param: DesignParameter, pt: OperatingPoint, lam0: complex, x0: Any, d0: complex, solve: Any,
                max_solves: int) -> dict[str, Any]:
     """Safeguarded Newton on ``sigma(p) = 0`` from the nominal design (module docstring).
 
@@ -147,9 +156,11 @@ def countermeasures(
     mu: float | None = None,
     theta: float = 0.0,
     *,
+    disc_speed: float | None = None,
     method: str = "auto",
     band: tuple[float, float] | None = None,
     n_modes: int | None = None,
+    basis: Any = None,
     confirm: bool = True,
     max_solves: int = 16,
 ) -> xr.Dataset:
@@ -162,11 +173,13 @@ def countermeasures(
     parameters : mapping or sequence of DesignParameter
         The ``[design]`` table (:func:`~squealkit.design.design_parameters`) or declared parameters.
     rpm : float, optional
-        Disc speed [rev/min] (FE models).
+        Disc speed [rev/min] (FE models, >= 0, or ``disc_speed``; refused for small models).
     mu : float, optional
         Friction coefficient (FE default: ``mu_ref``; required for small models).
     theta : float, default 0.0
         Run-out incline [rad].
+    disc_speed : float, optional
+        Disc speed [rad/s] of an FE model, instead of ``rpm``.
     method : {"auto", "dense", "sparse", "modal", "pod"}
         FE solver of the nominal design; a reduced study confirms on the same basis (with the
         full-model residual of each confirming solve), a full one by band solves around the mode.
@@ -174,6 +187,9 @@ def countermeasures(
         Frequency band [Hz] of the modes considered (FE models).
     n_modes : int, optional
         Reduced basis size for ``modal``/``pod``.
+    basis : array_like, shape (n, r), optional
+        A reduced basis of the FE model's DOFs to study and confirm on, instead of one built by
+        ``method`` (as :func:`~squealkit.design.eigen_derivatives`).
     confirm : bool, default True
         Confirm each predicted change by solves (Newton on ``sigma = 0``); False gives the
         first-order predictions only.
@@ -203,21 +219,19 @@ def countermeasures(
     >>> str(ds.status.values[0, 0]), bool(ds.confirmed_value[0, 0] < 1.0)
     ('confirmed', True)
     """
-    validate_model(model)
-    params = _params(model, parameters)
+    study = resolve_study(model, parameters, rpm, mu, theta, disc_speed=disc_speed, method=method, band=band,
+                          n_modes=n_modes, basis=basis)
     max_solves = validate_int("max_solves", max_solves, 1)
-    pt = _point(model, rpm, mu, theta)
-    modes, solver = _solve(model, pt, method, band, n_modes)
-    index = np.flatnonzero(modes.unstable)
-    d = modes.derivatives(model, params, pt, index)
+    params, pt = study.params, study.point
+    modes, solver, index, d = _nominal(study)
     shape = (index.size, len(params))
     rows: dict[str, np.ndarray] = {k: np.full(shape, math.nan) for k in (
         "predicted_value", "confirmed_value", "confirmed_growth_rate", "confirmed_frequency_hz")}
     solves = np.zeros(shape, dtype=np.int64)
     status = np.full(shape, "", dtype=object)
+    solve = _confirming_solver(model, pt, modes, solver)
     for i, k in enumerate(index):
         lam0, x0 = complex(modes.lam[k]), modes.X[:, k]
-        solve = _confirming_solver(model, pt, modes, solver)
         for j, p in enumerate(params):
             r = _stabilise(model, p, pt, lam0, x0, d[i, j], solve, max_solves if confirm else 0)
             if not confirm and r["status"] == "not_converged":
@@ -233,16 +247,10 @@ def countermeasures(
     conf_change = np.where(status == "confirmed", rows["confirmed_value"] - nominal, math.nan)
     with np.errstate(invalid="ignore", divide="ignore"):
         error = np.abs(pred_change - conf_change) / np.abs(conf_change)
-    lam = modes.lam[index]
-    md, mp = ("mode",), ("mode", "parameter")
-    per = "per unit of the parameter"
+    mp = ("mode", "parameter")
     return xr.Dataset(
         {
-            "growth_rate": (md, lam.real, {"units": "1/s", "long_name": "growth rate sigma"}),
-            "frequency_hz": (md, lam.imag / (2 * math.pi), {"units": "Hz", "long_name": "frequency"}),
-            "residual": (md, modes.residual[index], {"long_name": "backward error in the full model"}),
-            "dgrowth_rate_dp": (mp, d.real, {"units": f"1/s {per}", "long_name": "d sigma / d p"}),
-            "dfrequency_hz_dp": (mp, d.imag / (2 * math.pi), {"units": f"Hz {per}", "long_name": "d f / d p"}),
+            **_mode_variables(study, modes, index, d),
             "effect": (mp, effect, {"units": "1/s", "long_name": "change of the growth rate per declared step"}),
             "rank": (mp, np.asarray(rank, dtype=np.int64), {"long_name": "rank by |effect| (1: largest)"}),
             "predicted_value": (mp, rows["predicted_value"], {"long_name": "first-order stabilising value"}),
@@ -259,17 +267,12 @@ def countermeasures(
             "status": (mp, status.astype(str), {"long_name": "outcome of the search",
                                                 "allowed": " ".join(COUNTERMEASURE_STATUS)}),
         },
-        coords={"mode": ("mode", index, {"long_name": "index of the mode in the solve"}), **_parameter_coords(params)},
+        coords=_study_coords(study, index),
         attrs={
             "kind": "countermeasures",
             "title": "Countermeasures: the smallest change of each parameter that stabilises each unstable mode",
-            **pt.attrs(),
-            "method": modes.method,
-            "basis_size": 0 if modes.V is None else int(modes.V.shape[1]),
-            "band_hz": "all" if solver is None or solver.band is None else list(solver.band),
+            **_study_attrs(study, modes, solver),
             "confirmed": int(bool(confirm)),
-            "model": model.to_json(), "model_kind": model.kind,
-            "design": json.dumps([p.to_dict() for p in params]),
             "squealkit_version": __version__,
         },
     )

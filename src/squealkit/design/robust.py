@@ -62,6 +62,7 @@ from .._validation import InputError, validate_angle, validate_finite, validate_
 from ..uncertainty import UncertainParameter, parse_uncertain, sample_parameters
 from ._pencil import _gamma, _linear_matrices, _model_matrices, _modes_in_band, _state_eig, _threshold
 from ._scatter import _moments, _scatter_table, _uncertain
+from ._study import operating_point
 from .montecarlo import _check_scatter_samples, _montecarlo, _montecarlo_summary, _nominal_residual, _residual_check
 from .perturbation import (
     _FD_STEP,
@@ -132,19 +133,6 @@ def _fe_setup(model: Any, disc_speed: float, mu_e: float, unc: Sequence[Uncertai
             fixed[slot[power[name]]] += term
     return {"payload": (fixed, parts), "reduced": reduced, "factors": f, "power": power, "band": band,
             "basis": kind}
-
-
-def _operating_point(model: Any, rpm: float | None, disc_speed: float | None) -> tuple[float, float]:
-    """``(rpm, disc_speed)`` of an FE model from exactly one of them."""
-    from ..fe.model import rpm_to_disc_speed
-
-    if (rpm is None) == (disc_speed is None):
-        raise InputError("Give the disc speed of an FE model as rpm= or disc_speed= (one of them).")
-    if rpm is not None:
-        rpm = validate_finite("rpm", rpm)
-        return rpm, float(rpm_to_disc_speed(rpm))
-    disc_speed = validate_finite("disc_speed", disc_speed)
-    return disc_speed * 60.0 / (2 * math.pi), disc_speed
 
 
 def _methods(method: str | Sequence[str]) -> tuple[str, ...]:
@@ -298,9 +286,8 @@ def robust_margins(
     if is_fe:
         if damped is not None:
             raise InputError("Parameter damped applies to small models; an FE model's damping is its D parts.")
-        rpm, disc_speed = _operating_point(model, rpm, disc_speed)
-        mu = model.mu_ref if mu is None else validate_finite("mu", mu)
-        mu_e = mu + tan_t
+        pt = operating_point(model, rpm, mu, theta, disc_speed=disc_speed)
+        rpm, disc_speed, mu, mu_e = pt.rpm, pt.disc_speed, pt.mu, pt.mu_e
         known = {name: 1.0 for name in model.present}
         for name in scatter if isinstance(scatter, Mapping) else ():
             if name not in known:
@@ -314,14 +301,9 @@ def robust_margins(
     else:
         from ..models._base import resolve_damped
 
-        if rpm is not None or disc_speed is not None:
-            raise InputError(f"A small model ({model.kind!r}) has no disc speed: rpm and disc_speed apply to FE "
-                             "models.")
+        mu = operating_point(model, rpm, mu, theta, disc_speed=disc_speed).mu
         if not (isinstance(basis, str) and basis == "auto"):
             raise InputError("Parameter basis applies to FE models; a small model is solved whole.")
-        if mu is None:
-            raise InputError("Give the friction coefficient mu of a small model.")
-        mu = validate_finite("mu", mu)
         damped = resolve_damped(model, damped)
         info = model.parameter_info()
         nominal = {}
