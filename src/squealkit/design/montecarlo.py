@@ -41,7 +41,7 @@ _CLUSTER_MIN_SECONDS = 2.0
 _AMBIGUOUS = 0.2
 
 
-def match_modes(lam0: NDArray, X0: NDArray, lam: NDArray, X: NDArray) -> tuple[NDArray, NDArray]:
+def _match_modes(lam0: NDArray, X0: NDArray, lam: NDArray, X: NDArray) -> tuple[NDArray, NDArray]:
     """Match nominal modes to a sample's by shape and eigenvalue, with the near-equal alternatives.
 
     Parameters
@@ -114,7 +114,7 @@ def _mc_chunk(task: tuple) -> dict[str, NDArray]:
         if cand.size == 0:
             out["ambiguous"][s] = True
             continue
-        cols, alt = match_modes(lam0, X0, lam[s, cand], vec[s][:, cand])
+        cols, alt = _match_modes(lam0, X0, lam[s, cand], vec[s][:, cand])
         found = cols >= 0
         grows = lam[s, cand].real > tol0
         ambiguous = alt.any(axis=1)
