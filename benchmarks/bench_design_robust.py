@@ -25,7 +25,8 @@ def timed(fn, *args, **kwargs):
 
 
 def main() -> None:
-    from squealkit.design.robust import _fe_setup, _uncertain, robust_margins
+    from squealkit.design._scatter import _uncertain
+    from squealkit.design.robust import _fe_setup, robust_margins
     from squealkit.fe.demo import build_fe_demo
     from squealkit.fe.model import rpm_to_disc_speed
     from squealkit.solvers.band import band_eigs

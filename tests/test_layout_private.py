@@ -54,9 +54,9 @@ ALLOWED: dict[str, tuple[str, ...]] = {
     # of the reduced pencil) against central differences of LAPACK eigenvalues; the result only holds moments
     # the rule that drops parallel band walks when memory is short, checked at the cap where one fits and two do not
     "test_fe_scale.py": ("squealkit.solvers.band._walks_that_fit",),
-    "test_design_robust.py": ("squealkit.design.robust._fe_setup", "squealkit.design.robust._linear_matrices",
-                              "squealkit.design.robust._second_order_derivatives",
-                              "squealkit.design.robust._state_eigvals", "squealkit.design.robust._uncertain"),
+    "test_design_robust.py": ("squealkit.design.robust._fe_setup", "squealkit.design._pencil._linear_matrices",
+                              "squealkit.design.perturbation._second_order_derivatives",
+                              "squealkit.design._pencil._state_eigvals", "squealkit.design._scatter._uncertain"),
     "test_refusals.py": ("squealkit._validation.check_budget", "squealkit._validation.MAX_POINTS",
                          "squealkit.nonlinear.continuation._sample"),
     # the CLI's range grammar under hypothesis (thousands of examples; through the CLI each costs a command)

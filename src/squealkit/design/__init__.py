@@ -10,8 +10,9 @@ and the countermeasure study built on them.
   stabilising change confirmed by solves);
 - :mod:`~squealkit.design.doe`: a design-of-experiments sweep on the reduced model, every reduced
   eigenpair checked by its backward error in the full model;
-- :mod:`~squealkit.design.robust`: squeal propensity under parameter scatter, Monte Carlo on the
-  reduced model beside the second-order perturbation estimate.
+- :mod:`~squealkit.design.robust`: squeal propensity under parameter scatter, two estimates side by
+  side: :mod:`~squealkit.design.montecarlo` (samples of the reduced model) and
+  :mod:`~squealkit.design.perturbation` (the second-order perturbation estimate).
 """
 
 from .countermeasures import COUNTERMEASURE_STATUS, countermeasures

@@ -37,9 +37,9 @@ from numpy.typing import NDArray
 
 from .. import __version__
 from .._threads import honour_thread_limit
-from .._validation import InputError, validate_angle, validate_finite, validate_model
-from ..fe.model import FEModel, rpm_to_disc_speed
-from .parameters import DesignParameter, design_parameters
+from ..fe.model import FEModel
+from ._study import OperatingPoint, Study, resolve_study
+from .parameters import DesignParameter
 
 __all__ = ["eigen_derivatives", "eigenvalue_derivatives", "left_eigenvectors"]
 
@@ -128,42 +128,7 @@ def eigenvalue_derivatives(M: Any, C: Any, lam: Any, X: Any, Y: Any, dM: Any, dC
 # -- one operating point ------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class _Point:
-    """The operating point: disc speed (FE models), friction and run-out slope."""
-
-    rpm: float | None
-    disc_speed: float | None
-    mu: float
-    theta: float
-    tan_theta: float
-
-    def attrs(self) -> dict[str, Any]:
-        out = {"mu": self.mu, "theta": self.theta, "theta_deg": math.degrees(self.theta), "tan_theta": self.tan_theta}
-        if self.rpm is not None:
-            out.update(rpm=self.rpm, disc_speed=self.disc_speed)
-        return out
-
-
-def _point(model: Any, rpm: float | None, mu: float | None, theta: float) -> _Point:
-    theta = validate_angle("theta", theta)
-    t = math.tan(theta)
-    if isinstance(model, FEModel):
-        if rpm is None:
-            raise InputError("An FE model needs a disc speed: rpm=... [rev/min].")
-        rpm = validate_finite("rpm", rpm)
-        if not rpm > 0:
-            raise InputError(f"Parameter rpm={rpm!r} must be > 0 rev/min.")
-        mu = model.mu_ref if mu is None else validate_finite("mu", mu)
-        return _Point(rpm, float(rpm_to_disc_speed(rpm)), float(mu), theta, t)
-    if rpm is not None:
-        raise InputError(f"Parameter rpm applies to FE models only; a {model.kind!r} model has no disc speed.")
-    if mu is None:
-        raise InputError("A small model needs the friction coefficient: mu=...")
-    return _Point(None, None, validate_finite("mu", mu), theta, t)
-
-
-def _pencil(model: Any, pt: _Point) -> tuple[Any, Any, Any]:
+def _pencil(model: Any, pt: OperatingPoint) -> tuple[Any, Any, Any]:
     """``M, C, K`` at the point: sparse for an FE model, dense for a small one (damping included)."""
     if isinstance(model, FEModel):
         return (model.mass_matrix(), model.damping_matrix(pt.disc_speed, pt.mu, pt.tan_theta),
@@ -196,7 +161,7 @@ class _Modes:
             return A
         return self.V.T @ np.asarray(A @ self.V)
 
-    def derivatives(self, model: Any, params: Sequence[DesignParameter], pt: _Point, index: Any) -> NDArray:
+    def derivatives(self, model: Any, params: Sequence[DesignParameter], pt: OperatingPoint, index: Any) -> NDArray:
         """``d lambda / d p``, shape (len(index), len(params)), of the modes ``index``."""
         index = np.atleast_1d(np.asarray(index, dtype=np.intp))
         out = np.zeros((index.size, len(params)), dtype=complex)
@@ -211,14 +176,14 @@ class _Modes:
         return out
 
 
-def _fe_solver(model: FEModel, pt: _Point, method: str, band: Any, n_modes: int | None):
+def _fe_solver(model: FEModel, pt: OperatingPoint, method: str, band: Any, n_modes: int | None):
     from ..stability.fe_sweep import FESolver
 
     samples = (np.array([pt.disc_speed]), np.array([pt.mu + pt.tan_theta])) if method == "pod" else None
     return FESolver(model, method, band, n_modes, samples)
 
 
-def _solve_fe(model: FEModel, pt: _Point, solver: Any, V: NDArray | None = None) -> _Modes:
+def _solve_fe(model: FEModel, pt: OperatingPoint, solver: Any, V: NDArray | None = None) -> _Modes:
     """The modes of an FE model by ``solver`` (an FESolver), or on the fixed basis ``V``."""
     from threadpoolctl import threadpool_limits
 
@@ -244,7 +209,7 @@ def _solve_fe(model: FEModel, pt: _Point, solver: Any, V: NDArray | None = None)
     return _Modes(lam, X, res, unstable, M, C, K, basis, method)
 
 
-def _solve_small(model: Any, pt: _Point) -> _Modes:
+def _solve_small(model: Any, pt: OperatingPoint) -> _Modes:
     from ..stability.modes import mode_shapes, modes
 
     ds = modes(model, pt.mu, pt.theta, damped=True)
@@ -257,34 +222,58 @@ def _solve_small(model: Any, pt: _Point) -> _Modes:
                   "dense")
 
 
-def _solve(model: Any, pt: _Point, method: str, band: Any, n_modes: int | None,
-           basis: Any = None) -> tuple[_Modes, Any]:
-    if isinstance(model, FEModel):
-        if basis is not None:
-            V = np.asarray(basis, dtype=np.float64)
-            if V.ndim != 2 or V.shape[0] != model.n_dof or not np.all(np.isfinite(V)):
-                raise InputError(f"Parameter basis must be a finite {model.n_dof} x r matrix, got shape {V.shape}.")
-            if method not in ("auto", "modal", "pod") or n_modes is not None:
-                raise InputError("With basis=..., method and n_modes do not apply (the basis is the reduction).")
-            from types import SimpleNamespace
+def _solve(study: Study) -> tuple[_Modes, Any]:
+    """The nominal modes of a study, and the FE solver (None for a small model)."""
+    model, pt = study.model, study.point
+    if not study.is_fe:
+        return _solve_small(model, pt), None
+    if study.basis is not None:
+        from types import SimpleNamespace
 
-            from ..solvers.band import validate_band
-
-            solver = SimpleNamespace(method="basis", band=None if band is None else validate_band(band), reduced=None)
-            return _solve_fe(model, pt, solver, V=V), solver
-        solver = _fe_solver(model, pt, method, band, n_modes)
-        return _solve_fe(model, pt, solver), solver
-    if basis is not None:
-        raise InputError(f"Parameter basis applies to FE models only, not to a {model.kind!r} model.")
-    if method != "auto" or band is not None or n_modes is not None:
-        raise InputError(f"method, band and n_modes apply to FE models only, not to a {model.kind!r} model.")
-    return _solve_small(model, pt), None
+        solver = SimpleNamespace(method="basis", band=study.band, reduced=None)
+        return _solve_fe(model, pt, solver, V=study.basis), solver
+    solver = _fe_solver(model, pt, study.method, study.band, study.n_modes)
+    return _solve_fe(model, pt, solver), solver
 
 
-def _params(model: Any, parameters: Any) -> tuple[DesignParameter, ...]:
-    if isinstance(parameters, DesignParameter):
-        parameters = [parameters]
-    return design_parameters(parameters, model)
+def _nominal(study: Study, *, unstable_only: bool = True) -> tuple[_Modes, Any, NDArray[np.intp], NDArray]:
+    """The nominal solve of a study: its modes, the solver, the modes kept (the unstable ones, or all) and
+    their derivatives ``d lambda / d p`` (kept modes, parameters)."""
+    modes, solver = _solve(study)
+    index = np.flatnonzero(modes.unstable) if unstable_only else np.arange(modes.lam.size)
+    return modes, solver, index, modes.derivatives(study.model, study.params, study.point, index)
+
+
+def _mode_variables(study: Study, modes: _Modes, index: NDArray, d: NDArray) -> dict[str, Any]:
+    """The variables over ``mode`` and ``(mode, parameter)`` that a derivative study and a countermeasure
+    study share."""
+    lam = modes.lam[index]
+    md, mp = ("mode",), ("mode", "parameter")
+    per = "per unit of the parameter"
+    return {
+        "growth_rate": (md, lam.real, {"units": "1/s", "long_name": "growth rate sigma"}),
+        "frequency_hz": (md, lam.imag / (2 * math.pi), {"units": "Hz", "long_name": "frequency"}),
+        "residual": (md, modes.residual[index], {"long_name": "backward error in the full model"}),
+        "dgrowth_rate_dp": (mp, d.real, {"units": f"1/s {per}", "long_name": "d sigma / d p"}),
+        "dfrequency_hz_dp": (mp, d.imag / (2 * math.pi), {"units": f"Hz {per}", "long_name": "d f / d p"}),
+    }
+
+
+def _study_coords(study: Study, index: NDArray) -> dict[str, Any]:
+    return {"mode": ("mode", index, {"long_name": "index of the mode in the solve"}),
+            **_parameter_coords(study.params)}
+
+
+def _study_attrs(study: Study, modes: _Modes, solver: Any) -> dict[str, Any]:
+    """The attributes a derivative study and a countermeasure study share."""
+    return {
+        **study.point.attrs(),
+        "method": modes.method,
+        "basis_size": 0 if modes.V is None else int(modes.V.shape[1]),
+        "band_hz": "all" if solver is None or solver.band is None else list(solver.band),
+        "model": study.model.to_json(), "model_kind": study.model.kind,
+        "design": json.dumps([p.to_dict() for p in study.params]),
+    }
 
 
 def _parameter_coords(params: Sequence[DesignParameter]) -> dict[str, Any]:
@@ -306,6 +295,7 @@ def eigen_derivatives(
     mu: float | None = None,
     theta: float = 0.0,
     *,
+    disc_speed: float | None = None,
     method: str = "auto",
     band: tuple[float, float] | None = None,
     n_modes: int | None = None,
@@ -324,11 +314,13 @@ def eigen_derivatives(
     parameters : mapping or sequence of DesignParameter
         The ``[design]`` table (see :func:`~squealkit.design.design_parameters`), or declared parameters.
     rpm : float, optional
-        Disc speed [rev/min] (FE models; required there, refused for small models).
+        Disc speed [rev/min] (FE models, >= 0, or ``disc_speed``; refused for small models).
     mu : float, optional
         Friction coefficient (FE default: the model's ``mu_ref``; required for small models).
     theta : float, default 0.0
         Run-out incline [rad]; ``mu + tan(theta)`` enters the friction parts.
+    disc_speed : float, optional
+        Disc speed [rad/s] of an FE model, instead of ``rpm``.
     method : {"auto", "dense", "sparse", "modal", "pod"}
         FE solver (:func:`~squealkit.stability.fe_modes`); ``modal``/``pod`` give the derivatives of
         the reduced model's eigenvalues.
@@ -362,40 +354,16 @@ def eigen_derivatives(
     >>> ds.sizes["mode"], bool(ds.dgrowth_rate_dp.sel(parameter="damping")[0] < 0)
     (1, True)
     """
-    validate_model(model)
-    params = _params(model, parameters)
-    pt = _point(model, rpm, mu, theta)
-    modes, solver = _solve(model, pt, method, band, n_modes, basis)
-    index = np.flatnonzero(modes.unstable) if unstable_only else np.arange(modes.lam.size)
-    d = modes.derivatives(model, params, pt, index)
-    return _dataset(model, params, pt, modes, index, d, solver)
-
-
-def _dataset(model: Any, params: Sequence[DesignParameter], pt: _Point, modes: _Modes, index: NDArray, d: NDArray,
-             solver: Any) -> xr.Dataset:
-    lam = modes.lam[index]
-    md, mp = ("mode",), ("mode", "parameter")
+    study = resolve_study(model, parameters, rpm, mu, theta, disc_speed=disc_speed, method=method, band=band,
+                          n_modes=n_modes, basis=basis)
+    modes, solver, index, d = _nominal(study, unstable_only=unstable_only)
     return xr.Dataset(
-        {
-            "growth_rate": (md, lam.real, {"units": "1/s", "long_name": "growth rate sigma"}),
-            "frequency_hz": (md, lam.imag / (2 * math.pi), {"units": "Hz", "long_name": "frequency"}),
-            "residual": (md, modes.residual[index], {"long_name": "backward error in the full model"}),
-            "unstable": (md, modes.unstable[index]),
-            "dgrowth_rate_dp": (mp, d.real, {"units": "1/s per unit of the parameter",
-                                             "long_name": "d sigma / d p"}),
-            "dfrequency_hz_dp": (mp, d.imag / (2 * math.pi), {"units": "Hz per unit of the parameter",
-                                                             "long_name": "d f / d p"}),
-        },
-        coords={"mode": ("mode", index, {"long_name": "index of the mode in the solve"}), **_parameter_coords(params)},
+        {**_mode_variables(study, modes, index, d), "unstable": (("mode",), modes.unstable[index])},
+        coords=_study_coords(study, index),
         attrs={
             "kind": "eigen_derivatives",
             "title": "Eigenvalue derivatives with respect to design parameters",
-            **pt.attrs(),
-            "method": modes.method,
-            "basis_size": 0 if modes.V is None else int(modes.V.shape[1]),
-            "band_hz": "all" if solver is None or solver.band is None else list(solver.band),
-            "model": model.to_json(), "model_kind": model.kind,
-            "design": json.dumps([p.to_dict() for p in params]),
+            **_study_attrs(study, modes, solver),
             "reference": "d lambda/dp = -y^H (lambda^2 dM + lambda dC + dK) x / y^H (2 lambda M + C) x "
                          "(Nobari, Ouyang & Bannister, J. Sound Vib. 338, 2015)",
             "squealkit_version": __version__,

@@ -36,8 +36,9 @@ from .._threads import honour_thread_limit
 from .._validation import InputError, check_budget, validate_model
 from ..fe.model import FEModel
 from ..solvers.band import RESIDUAL_TOL, real_times
-from .derivatives import _fe_solver, _parameter_coords, _params, _Point, _point, _solve_fe
-from .parameters import DesignParameter
+from ._study import OperatingPoint, operating_point
+from .derivatives import _fe_solver, _parameter_coords, _solve_fe
+from .parameters import DesignParameter, design_parameters
 
 __all__ = ["doe_points", "doe_sweep"]
 
@@ -81,7 +82,7 @@ class _Blocks:
     """The full matrices of the sweep (nominal M, C, K and each parameter's derivatives), projected,
     with the triangular factor and Gram matrix of the full-model residuals."""
 
-    def __init__(self, model: FEModel, params: Sequence[DesignParameter], pt: _Point, V: NDArray) -> None:
+    def __init__(self, model: FEModel, params: Sequence[DesignParameter], pt: OperatingPoint, V: NDArray) -> None:
         mats: list[tuple[Any, int, int]] = [
             (model.mass_matrix(), 2, -1),
             (model.damping_matrix(pt.disc_speed, pt.mu, pt.tan_theta), 1, -1),
@@ -137,8 +138,8 @@ class _Blocks:
         return lam, Y, res / (a**2 * norms[0] + a * norms[1] + norms[2])
 
 
-def _basis(model: FEModel, params: Sequence[DesignParameter], pt: _Point, points: NDArray, method: str, band: Any,
-           n_modes: int | None, enrich: bool) -> tuple[NDArray, tuple[float, float], str]:
+def _basis(model: FEModel, params: Sequence[DesignParameter], pt: OperatingPoint, points: NDArray, method: str,
+           band: Any, n_modes: int | None, enrich: bool) -> tuple[NDArray, tuple[float, float], str]:
     """The nominal reduced basis, with the full model's modes at the corners of the sweep if ``enrich``."""
     if method not in ("modal", "pod"):
         raise InputError(f"A DOE sweep runs on the reduced model: method 'modal' or 'pod', not {method!r}.")
@@ -168,10 +169,11 @@ def doe_sweep(
     model: FEModel,
     parameters: Mapping[str, Any] | Sequence[DesignParameter],
     values: Mapping[str, Any] | Any,
-    rpm: float,
+    rpm: float | None = None,
     mu: float | None = None,
     theta: float = 0.0,
     *,
+    disc_speed: float | None = None,
     method: str = "pod",
     band: tuple[float, float] | None = None,
     n_modes: int | None = None,
@@ -190,11 +192,13 @@ def doe_sweep(
         ``NAME -> values`` (full factorial grid), or the points, shape (points, parameters)
         (:func:`doe_points`).
     rpm : float
-        Disc speed [rev/min].
+        Disc speed [rev/min] (>= 0; or ``disc_speed``).
     mu : float, optional
         Friction coefficient (default: the model's ``mu_ref``).
     theta : float, default 0.0
         Run-out incline [rad].
+    disc_speed : float, optional
+        Disc speed [rad/s], instead of ``rpm``.
     method : {"pod", "modal"}
         Reduced basis (built once at the nominal design).
     band : (float, float), optional
@@ -219,10 +223,10 @@ def doe_sweep(
         and less unstable); over ``(point, parameter)``: ``value``. ``kind = "doe_sweep"``.
     """
     validate_model(model, kind="fe")
-    params = _params(model, parameters)
+    params = design_parameters([parameters] if isinstance(parameters, DesignParameter) else parameters, model)
     if any(p.kind == "model" for p in params):
         raise InputError("A DOE sweep takes FE design parameters (scales, point masses).")
-    pt = _point(model, rpm, mu, theta)
+    pt = operating_point(model, rpm, mu, theta, disc_speed=disc_speed)
     points = doe_points(params, values)
     check_budget(f"A DOE sweep of {points.shape[0]} points", points=points.shape[0], seconds=1e-3 * points.shape[0])
     V, band_, method_ = _basis(model, params, pt, points, method, band, n_modes, enrich)

@@ -22,7 +22,8 @@ def robust_margins_plot(ds: xr.Dataset, ax=None):
     """Mean growth rate of each mode +- two standard deviations against frequency, per estimator.
 
     The nominal growth rates are black crosses; modes beyond the perturbation estimate's reach
-    (``perturbation_status`` 2, indeterminate) are circled in red. The legend gives each
+    (``perturbation_status`` 2, indeterminate) are circled in red, those whose Monte Carlo match is
+    indeterminate in some samples (``match_indeterminate``) boxed in orange. The legend gives each
     estimator's squeal propensity with its interval and its cost.
 
     Parameters
@@ -56,6 +57,11 @@ def robust_margins_plot(ds: xr.Dataset, ax=None):
         if bad.any():
             ax.plot(f_khz[bad], ds.growth_rate.values[bad], "o", mfc="none", mec="tab:red", ms=14,
                     label="indeterminate (near a coalescence)")
+    if "match_indeterminate" in ds:
+        mixed = ds.match_indeterminate.values.any(axis=0)
+        if mixed.any():
+            ax.plot(f_khz[mixed], ds.growth_rate.values[mixed], "s", mfc="none", mec="tab:orange", ms=14,
+                    label="Monte Carlo match indeterminate in some samples (near-degenerate pair)")
     ax.axhline(0.0, color="k", lw=0.8)
     ax.set_xlabel("frequency [kHz]")
     ax.set_ylabel("growth rate [1/s] (mean +- 2 std)")
