@@ -59,3 +59,22 @@ def require(module: str, purpose: str) -> ModuleType:
         return importlib.import_module(module)
     except ImportError as e:
         raise InputError(f"{purpose} needs {dist}: pip install 'squealkit[{extra}]'.") from e
+
+
+def available(module: str) -> bool:
+    """Whether an optional module can be imported (for output that is written only when it is there).
+
+    Parameters
+    ----------
+    module : str
+        As for :func:`require`.
+
+    Returns
+    -------
+    bool
+    """
+    try:
+        require(module, "")
+    except InputError:
+        return False
+    return True

@@ -40,6 +40,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from .._optional import available
 from ..io import check_output, save_dataset
 from .document import FigureRef, Section, Table
 from .settings import check_report_keys, report_key, report_table_values, settings_from_file
@@ -260,11 +261,7 @@ def modes_step(model: Any, settings: FEReportSettings, figures: Path, data: Path
 
 
 def _has_meshio() -> bool:
-    try:
-        import meshio  # noqa: F401
-    except ImportError:  # optional: the VTK files need it
-        return False
-    return True
+    return available("meshio")  # optional: the VTK files need it
 
 
 def tracking_step(model: Any, settings: FEReportSettings, figures: Path, data: Path) -> Section:
