@@ -75,7 +75,7 @@ LOCAL_START_TIMEOUT = 180.0
 _SCRATCH: dict[int, weakref.finalize] = {}
 
 
-def get_client(scheduler: str, *, n_workers: int | None = None):
+def get_client(scheduler: str, *, n_workers: int | None = None, dashboard_address: str | None = None):
     """A ``distributed.Client`` for ``scheduler``.
 
     Parameters
@@ -87,6 +87,11 @@ def get_client(scheduler: str, *, n_workers: int | None = None):
         e.g. ``"tcp://10.0.0.5:8786"`` or a scheduler file ``*.json``.
     n_workers : int, optional
         Workers of a local cluster.
+    dashboard_address : str, optional
+        Where a local cluster serves Dask's dashboard, e.g. ``":8787"`` or ``":0"`` (a free
+        port; ``client.dashboard_link`` tells which). None (the default): no dashboard, and the
+        scheduler's HTTP endpoints on a free port, so that several clusters (parallel tests,
+        a user's own cluster on 8787) start side by side without a word about a port in use.
 
     Returns
     -------
@@ -111,8 +116,11 @@ def get_client(scheduler: str, *, n_workers: int | None = None):
                 # each worker's nanny gives up on a worker process that has not started within the bound,
                 # and the cluster's start then fails instead of waiting for ever
                 with _collection_paused():
+                    # (None would mean Dask's default, 8787, and a warning where that port is taken)
                     cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                                       dashboard_address=None, silence_logs=logging.CRITICAL,
+                                                       dashboard_address=dashboard_address or ":0",
+                                                       scheduler_kwargs={"dashboard": dashboard_address is not None},
+                                                       silence_logs=logging.CRITICAL,
                                                        local_directory=scratch,
                                                        death_timeout=f"{LOCAL_START_TIMEOUT:g}s")
         except Exception as e:
@@ -256,7 +264,8 @@ def _connect(distributed, address: str):
 
 
 @contextlib.contextmanager
-def cluster_client(scheduler: str | None, *, n_workers: int | None = None) -> Iterator[Any]:
+def cluster_client(scheduler: str | None, *, n_workers: int | None = None,
+                   dashboard_address: str | None = None) -> Iterator[Any]:
     """Context manager: a client for ``scheduler`` (None yields None), closed on exit.
 
     Parameters
@@ -266,6 +275,8 @@ def cluster_client(scheduler: str | None, *, n_workers: int | None = None) -> It
         None runs without a cluster.
     n_workers : int, optional
         Workers of a local cluster.
+    dashboard_address : str, optional
+        A local cluster's dashboard (:func:`get_client`; default none).
 
     Yields
     ------
@@ -275,7 +286,7 @@ def cluster_client(scheduler: str | None, *, n_workers: int | None = None) -> It
     if scheduler is None:
         yield None
         return
-    client = get_client(scheduler, n_workers=n_workers)
+    client = get_client(scheduler, n_workers=n_workers, dashboard_address=dashboard_address)
     try:
         yield client
     finally:
