@@ -27,6 +27,7 @@ from .._validation import (
     check_memory,
     validate_array_finite,
     validate_dataset,
+    validate_int,
     validate_model,
 )
 from ..models import FrictionModel
@@ -475,8 +476,7 @@ def _stability_map_small(model: FrictionModel, mu: ArrayLike, theta: ArrayLike, 
             return _dataset(model, mu_a, th_a, sol, damped=damped, tracked=track, lock_in_rtol=lock_in_rtol, **fr)
     if Path(store).suffix.lower() != ".zarr":
         raise InputError(f"Parameter store={str(store)!r} must be a zarr store ending in .zarr.")
-    if isinstance(tile_points, bool) or not isinstance(tile_points, int) or tile_points < 1:
-        raise InputError(f"Parameter tile_points={tile_points!r} must be an integer >= 1.")
+    tile_points = validate_int("tile_points", tile_points, 1)
     return _stream_map(model, mu_a, th_a, damped=damped, track=track, lock_in_rtol=lock_in_rtol,
                        progress=progress, store=store, client=client, tile_points=tile_points, **fr)
 
