@@ -105,10 +105,11 @@ def validate_dataset(ds: object, name: str = "ds", *, variables: Sequence[str] =
 
 def validate_int(name: str, value: object, minimum: int, maximum: int | None = None) -> int:
     """Return ``value`` as an int in ``[minimum, maximum]``, rejecting bools, floats and text."""
+    upper = f" and <= {maximum}" if maximum is not None else ""
     if isinstance(value, bool) or not isinstance(value, int | np.integer):
-        raise InputTypeError(f"Parameter {name}={_short(value)} must be an integer, not {type(value).__name__}.")
+        raise InputTypeError(f"Parameter {name}={_short(value)} must be an integer >= {minimum}{upper}, "
+                             f"not {type(value).__name__}.")
     if value < minimum or (maximum is not None and value > maximum):
-        upper = f" and <= {maximum}" if maximum is not None else ""
         raise InputError(f"Parameter {name}={value!r} must be an integer >= {minimum}{upper}.")
     return int(value)
 

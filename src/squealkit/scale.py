@@ -20,6 +20,7 @@ of a given size uses.
 from __future__ import annotations
 
 import contextlib
+import functools
 import gc
 import json
 import logging
@@ -40,9 +41,23 @@ import xarray as xr
 from ._threads import ENV_VAR, SERIAL_BELOW, env_threads, limit_threads, thread_limit, threads_for
 from ._validation import InputError
 from .io import atomic_path, deferred_interrupts, written_path
+from .io._interrupts import _interrupt_recorded
 
-__all__ = ["ENV_VAR", "LOCAL_WORKER_CONFIG", "SERIAL_BELOW", "cluster_client", "env_threads", "get_client",
-           "lazy_template", "limit_threads", "map_tasks", "stream_to_zarr", "thread_limit", "threads_for"]
+__all__ = [
+    "ENV_VAR",
+    "LOCAL_WORKER_CONFIG",
+    "SERIAL_BELOW",
+    "ZARR_CHUNK_BYTES",
+    "cluster_client",
+    "env_threads",
+    "get_client",
+    "lazy_template",
+    "limit_threads",
+    "map_tasks",
+    "stream_to_zarr",
+    "thread_limit",
+    "threads_for",
+]
 
 Progress = Callable[[int, int], None]
 
@@ -75,7 +90,7 @@ LOCAL_START_TIMEOUT = 180.0
 _SCRATCH: dict[int, weakref.finalize] = {}
 
 
-def get_client(scheduler: str, *, n_workers: int | None = None):
+def get_client(scheduler: str, *, n_workers: int | None = None, dashboard_address: str | None = None):
     """A ``distributed.Client`` for ``scheduler``.
 
     Parameters
@@ -87,6 +102,11 @@ def get_client(scheduler: str, *, n_workers: int | None = None):
         e.g. ``"tcp://10.0.0.5:8786"`` or a scheduler file ``*.json``.
     n_workers : int, optional
         Workers of a local cluster.
+    dashboard_address : str, optional
+        Where a local cluster serves Dask's dashboard, e.g. ``":8787"`` or ``":0"`` (a free
+        port; ``client.dashboard_link`` tells which). None (the default): no dashboard, and the
+        scheduler's HTTP endpoints on a free port, so that several clusters (parallel tests,
+        a user's own cluster on 8787) start side by side without a word about a port in use.
 
     Returns
     -------
@@ -111,8 +131,11 @@ def get_client(scheduler: str, *, n_workers: int | None = None):
                 # each worker's nanny gives up on a worker process that has not started within the bound,
                 # and the cluster's start then fails instead of waiting for ever
                 with _collection_paused():
+                    # (None would mean Dask's default, 8787, and a warning where that port is taken)
                     cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                                       dashboard_address=None, silence_logs=logging.CRITICAL,
+                                                       dashboard_address=dashboard_address or ":0",
+                                                       scheduler_kwargs={"dashboard": dashboard_address is not None},
+                                                       silence_logs=logging.CRITICAL,
                                                        local_directory=scratch,
                                                        death_timeout=f"{LOCAL_START_TIMEOUT:g}s")
         except Exception as e:
@@ -256,7 +279,8 @@ def _connect(distributed, address: str):
 
 
 @contextlib.contextmanager
-def cluster_client(scheduler: str | None, *, n_workers: int | None = None) -> Iterator[Any]:
+def cluster_client(scheduler: str | None, *, n_workers: int | None = None,
+                   dashboard_address: str | None = None) -> Iterator[Any]:
     """Context manager: a client for ``scheduler`` (None yields None), closed on exit.
 
     Parameters
@@ -266,6 +290,8 @@ def cluster_client(scheduler: str | None, *, n_workers: int | None = None) -> It
         None runs without a cluster.
     n_workers : int, optional
         Workers of a local cluster.
+    dashboard_address : str, optional
+        A local cluster's dashboard (:func:`get_client`; default none).
 
     Yields
     ------
@@ -275,7 +301,7 @@ def cluster_client(scheduler: str | None, *, n_workers: int | None = None) -> It
     if scheduler is None:
         yield None
         return
-    client = get_client(scheduler, n_workers=n_workers)
+    client = get_client(scheduler, n_workers=n_workers, dashboard_address=dashboard_address)
     try:
         yield client
     finally:
@@ -434,13 +460,70 @@ def _text_as_object(ds: xr.Dataset) -> xr.Dataset:
         {k: ds[k].astype(object) for k in text if k in ds.coords and k not in ds.dims})
 
 
+#: Largest chunk of a streamed zarr store [bytes, before compression]. A piece is written chunk by chunk
+#: and a stop request (SIGTERM, Ctrl-C) is honoured before each chunk (:func:`_stop_aware`): a run stops
+#: after the chunks in flight (at most zarr's ``async.concurrency``, 10), not after a whole piece. A tile
+#: of a 3000 x 3000 stability map is 149 MB (one chunk per variable of up to 25 MB before), which took
+#: 1.7-2.5 s to write on a loaded machine: the signal waited that long.
+ZARR_CHUNK_BYTES = 4 << 20
+
+
+class _StopRequested(RuntimeError):
+    """A chunk write refused because the run was interrupted (raised inside zarr's writer)."""
+
+
+@functools.cache
+def _stop_aware_store() -> type | None:
+    """A zarr store class that refuses every chunk once an interrupt is recorded (None with zarr 2)."""
+    try:
+        from zarr.storage import WrapperStore
+    except ImportError:  # pragma: no cover - zarr 2: a piece is written whole
+        return None
+
+    class StopAwareStore(WrapperStore):
+        async def set(self, key: str, value: Any) -> None:
+            if _interrupt_recorded():
+                raise _StopRequested(key)
+            await self._store.set(key, value)
+
+    return StopAwareStore
+
+
+def _stop_aware(path: str) -> Any:
+    """The zarr store at ``path``, written through :func:`_stop_aware_store` where zarr has it."""
+    store = _stop_aware_store()
+    if store is None:  # pragma: no cover - zarr 2
+        return path
+    from zarr.storage import LocalStore
+
+    return store(LocalStore(path))
+
+
+def _bounded_chunks(v: xr.Variable, dim: str, step: int) -> tuple[int, ...]:
+    """Chunks of ``v``: ``step`` along ``dim`` (a piece's length), the other dimensions cut (the longest
+    first) so that a chunk holds at most :data:`ZARR_CHUNK_BYTES`. Text (variable length) stays whole."""
+    shape = [step if d == dim else n for d, n in zip(v.dims, v.shape, strict=True)]
+    if v.dtype.kind == "O":
+        return tuple(shape)
+    for i in sorted((i for i, d in enumerate(v.dims) if d != dim), key=lambda i: -shape[i]):
+        rest = v.dtype.itemsize * int(np.prod([n for j, n in enumerate(shape) if j != i]))
+        if rest * shape[i] <= ZARR_CHUNK_BYTES:
+            break
+        shape[i] = max(1, ZARR_CHUNK_BYTES // rest)
+    return tuple(shape)
+
+
 def _write_region(item: tuple) -> int:
-    """Compute one piece and write it into its region of the zarr store."""
+    """Compute one piece and write it into its region of the zarr store, chunk by chunk until a stop request."""
     fn, arg, path, dim, start, stop = item
     piece: xr.Dataset = _text_as_object(fn(arg))
     drop = [k for k, v in piece.variables.items() if dim not in v.dims]
-    with deferred_interrupts():  # no background writer outlives an interrupt
-        piece.drop_vars(drop).to_zarr(path, region={dim: slice(start, stop)}, consolidated=False)
+    # the write returns (no background writer outlives an interrupt), but refuses every chunk after one
+    with deferred_interrupts():
+        try:
+            piece.drop_vars(drop).to_zarr(_stop_aware(path), region={dim: slice(start, stop)}, consolidated=False)
+        except _StopRequested:
+            pass  # deferred_interrupts raises the interrupt itself
     return stop - start
 
 
@@ -487,8 +570,7 @@ def stream_to_zarr(
         if any(a % step for *_, a, _b in pieces):
             raise ValueError(f"stream_to_zarr: pieces along {dim!r} must start at multiples of {step}.")
         layout = _text_as_object(template)
-        encoding = {k: {"chunks": tuple(step if d == dim else n for d, n in zip(v.dims, v.shape, strict=True))}
-                    for k, v in layout.variables.items() if dim in v.dims}
+        encoding = {k: {"chunks": _bounded_chunks(v, dim, step)} for k, v in layout.variables.items() if dim in v.dims}
         with deferred_interrupts():
             layout.to_zarr(tmp, mode="w", compute=False, consolidated=False, encoding=encoding)
         path = str(tmp.resolve())

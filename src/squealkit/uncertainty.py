@@ -46,7 +46,15 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from . import __version__
-from ._validation import InputError, check_memory, validate_angle, validate_dataset, validate_finite, validate_model
+from ._validation import (
+    InputError,
+    check_memory,
+    validate_angle,
+    validate_dataset,
+    validate_finite,
+    validate_int,
+    validate_model,
+)
 from .models import FrictionModel, RigModel, load_model
 from .models._base import resolve_damped
 from .models.config import _read_toml
@@ -364,12 +372,6 @@ def _evaluate(task: tuple) -> tuple[NDArray[np.bool_], NDArray[np.float64], NDAr
     return unstable, mu_c, status
 
 
-def _positive_int(name: str, value: object, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
-        raise InputError(f"Parameter {name}={value!r} must be an integer >= {minimum}.")
-    return int(value)
-
-
 def _binomial_band(count: NDArray, n: int, confidence: float) -> tuple[NDArray, NDArray]:
     from scipy import stats
 
@@ -531,9 +533,9 @@ def squeal_propensity(
         raise InputError("uncertain must be a non-empty sequence of UncertainParameter (or an [uncertain] table).")
     parse_uncertain({p.name: {"dist": p.dist, **p.params} for p in unc}, source)  # names valid for this model
     mu_a = _grid(mu)
-    samples = _positive_int("samples", samples, 2)
-    batch_size = _positive_int("batch_size", batch_size, 1)
-    seed = _positive_int("seed", seed, 0)
+    samples = validate_int("samples", samples, 2)
+    batch_size = validate_int("batch_size", batch_size, 1)
+    seed = validate_int("seed", seed, 0)
     theta = validate_angle("theta", theta)
     confidence = validate_finite("confidence", confidence)
     if not 0.0 < confidence < 1.0:

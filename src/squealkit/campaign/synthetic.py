@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import InputError, check_budget, validate_positive
+from .._validation import check_budget, validate_int, validate_positive
 
 __all__ = ["SQUEAL_RULES", "synthetic_campaign"]
 
@@ -87,8 +87,7 @@ def synthetic_campaign(
     """
     from ..io import output_folder
 
-    if not isinstance(n_applications, int) or n_applications < 1:
-        raise InputError(f"Parameter n_applications={n_applications!r} must be a whole number >= 1.")
+    n_applications = validate_int("n_applications", n_applications, 1)
     from ..measurement.synthetic import SECONDS_PER_SAMPLE
 
     check_budget(f"A synthetic campaign of {n_applications} applications", points=n_applications,

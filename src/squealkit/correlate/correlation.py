@@ -21,7 +21,7 @@ from .conditions import (
     fit_friction_law,
     operating_points,
 )
-from .match import match_modes, measured_components, validate_tolerance
+from .match import _match_counts, match_modes, measured_components, validate_tolerance
 from .predict import CONDITION_QUANTITIES, apply_quantities, predict_modes
 
 __all__ = ["correlate", "load_correlation_model"]
@@ -133,22 +133,26 @@ def correlate(
         law = fit_friction_law(condition_values(apps, cmap), apps["mu_measured"].values, cmap.mu_law_terms)
     pred_kw = dict(damped=damped, client=client, method=method, band=band, n_modes=n_modes)
 
-    def run(values: Mapping[str, float]) -> tuple[xr.Dataset, xr.Dataset, xr.Dataset]:
+    def predict(values: Mapping[str, float]) -> tuple[xr.Dataset, xr.Dataset]:
         cm = cmap.with_quantities(**{k: v for k, v in values.items() if k in CONDITION_QUANTITIES})
         points = operating_points(apps, cm, mu_law=law)
         m = apply_quantities(model, {k: v for k, v in values.items() if k not in CONDITION_QUANTITIES})
-        pred = predict_modes(m, points, **pred_kw)
-        return points, pred, match_modes(pred, measured, points, tolerance=tol, band=squeal_band)
+        return points, predict_modes(m, points, **pred_kw)
+
+    def counts(values: Mapping[str, float]) -> xr.Dataset:
+        # the calibration weighs thousands of candidates by their counts alone: no labelled matching per candidate
+        return xr.Dataset(attrs=_match_counts(predict(values)[1], measured, tolerance=tol))
 
     cal: Calibration | None = None
     values: dict[str, float] = {}
     if fit is not None:
         bounds = parse_fit(fit)
         start = {n: _current(model, cmap, n) for n in bounds}
-        run(start)  # a bad quantity name is refused before the search
-        cal = calibrate(lambda v: run(v)[2], bounds, start, rng=rng)
+        predict(start)  # a bad quantity name is refused before the search
+        cal = calibrate(counts, bounds, start, rng=rng)
         values = cal.values
-    points, pred, match = run(values)
+    points, pred = predict(values)
+    match = match_modes(pred, measured, points, tolerance=tol, band=squeal_band)
     ds = xr.merge([points.drop_vars([v for v in ("mu",) if v in points]), pred, match], compat="override",
                   combine_attrs="override")
     ds.attrs = {}

@@ -107,6 +107,55 @@ def _bin_index(x: np.ndarray, edges: tuple[float, ...]) -> np.ndarray:
     return np.where(np.isfinite(x), idx, -1)
 
 
+def _outcomes(f_pred: np.ndarray, f_meas: np.ndarray, tol: float
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """The matching itself: per application its outcome code (:data:`OUTCOMES`), which components
+    ``(A, C)`` and unstable modes ``(A, M)`` matched, and the frequency misfit of the matched
+    components (mean squared error in tolerances: the calibration's tie-breaker).
+
+    ``f_pred``: the unstable modes' frequencies (NaN where stable), ``f_meas``: the components'.
+    """
+    with np.errstate(invalid="ignore"):
+        diff = np.abs(f_meas[:, :, None] - f_pred[:, None, :])  # (A, C, M)
+        close = diff <= tol * f_meas[:, :, None]
+        err = np.where(close, diff / (tol * f_meas[:, :, None]), np.inf)
+    comp_matched = close.any(axis=2)
+    squeal = np.isfinite(f_meas).any(axis=1)
+    predicted_any = np.isfinite(f_pred).any(axis=1)
+    outcome = np.where(squeal, np.where(comp_matched.any(axis=1), 0, 1), np.where(predicted_any, 2, 3))
+    best = err.min(axis=2, initial=np.inf)
+    misfit = float(np.mean(best[np.isfinite(best)] ** 2)) if np.isfinite(best).any() else 0.0
+    return outcome, comp_matched, close.any(axis=1), misfit
+
+
+def _counts(outcome: np.ndarray) -> dict[str, int]:
+    return {"hits": int((outcome == 0).sum()), "misses": int((outcome == 1).sum()),
+            "over_predictions": int((outcome == 2).sum()), "quiet": int((outcome == 3).sum())}
+
+
+def _match_counts(predicted: xr.Dataset, measured: xr.Dataset, *, tolerance: float = 0.03) -> dict[str, float]:
+    """The counts of :func:`match_modes` alone (what a calibration weighs, thousands of times).
+
+    Parameters
+    ----------
+    predicted, measured, tolerance
+        As for :func:`match_modes`; ``measured`` over the same applications in the same order.
+
+    Returns
+    -------
+    dict
+        ``hits``, ``misses``, ``over_predictions``, ``quiet`` and ``frequency_misfit``: the
+        attributes of :func:`match_modes` of the same arguments.
+    """
+    tol = validate_tolerance(tolerance)
+    f_meas = measured["measured_hz"].values
+    if not np.array_equal(measured["application"].values, predicted["application"].values):
+        f_meas = measured.reindex(application=predicted["application"].values)["measured_hz"].values
+    f_pred = np.where(predicted["unstable"].values, predicted["frequency_hz"].values, np.nan)
+    outcome, _, _, misfit = _outcomes(f_pred, f_meas, tol)
+    return {**_counts(outcome), "frequency_misfit": misfit}
+
+
 def match_modes(predicted: xr.Dataset, measured: xr.Dataset, conditions: xr.Dataset | None = None, *,
                 tolerance: float = 0.03, band: tuple[float, float] = (2000.0, 16000.0)) -> xr.Dataset:
     """Match measured squeal components to predicted unstable modes, application by application.
@@ -142,18 +191,8 @@ def match_modes(predicted: xr.Dataset, measured: xr.Dataset, conditions: xr.Data
     meas = measured.reindex(application=apps)
     f_pred = np.where(predicted["unstable"].values, predicted["frequency_hz"].values, np.nan)  # (A, M)
     f_meas = meas["measured_hz"].values  # (A, C)
-    with np.errstate(invalid="ignore"):
-        close = np.abs(f_meas[:, :, None] - f_pred[:, None, :]) <= tol * f_meas[:, :, None]  # (A, C, M)
-    comp_matched = close.any(axis=2)
-    mode_matched = close.any(axis=1)
+    outcome, comp_matched, mode_matched, misfit = _outcomes(f_pred, f_meas, tol)
     squeal = np.isfinite(f_meas).any(axis=1)
-    predicted_any = np.isfinite(f_pred).any(axis=1)
-    outcome = np.where(squeal, np.where(comp_matched.any(axis=1), 0, 1), np.where(predicted_any, 2, 3))
-    # frequency misfit of the matched components, in tolerances (the calibration's tie-breaker)
-    with np.errstate(invalid="ignore"):
-        rel = np.where(close, np.abs(f_meas[:, :, None] - f_pred[:, None, :]) / (tol * f_meas[:, :, None]), np.inf)
-    best = rel.min(axis=2)
-    misfit = float(np.mean(best[np.isfinite(best)] ** 2)) if np.isfinite(best).any() else 0.0
 
     bands = third_octave_bands(band)
     centres = np.array([c for c, _, _ in bands])
@@ -219,9 +258,7 @@ def match_modes(predicted: xr.Dataset, measured: xr.Dataset, conditions: xr.Data
                 "band": ("band", centres, {"units": "Hz", "long_name": "1/3-octave band centre"}),
                 "band_lo": ("band", lo_edges, {"units": "Hz"}), "band_hi": ("band", hi_edges, {"units": "Hz"})},
         attrs={"tolerance": tol, "tolerance_percent": 100 * tol, "applications": int(A),
-               "hits": int((outcome == 0).sum()), "misses": int((outcome == 1).sum()),
-               "over_predictions": int((outcome == 2).sum()), "quiet": int((outcome == 3).sum()),
-               "frequency_misfit": misfit,
+               **_counts(outcome), "frequency_misfit": misfit,
                "matching": f"a measured squeal component matches an unstable mode within {100 * tol:g} % "
                            "of its frequency"},
     )

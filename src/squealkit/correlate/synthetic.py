@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import InputError
+from .._validation import validate_int
 
 __all__ = ["synthetic_correlation_campaign"]
 
@@ -89,8 +89,7 @@ def synthetic_correlation_campaign(
     from ..stability import critical_friction
 
     model = get_preset("lv2013") if model is None else model
-    if not isinstance(n_applications, int) or n_applications < 1:
-        raise InputError(f"Parameter n_applications={n_applications!r} must be a whole number >= 1.")
+    n_applications = validate_int("n_applications", n_applications, 1)
     rng = np.random.default_rng(seed)
     T = np.round(rng.uniform(50.0, 350.0, n_applications), 1)
     p = np.round(rng.uniform(5.0, 40.0, n_applications), 1)

@@ -69,6 +69,12 @@ def interrupt_signal() -> int | None:
     return _state["signal"] if _interrupted.is_set() else None
 
 
+def _interrupt_recorded() -> bool:
+    """Whether an interrupt is recorded (:func:`note_interrupt`), whatever its signal: for writers that
+    check before each chunk (thread-safe: an event)."""
+    return _interrupted.is_set()
+
+
 def interrupts_deferred() -> bool:
     """Whether a library write is in progress (see :func:`deferred_interrupts`).
 

@@ -120,9 +120,7 @@ def floquet_multipliers(system: SecondOrderSystem, cycle: LimitCycle, *, n_floqu
     """
     from ..solvers import ode
 
-    S = floquet_steps(system, cycle) if n_floquet is None else int(n_floquet)
-    if S < 1:
-        raise InputError(f"Parameter n_floquet={n_floquet!r} must be an integer >= 1.")
+    S = floquet_steps(system, cycle) if n_floquet is None else validate_int("n_floquet", n_floquet, 1)
     A = _variational(system, cycle, 2 * S)
     A = np.concatenate([A, A[:1]], axis=0)  # A(T) = A(0)
     Phi = ode.monodromy_rk4(ode.sampled_rhs, np.ascontiguousarray(A), S, 2 * math.pi / cycle.omega / S, A.shape[1])
@@ -241,7 +239,7 @@ def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_st
               max_turn, stability) -> Branch:
     from .hill import hill_multipliers
 
-    H = int(harmonics)
+    H = validate_int("harmonics", harmonics, 1)
     n = system.n_dof
     dp_nom = (hi - lo) / 50 if step is None else validate_positive("step", step)
     j = int(np.argmax(np.abs(hopf.shape)))
@@ -432,9 +430,7 @@ def limit_cycle_branch(
     lo, hi = float(mu_a.min()), float(mu_a.max())
     if not hi > lo:
         raise InputError(f"Parameter mu={mu!r} must span a range (start < stop).")
-    n_points = int(n_points)
-    if n_points < 2:
-        raise InputError(f"Parameter n_points={n_points!r} must be >= 2.")
+    n_points = validate_int("n_points", n_points, 2)
     t = math.tan(theta)
     fr = {} if contact.mu_static is None else {"friction": contact.friction_law, "speed": speed}
     crit = critical_friction(model, theta, damped=True, mu_max=max(2.0, 2 * hi), **fr)
@@ -472,7 +468,7 @@ def _enough_harmonics(solve: Callable[[int], xr.Dataset], harmonics: int, tol: f
     if not check:
         raise InputError("Parameter harmonics_tol needs check_harmonics=True: the amplitude change at 2H is "
                          "what measures convergence in the harmonics.")
-    H = int(harmonics)
+    H = validate_int("harmonics", harmonics, 1)
     while True:
         ds = solve(H)
         change = float(ds.attrs["harmonics_change"])
@@ -530,6 +526,8 @@ def limit_cycle_branch_slope(
     """
     validate_model(model, kind="friction")
     harmonics = validate_int("harmonics", harmonics, 1)
+    n_points = validate_int("n_points", n_points, 2)
+    scan = validate_int("scan", scan, 2)
     from ..transient.contact import Contact, as_contact
     from .hopf import _growth
 
@@ -539,7 +537,7 @@ def limit_cycle_branch_slope(
     if not hi > lo:
         raise InputError(f"Parameter tan_theta={tan_theta!r} must span a range (start < stop).")
     system = contact_system(model, contact, speed=speed, mu=validate_finite("mu", mu), param="tan_theta")
-    grid = np.linspace(lo, hi, int(scan))
+    grid = np.linspace(lo, hi, scan)
     g = np.array([_growth(system, t)[0] for t in grid])
     up = np.flatnonzero((g[:-1] < 0) & (g[1:] >= 0))
     if up.size == 0:

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from .._validation import InputError, validate_finite, validate_model, validate_positive
+from .._validation import InputError, validate_finite, validate_int, validate_model, validate_positive
 
 __all__ = [
     "LimitCycle",
@@ -609,9 +609,7 @@ def harmonic_balance(
     >>> round(float(lc.amplitude[0]), 3)
     2.0
     """
-    H = int(harmonics)
-    if H < 1:
-        raise InputError(f"Parameter harmonics={harmonics!r} must be an integer >= 1.")
+    H = validate_int("harmonics", harmonics, 1)
     omega = validate_positive("omega", omega)
     n = system.n_dof
     if guess is None:

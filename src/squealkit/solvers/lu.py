@@ -109,7 +109,56 @@ def fill_reducing_order(*mats) -> NDArray[np.intp]:
     return np.asarray(perm, dtype=np.intp)
 
 
-class PermutedLU:
+class _FactorBase:
+    """What every built-in factorisation shares: its size and type, and the solve of vectors and blocks.
+
+    A backend's class factorises in ``__init__`` (after ``super().__init__(P)``, which sets ``n``
+    and ``dtype``, float64 or complex128) and solves an ``(n, k)`` block of its own ``dtype`` in
+    ``_solve_block``. :meth:`solve` does the rest for all of them: a vector is a block of one; a
+    right-hand side of another size is a ``ValueError``; a real one is cast to a complex factor's
+    type; a complex one of a real factor is solved as its real and imaginary parts side by side
+    (one pass over the real factors, never a complex copy of them).
+
+    Attributes
+    ----------
+    n : int
+        Rows of ``P``.
+    dtype : numpy.dtype
+        The factor's type (float64 or complex128).
+    """
+
+    def __init__(self, P) -> None:
+        self.n = int(P.shape[0])
+        self.dtype = np.result_type(P.dtype, np.float64)
+
+    def _solve_block(self, B: NDArray) -> NDArray:  # pragma: no cover - each backend has its own
+        raise NotImplementedError
+
+    def solve(self, b: NDArray) -> NDArray:
+        """``P^-1 b`` for a vector or an ``(n, k)`` block ``b``, real or complex.
+
+        Parameters
+        ----------
+        b : ndarray, shape (n,) or (n, k)
+
+        Returns
+        -------
+        ndarray, shape of ``b``
+            Of type ``result_type(factor, b, float64)``.
+        """
+        b = np.asarray(b)
+        if b.ndim not in (1, 2) or b.shape[0] != self.n:
+            raise ValueError(f"A right-hand side of shape {b.shape} where the factor has {self.n} rows: "
+                             f"give ({self.n},) or ({self.n}, k).")
+        B = b.reshape(self.n, -1)
+        if np.iscomplexobj(B) and self.dtype.kind != "c":
+            k = B.shape[1]
+            X = self._solve_block(np.concatenate([B.real, B.imag], axis=1).astype(self.dtype, copy=False))
+            return (X[:, :k] + 1j * X[:, k:]).reshape(b.shape)
+        return self._solve_block(B.astype(self.dtype, copy=False)).reshape(b.shape)
+
+
+class PermutedLU(_FactorBase):
     """Sparse LU of ``P[perm][:, perm]`` (real or complex) by SuperLU, solving ``P x = b`` for
     vectors or blocks ``b``.
 
@@ -131,8 +180,8 @@ class PermutedLU:
     """
 
     def __init__(self, P, perm: NDArray[np.intp], *, diag_pivot_thresh: float = 0.1):
+        super().__init__(P)
         self.perm = perm
-        self.dtype = np.result_type(P.dtype, np.float64)
         Pp = sp.csc_matrix(P, dtype=self.dtype)[perm][:, perm].tocsc()
         # diagonal pivots (threshold 0.1) keep the ordering; partial pivoting would undo it
         self.lu = spla.splu(Pp, permc_spec="NATURAL", diag_pivot_thresh=diag_pivot_thresh,
@@ -143,24 +192,13 @@ class PermutedLU:
         """Entries in L + U."""
         return self.lu.L.nnz + self.lu.U.nnz
 
-    def solve(self, b: NDArray) -> NDArray:
-        """``P^-1 b`` for a vector or an ``(n, k)`` block ``b``.
-
-        Parameters
-        ----------
-        b : ndarray, shape (n,) or (n, k)
-
-        Returns
-        -------
-        ndarray, shape of ``b``
-        """
-        b = np.asarray(b)
-        x = np.empty(b.shape, dtype=np.result_type(self.dtype, b.dtype))
-        x[self.perm] = self.lu.solve(b[self.perm].astype(x.dtype, copy=False))
-        return x
+    def _solve_block(self, B: NDArray) -> NDArray:
+        X = np.empty_like(B)
+        X[self.perm] = self.lu.solve(B[self.perm])
+        return X
 
 
-class DenseLU:
+class DenseLU(_FactorBase):
     """LAPACK's LU (``getrf``, partial pivoting) of the dense ``P``; ``perm`` is not needed.
 
     For models of a few hundred DOFs, and as an independent check of the sparse backend.
@@ -177,28 +215,15 @@ class DenseLU:
 
     def __init__(self, P):
         A = P.toarray() if sp.issparse(P) else np.asarray(P)
-        self.dtype = np.result_type(A.dtype, np.float64)
+        super().__init__(A)
         with warnings.catch_warnings():  # a zero pivot is the RuntimeError below, not a warning
             warnings.simplefilter("ignore", sla.LinAlgWarning)
             self.lu, self.piv = sla.lu_factor(A.astype(self.dtype), check_finite=False)
         if np.any(np.diag(self.lu) == 0):
             raise RuntimeError("Factor is exactly singular")
 
-    def solve(self, b: NDArray) -> NDArray:
-        """``P^-1 b`` for a vector or an ``(n, k)`` block ``b``.
-
-        Parameters
-        ----------
-        b : ndarray, shape (n,) or (n, k)
-
-        Returns
-        -------
-        ndarray, shape of ``b``
-        """
-        b = np.asarray(b)
-        dtype = np.result_type(self.dtype, b.dtype)
-        lu = self.lu.astype(dtype, copy=False)
-        return sla.lu_solve((lu, self.piv), b.astype(dtype, copy=False), check_finite=False)
+    def _solve_block(self, B: NDArray) -> NDArray:
+        return sla.lu_solve((self.lu, self.piv), B, check_finite=False)
 
 
 @functools.cache
@@ -229,7 +254,7 @@ def _is_symmetric(A) -> bool:
             and np.array_equal(A.data, T.data))
 
 
-class PardisoLU:
+class PardisoLU(_FactorBase):
     """Intel MKL PARDISO's factorisation of ``P`` (real or complex), solving ``P x = b`` for vectors
     or blocks ``b``.
 
@@ -266,15 +291,14 @@ class PardisoLU:
     def __init__(self, P, perm: NDArray[np.intp] | None = None, *, symmetric: bool | None = None,
                  before_factor: Callable[[int], None] | None = None):
         A = sp.csr_matrix(P)
-        self.dtype = np.result_type(A.dtype, np.float64)
-        complex_ = np.issubdtype(self.dtype, np.complexfloating)
+        super().__init__(A)
+        complex_ = self.dtype.kind == "c"
         symmetric = _is_symmetric(A) if symmetric is None else bool(symmetric)
         self.mtype = (6 if complex_ else -2) if symmetric else (13 if complex_ else 11)
         if symmetric:
             A = sp.triu(A, format="csr")  # PARDISO's symmetric types read the upper triangle by rows
         A.sum_duplicates()
         A.sort_indices()
-        self.n = A.shape[0]
         self._a = np.ascontiguousarray(A.data, dtype=self.dtype)
         self._ia = np.ascontiguousarray(A.indptr, dtype=np.int32)
         self._ja = np.ascontiguousarray(A.indices, dtype=np.int32)
@@ -333,27 +357,8 @@ class PardisoLU:
         r = np.linalg.norm(P @ x - b)
         return not np.all(np.isfinite(x)) or r > 1e-6 * np.linalg.norm(b)
 
-    def solve(self, b: NDArray) -> NDArray:
-        """``P^-1 b`` for a vector or an ``(n, k)`` block ``b``.
-
-        A real factor solves a complex ``b`` as its real and imaginary parts side by side.
-
-        Parameters
-        ----------
-        b : ndarray, shape (n,) or (n, k)
-
-        Returns
-        -------
-        ndarray, shape of ``b``
-        """
-        b = np.asarray(b)
-        B = b.reshape(self.n, -1)
-        if np.iscomplexobj(B) and not np.issubdtype(self.dtype, np.complexfloating):
-            k = B.shape[1]
-            X = self._call(33, np.asfortranarray(np.concatenate([B.real, B.imag], axis=1), dtype=np.float64))
-            return (X[:, :k] + 1j * X[:, k:]).reshape(b.shape)
-        X = self._call(33, np.asfortranarray(B, dtype=self.dtype))
-        return X.reshape(b.shape)
+    def _solve_block(self, B: NDArray) -> NDArray:
+        return self._call(33, np.asfortranarray(B))
 
     def __del__(self):
         with contextlib.suppress(Exception):

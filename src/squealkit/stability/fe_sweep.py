@@ -35,6 +35,7 @@ from .._validation import (
     check_budget,
     validate_angle,
     validate_array_finite,
+    validate_int,
     validate_model,
     validate_plausible,
     validate_positive,
@@ -108,9 +109,8 @@ class FESolver:
             # a band solve, and a reduced basis (built for the band: outside it the reduced
             # eigenvalues are not the brake's), look at the squeal band unless told otherwise
             self.band = BAND_HZ
-        if self.n_modes is not None and (isinstance(self.n_modes, bool) or int(self.n_modes) != self.n_modes
-                                         or self.n_modes < 1):
-            raise InputError(f"Parameter n_modes={self.n_modes!r} must be an integer >= 1.")
+        if self.n_modes is not None:
+            self.n_modes = validate_int("n_modes", self.n_modes, 1)
         self.sigma_reach = validate_positive("sigma_reach", self.sigma_reach, allow_zero=True)
         self.reduced = reduction.reduce(self.model, self._basis()) if self.method in ("modal", "pod") else None
         self.subspace = None
@@ -570,8 +570,7 @@ def fe_critical_friction(
     mu_max = validate_plausible("mu_max", validate_positive("mu_max", 2.0 * model.mu_ref if mu_max is None else mu_max),
                                 "friction")
     t = _tan_theta(theta)
-    if isinstance(n_scan, bool) or int(n_scan) != n_scan or n_scan < 2:
-        raise InputError(f"Parameter n_scan={n_scan!r} must be an integer >= 2.")
+    n_scan = validate_int("n_scan", n_scan, 2)
     _check_work(model, method, f"An FE onset search at {rpm_a.size} speeds", rpm_a.size, rpm_a.size * float(n_scan))
     omegas = rpm_to_disc_speed(rpm_a)
     # the middle speed, as fe_stability_map; three frictions over the search range (one band
@@ -736,8 +735,7 @@ def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any, *, energy: xr.Datase
         with atomic_path(target) as tmp:
             out.write(tmp, file_format="vtu")
         return
-    if isinstance(n_frames, bool) or int(n_frames) != n_frames or n_frames < 2:
-        raise InputError(f"Parameter n_frames={n_frames!r} must be an integer >= 2.")
+    n_frames = validate_int("n_frames", n_frames, 2)
     from ..io import outputs_together
 
     frames = target.with_name(f"{target.stem}_frames")

@@ -16,7 +16,7 @@ from scipy import signal
 from ..._threads import thread_limit
 from ..._validation import InputError, validate_fs, validate_positive
 from ..formats import DEFAULT_BLOCK, RecordingSource, open_recording
-from ..formats._common import _to_si
+from ..formats._common import _TimeFit, _to_si
 from ..signal.spectral import P_REF, a_weighting_db
 from ..signal.tacho import ConstantSpeed, read_tacho
 from ..squeal.criteria import EDGE_HZ
@@ -33,10 +33,10 @@ class _DatasetSource:
             if "fs" in ds.attrs:
                 fs = ds.attrs["fs"]
             elif "time" in ds.coords and ds.sizes["time"] > 1:
-                # least-squares slope of the whole time coordinate: rounded times leave it unbiased
-                t = np.asarray(ds["time"].values, dtype=np.float64)
-                k = np.arange(t.size, dtype=np.float64) - (t.size - 1) / 2.0
-                fs = float(np.dot(k, k) / np.dot(k, t - t.mean())) if t.size > 2 else 1.0 / float(t[1] - t[0])
+                # the readers' estimate: least squares over the whole time coordinate
+                fit = _TimeFit()
+                fit.add(ds["time"].values)
+                fs = float(np.round(1.0 / fit.result()[0], 6))
             else:
                 raise InputError("The recording has no 'fs' attribute or time coordinate; give fs.")
         self.fs = validate_fs(fs)

@@ -7,7 +7,7 @@ import logging
 import math
 import re
 import warnings
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -221,10 +221,153 @@ def _head_interval(path: Path, label: str, t: NDArray[np.float64], where: Callab
     return dt
 
 
+#: Jitter of a time axis (RMS about its least-squares line, as a share of the sample interval) above which
+#: reading it warns: the rounding of 7 decimals at 48 kHz is 0.14 %.
+_JITTER_WARN = 0.05
+#: Values at the start of a time axis whose own least-squares slope is the reference line of :class:`_TimeFit`.
+_REF_SAMPLES = 1 << 12
+#: How the sample rate of a recording with a time axis is found (its ``fs_method`` attribute).
+FS_METHOD = "least-squares slope of the time axis against the sample index"
+
+
+@nb.njit(cache=True, nogil=True)
+def _line_sums(t, k0, t0, ref):  # pragma: no cover - compiled
+    """Mean of ``u = t - t0 - ref k`` over a block (``k = k0, k0 + 1, ...``) and its centred sums
+    ``sum (k - mean k)(u - mean u)`` and ``sum (u - mean u)^2``, in two passes without temporaries."""
+    m = t.shape[0]
+    s = 0.0
+    for i in range(m):
+        s += t[i] - t0 - ref * (k0 + i)
+    ub = s / m
+    kb = k0 + (m - 1) / 2.0
+    sku = 0.0
+    suu = 0.0
+    for i in range(m):
+        uc = t[i] - t0 - ref * (k0 + i) - ub
+        sku += (k0 + i - kb) * uc
+        suu += uc * uc
+    return ub, sku, suu
+
+
+class _TimeFit:
+    """The least-squares line of a time axis against its sample index, fed block by block.
+
+    A time axis rounded to a few decimals has steps that are each off by up to the rounding
+    (7 decimals at 48 kHz: 2.08e-5 or 2.09e-5 s for 2.0833e-5 s); the slope of time against
+    sample index over the whole axis is not. The sums are taken about a reference line (the
+    first 4096 values' own fit), so they hold only the residuals' size, and merged block by
+    block as centred sums (Chan, Golub and LeVeque's pairwise update): an hour at 48 kHz, or a
+    clock 1000 s in, keeps the residuals of a 1e-7 s rounding to three digits whatever the blocks.
+    """
+
+    def __init__(self) -> None:
+        self.n = 0
+        self._t0 = self._ref = math.nan
+        self._kbar = self._ubar = self._skk = self._sku = self._suu = 0.0
+        self._pending: list[NDArray[np.float64]] = []
+
+    def add(self, t: NDArray) -> None:
+        """Take the next values of the axis (any block size, in order)."""
+        t = np.asarray(t, dtype=np.float64).ravel()
+        if self.n:
+            self._merge(t)
+            return
+        self._pending.append(t)
+        if sum(v.size for v in self._pending) >= _REF_SAMPLES:
+            self._start()
+
+    def _start(self) -> None:
+        head = np.concatenate(self._pending) if self._pending else np.empty(0)
+        self._pending = []
+        if head.size == 0:
+            return
+        k = np.arange(head.size, dtype=np.float64) - (head.size - 1) / 2.0
+        self._t0 = float(head[0])
+        self._ref = float(np.dot(k, head - head.mean()) / np.dot(k, k)) if head.size > 1 else 0.0
+        self._merge(head)
+
+    def _merge(self, t: NDArray[np.float64]) -> None:
+        m = t.size
+        if m == 0:
+            return
+        kb = self.n + (m - 1) / 2.0
+        ub, sku, suu = _line_sums(np.ascontiguousarray(t), float(self.n), self._t0, self._ref)
+        n = self.n + m
+        w = self.n * m / n
+        dk, du = kb - self._kbar, ub - self._ubar
+        self._skk += m * (m * m - 1.0) / 12.0 + dk * dk * w
+        self._sku += sku + dk * du * w
+        self._suu += suu + du * du * w
+        self._kbar += dk * m / n
+        self._ubar += du * m / n
+        self.n = n
+
+    def result(self) -> tuple[float, float]:
+        """The sample interval (the slope) [s] and the RMS of the residuals about the line [s] (NaN for
+        fewer than 3 values)."""
+        if self._pending:
+            self._start()
+        if self.n < 2:
+            return math.nan, math.nan
+        slope = self._sku / self._skk
+        rss = self._suu - slope * self._sku
+        jitter = math.sqrt(max(rss, 0.0) / (self.n - 2)) if self.n > 2 else math.nan
+        return self._ref + slope, jitter
+
+
+def _time_base(path: Path, label: str, head: NDArray[np.float64], values: Iterable[NDArray], n: int,
+               where: Callable[[int], str] = _sample_where) -> tuple[float, float]:
+    """Sample rate [Hz] of a recording from its whole time axis, and the axis's jitter [s].
+
+    Every reader with a time axis (a CSV time column, a netCDF time coordinate, MDF4 time stamps)
+    takes its rate from here: the least-squares slope (:class:`_TimeFit`) of all ``n`` times
+    against the sample index, read once in blocks (``values``), as 1 / slope rounded to 1e-6 Hz
+    (below the slope's resolution; an exact time base gives the rate it was written with). The
+    jitter is the RMS of the times about that line; above 5 % of the sample interval a warning
+    says the samples are taken as uniform.
+
+    ``head`` (the first values) is checked here: a time that goes back or is not a number is
+    reported where it is. Further on, a step that is not one sample interval (of the head's median
+    step) or a count other than ``n`` leaves the rate of the head's median step and a NaN jitter:
+    the block reader then says where the axis goes wrong.
+    """
+    dt0 = _head_interval(path, label, head, where)
+    fit = _TimeFit()
+    last = 0.0
+    for t in values:
+        t = np.ascontiguousarray(t, dtype=np.float64)
+        if t.size == 0:
+            continue
+        if not _time_steps_ok(t, last, fit.n > 0, dt0):
+            return 1.0 / dt0, math.nan
+        fit.add(t)
+        last = float(t[-1])
+    dt, jitter = fit.result()
+    if fit.n != n or not (math.isfinite(dt) and dt > 0):
+        return 1.0 / dt0, math.nan
+    fs = float(np.round(1.0 / dt, 6))
+    if jitter > _JITTER_WARN * dt:
+        warnings.warn(f"Recording {str(path)!r}: its {label} has a jitter of {jitter:.3g} s RMS about a uniform "
+                      f"time base, {jitter / dt:.0%} of the sample interval ({dt:.6g} s); the samples are "
+                      f"taken as uniform at fs = {fs:.9g} Hz (least squares over the whole axis).",
+                      UserWarning, stacklevel=5)
+    return fs, jitter
+
+
+def _time_extra(label: str, fs: float, jitter: float) -> dict[str, Any]:
+    """What a reader keeps of a time axis: the axis to check as it is read, its jitter (``time_jitter_rms``)."""
+    return {"time_axis": (label, 1.0 / fs), "time_jitter_rms": jitter}
+
+
 
 
 def _head(h5: Any, variable: Any, name: str, n_samples: int, count: int = 64) -> NDArray:
-    """The first ``count`` values of a 1-D netCDF variable of the root group.
+    """The first ``count`` values of a 1-D netCDF variable of the root group (see :func:`_values`)."""
+    return _values(h5, variable, name, n_samples, 0, count)
+
+
+def _values(h5: Any, variable: Any, name: str, n_samples: int, start: int, stop: int) -> NDArray:
+    """Values ``[start, stop)`` of a 1-D netCDF variable of the root group.
 
     Read from its HDF5 dataset (``h5``, the open file) when that holds all ``n_samples`` numbers:
     then h5netcdf returns the dataset's values as they are, and reading them through it costs
@@ -235,8 +378,8 @@ def _head(h5: Any, variable: Any, name: str, n_samples: int, count: int = 64) ->
 
     dset = h5.get(name)
     if isinstance(dset, h5py.Dataset) and dset.shape == (n_samples,) and dset.dtype.kind in "biuf":
-        return dset[:count]
-    return variable[:count]
+        return dset[start:stop]
+    return variable[start:stop]
 
 
 def _attr_str(value: Any) -> str:

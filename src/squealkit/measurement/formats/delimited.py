@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import math
-import warnings
 from pathlib import Path
 from typing import Any
 
@@ -14,10 +12,10 @@ from ._common import (
     _TIME_NAMES,
     DEFAULT_BLOCK,
     _fail,
-    _head_interval,
     _library_error,
     _split_unit,
-    _time_steps_ok,
+    _time_base,
+    _time_extra,
 )
 from .source import RecordingSource
 
@@ -87,65 +85,20 @@ def _csv_rows(p: Path, n_fields: int) -> int:
                 return rows
 
 
-#: Jitter of a time column (RMS about its least-squares line, as a share of the sample interval) above which
-#: reading it warns: the rounding of 7 decimals at 48 kHz is 0.14 %.
-_JITTER_WARN = 0.05
-
-
-def _last_time(p: Path, column: int) -> float:
-    """The time in the last data row of a CSV (NaN when it cannot be read from the file's tail)."""
-    import csv
-
-    with open(p, "rb") as fh:
-        fh.seek(0, 2)
-        fh.seek(max(0, fh.tell() - 4096))
-        lines = [ln for ln in fh.read().decode("utf-8", errors="replace").splitlines() if ln.strip()]
-    try:
-        return float(next(csv.reader([lines[-1]]))[column])
-    except (IndexError, ValueError, StopIteration):
-        return math.nan
-
-
-def _fit_time_column(p: Path, label: str, column: int, n: int, t0: float, dt0: float) -> tuple[float, float]:
-    """Sample interval [s] of a CSV's whole time column by least squares, and the RMS of its residuals [s].
-
-    A time column rounded to a few decimals has steps that are each off by up to the rounding
-    (7 decimals at 48 kHz: 2.08e-5 or 2.09e-5 s for 2.0833e-5 s); the slope of time against
-    sample index over the whole column is not. One pass over the column, in blocks, about
-    the line through the first and last times (so the sums hold only the residuals' size).
-    Falls back to ``dt0`` (the first rows' median step) where a value is not a number or a step
-    is not one sample interval: the block reader then says where.
-    """
+def _time_column(p: Path, label: str, n: int):
+    """The values of a CSV's time column, in blocks, read once (stops where the parser fails: the block
+    reader then says where)."""
     import pandas as pd
 
-    t_last = _last_time(p, column)
-    dt1 = (t_last - t0) / (n - 1) if math.isfinite(t_last) and t_last > t0 else dt0
-    kbar, skk = (n - 1) / 2.0, n * (n * n - 1.0) / 12.0
-    s_ku = s_u = s_uu = last = 0.0
     start = 0
     try:
         for df in pd.read_csv(p, usecols=[label], chunksize=DEFAULT_BLOCK, skipinitialspace=True,
                               skip_blank_lines=False):
             t = pd.to_numeric(df[label], errors="coerce").to_numpy(dtype=np.float64)[: max(0, n - start)]
-            k = np.arange(start, start + t.size, dtype=np.float64)
-            u = t - t0 - dt1 * k
-            if not (t.size and _time_steps_ok(np.ascontiguousarray(t), last, start > 0, dt0)):
-                return dt0, math.nan  # a step that is not one sample interval: the block reader says where
-            last = float(t[-1])
-            s_ku += float(np.dot(k - kbar, u))
-            s_u += float(u.sum())
-            s_uu += float(np.dot(u, u))
+            yield t
             start += t.size
     except (pd.errors.ParserError, ValueError):
-        return dt0, math.nan
-    if start != n or n < 3:
-        return dt0, math.nan
-    slope = s_ku / skk
-    dt = dt1 + slope
-    if not (math.isfinite(dt) and dt > 0):
-        return dt0, math.nan
-    ss = s_uu - s_u * s_u / n - slope * slope * skk
-    return dt, math.sqrt(max(ss, 0.0) / (n - 2))
+        return
 
 
 def _open_csv(p: Path, fs: float | None) -> RecordingSource:
@@ -175,15 +128,9 @@ def _open_csv(p: Path, fs: float | None) -> RecordingSource:
         if np.isnan(t).any():
             i = int(np.argmax(np.isnan(t)))
             raise _fail(p, f"{label} has a non-numeric value {col.iloc[i]!r} at line {i + 2}.")
-        dt = _head_interval(p, label, t, lambda k: f"line {k + 2}")
-        dt, jitter = _fit_time_column(p, labels[time_i], time_i, n_rows, float(t[0]), dt)
-        fs = 1.0 / dt
-        extra.update(time_column=labels[time_i], time_axis=(label, dt), time_jitter_rms=jitter)
-        if jitter > _JITTER_WARN * dt:
-            warnings.warn(f"Recording {str(p)!r}: its {label} has a jitter of {jitter:.3g} s RMS about a uniform "
-                          f"time base, {jitter / dt:.0%} of the sample interval ({dt:.6g} s); the samples are "
-                          f"taken as uniform at fs = {fs:.9g} Hz (least squares over the whole column).",
-                          UserWarning, stacklevel=3)
+        fs, jitter = _time_base(p, label, t, _time_column(p, labels[time_i], n_rows), n_rows,
+                                lambda k: f"line {k + 2}")
+        extra.update(time_column=labels[time_i], **_time_extra(label, fs, jitter))
     channels, units, columns = [], {}, {}
     for i, (name, unit) in enumerate(parsed):
         if i == time_i:

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..._validation import InputError
-from ._common import _TIME, _TIME_NAMES, _fail, _head_interval, _library_error, _sample_where
+from ._common import _TIME, _TIME_NAMES, DEFAULT_BLOCK, _fail, _library_error, _time_base, _time_extra
 from .source import RecordingSource
 
 
@@ -84,23 +84,29 @@ def _open_mdf4(p: Path, fs: float | None) -> RecordingSource:
                 if n_samples is None:
                     n_samples = int(group.channel_group.cycles_nr)
                     sig = next(mdf.iter_get(ch.name, group=gi, index=ci))
-                    head = (ch.name, np.asarray(sig.timestamps[:64], dtype=float))
+                    head = (ch.name, gi, np.asarray(sig.timestamps[:64], dtype=float))
                 where[ch.name] = (gi, ci)
                 units[ch.name] = str(ch.unit)
         synthetic = "SYNTHETIC" in str(mdf.header.comment)
         counts = {n: int(mdf.groups[g].channel_group.cycles_nr) for n, (g, _) in where.items()}
-    if not where or n_samples is None or head is None:
-        raise _fail(p, "has no numeric channel" + (f" (text: {', '.join(map(repr, other))})." if other else "."))
-    if len(set(counts.values())) != 1:
-        raise _fail(p, f"its channels have different lengths ({', '.join(f'{n}: {k}' for n, k in counts.items())} "
-                       "samples); give channels of one sample rate.")
-    extra: dict[str, Any] = {"where": where, "synthetic": synthetic, "non_numeric": other}
-    if fs is None:
-        label = f"time axis of channel {head[0]!r}"
-        dt = _head_interval(p, label, head[1], _sample_where)
-        fs = float(np.round(1.0 / dt, 6))
-        extra["time_axis"] = (label, dt)
+        if not where or n_samples is None or head is None:
+            raise _fail(p, "has no numeric channel" + (f" (text: {', '.join(map(repr, other))})." if other
+                                                       else "."))
+        if len(set(counts.values())) != 1:
+            raise _fail(p, f"its channels have different lengths ({', '.join(f'{n}: {k}' for n, k in counts.items())}"
+                           " samples); give channels of one sample rate.")
+        extra: dict[str, Any] = {"where": where, "synthetic": synthetic, "non_numeric": other}
+        if fs is None:
+            label = f"time axis of channel {head[0]!r}"
+            fs, jitter = _time_base(p, label, head[2], _master_blocks(mdf, head[1], n_samples), n_samples)
+            extra.update(_time_extra(label, fs, jitter))
     return RecordingSource(p, "mdf4", float(fs), n_samples, tuple(where), units, {}, extra)
+
+
+def _master_blocks(mdf: Any, group: int, n: int, block: int = DEFAULT_BLOCK) -> Iterator[NDArray]:
+    """The time stamps of data group ``group`` (its master channel), ``block`` records at a time."""
+    for start in range(0, n, block):
+        yield np.asarray(mdf.get_master(group, record_offset=start, record_count=min(block, n - start)))
 
 
 def blocks(src: RecordingSource, names: list[str], block: int, with_time: bool):

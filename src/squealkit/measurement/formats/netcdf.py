@@ -10,6 +10,7 @@ import xarray as xr
 
 from ._common import (
     _TIME,
+    DEFAULT_BLOCK,
     _attr_str,
     _fail,
     _file_rate,
@@ -19,6 +20,10 @@ from ._common import (
     _mapped_block,
     _sample_where,
     _stored_as_is,
+    _time_base,
+    _time_extra,
+    _TimeFit,
+    _values,
 )
 from .source import RecordingSource
 
@@ -58,16 +63,24 @@ def _open_netcdf(p: Path, fs: float | None) -> RecordingSource:
                 if scale is None:
                     raise _fail(p, f"time coordinate {dim!r} has units {tunits!r}; use seconds, or give fs.")
                 label = f"time coordinate {dim!r}"
-                dt = _head_interval(p, label, np.asarray(_head(h5, tv, dim, n_samples), dtype=float) * scale,
-                                    _sample_where)
+                head = np.asarray(_head(h5, tv, dim, n_samples), dtype=float) * scale
                 if "fs" in f.attrs:  # both: the attribute sets the rate, the coordinate must agree
                     rate = _file_rate(p, f.attrs["fs"], "fs attribute")
+                    _head_interval(p, label, head, _sample_where)
+                    fit = _TimeFit()
+                    fit.add(head)  # (least squares: the head's steps may be rounded)
+                    dt = fit.result()[0]
                     if abs(dt * rate - 1) > 1e-3:
                         raise _fail(p, f"its fs attribute ({rate:.9g} Hz) and its {label} (steps of {dt:.6g} s, "
                                        f"{1 / dt:.9g} Hz) disagree; give fs.")
-                    dt = 1.0 / rate
-                fs = 1.0 / dt
-                extra.update(time_axis=(label, dt), time_scale=scale)
+                    fs = rate
+                    extra.update(time_axis=(label, 1.0 / rate))
+                else:
+                    values = (np.asarray(_values(h5, tv, dim, n_samples, a, min(a + DEFAULT_BLOCK, n_samples)),
+                                         dtype=float) * scale for a in range(0, n_samples, DEFAULT_BLOCK))
+                    fs, jitter = _time_base(p, label, head, values, n_samples)
+                    extra.update(_time_extra(label, fs, jitter))
+                extra.update(time_scale=scale)
             elif "fs" in f.attrs:
                 fs = _file_rate(p, f.attrs["fs"], "fs attribute")
             else:

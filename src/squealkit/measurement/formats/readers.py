@@ -21,7 +21,7 @@ from ..._validation import InputError, validate_fs, validate_positive
 
 __all__ = ["RecordingSource", "open_recording", "read_recording", "recording_dataset"]
 
-from ._common import _fail, _library_error, _scales_for, _to_si
+from ._common import FS_METHOD, _fail, _library_error, _scales_for, _to_si
 from .delimited import _open_csv
 from .mdf import _open_mdf4
 from .netcdf import _open_netcdf
@@ -182,8 +182,7 @@ def read_recording(path: str | Path, channels: Sequence[str | int] | None = None
     data = {n: np.concatenate(v) for n, v in parts.items()}
     attrs: dict[str, Any] = {"source": str(src.path)}
     if "time_jitter_rms" in src._extra:
-        attrs |= {"fs_method": "least-squares slope of the time column against the sample index",
-                  "time_jitter_rms": src._extra["time_jitter_rms"]}
+        attrs |= {"fs_method": FS_METHOD, "time_jitter_rms": src._extra["time_jitter_rms"]}
     ds = recording_dataset(data, src.fs, {n: src.units.get(n, "") for n in names}, attrs)
     for n, unit in src._extra.get("file_units", {}).items():
         if n in ds:

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._validation import InputError
+from ..._validation import InputError, validate_int
 from ._common import _TIME, DEFAULT_BLOCK, _as_samples, _check_finite, _fail, _library_error, _TimeAxis
 
 
@@ -129,8 +129,7 @@ class RecordingSource:
             Channel name -> samples (float64, physical units).
         """
         names = [self.resolve(c) for c in channels]
-        if isinstance(block, bool) or not isinstance(block, int | np.integer) or block < 1:
-            raise InputError(f"Parameter block={block!r} must be a whole number >= 1.")
+        block = validate_int("block", block, 1)
         spec = self._extra.get("time_axis")
         checked = self._extra.get("time_axis_checked", False)
         axis = _TimeAxis(self.path, spec[0], spec[1], self._where) if spec and not checked else None

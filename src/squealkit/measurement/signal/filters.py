@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import signal
 
-from ..._validation import InputError, validate_fs, validate_positive
+from ..._validation import InputError, validate_fs, validate_int, validate_positive
 
 __all__ = ["bandpass", "butter_sos", "highpass", "lowpass", "lowpass_decimated"]
 
@@ -55,8 +55,7 @@ def butter_sos(kind: str, freq: float | tuple[float, float], fs: float, *, order
     fs = validate_fs(fs)
     if kind not in ("lowpass", "highpass", "bandpass"):
         raise InputError(f"Parameter kind={kind!r} must be 'lowpass', 'highpass' or 'bandpass'.")
-    if not isinstance(order, int) or order < 1:
-        raise InputError(f"Parameter order={order!r} must be a whole number >= 1.")
+    order = validate_int("order", order, 1)
     nyq = fs / 2
     corners = tuple(freq) if kind == "bandpass" else (freq,)  # type: ignore[arg-type]
     if kind == "bandpass" and len(corners) != 2:

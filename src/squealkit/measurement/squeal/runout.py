@@ -14,7 +14,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..._validation import InputError, validate_fs, validate_positive
+from ..._validation import InputError, validate_fs, validate_int, validate_positive
 from ..signal.filters import lowpass
 
 __all__ = ["incline", "revolution_frequency", "split_runout", "surface_speed"]
@@ -84,8 +84,7 @@ def split_runout(
         ``sro = macro + micro`` [m].
     """
     fs = validate_fs(fs)
-    if not isinstance(macro_orders, int) or macro_orders < 1:
-        raise InputError(f"Parameter macro_orders={macro_orders!r} must be a whole number >= 1.")
+    macro_orders = validate_int("macro_orders", macro_orders, 1)
     sro = lowpass(q, lowpass_freq, fs)
     f_macro = (macro_orders + 0.5) * revolution_frequency(rpm)
     if f_macro >= lowpass_freq:
