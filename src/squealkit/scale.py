@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from ._optional import require
 from ._threads import ENV_VAR, SERIAL_BELOW, env_threads, limit_threads, thread_limit, threads_for
 from ._validation import InputError
 from .io import atomic_path, deferred_interrupts, written_path
@@ -63,13 +64,7 @@ Progress = Callable[[int, int], None]
 
 
 def _distributed():
-    try:
-        import distributed
-    except ImportError as e:  # pragma: no cover - the test extra installs it
-        raise InputError(
-            "Running on a Dask cluster needs dask.distributed: pip install \"squealkit[distributed]\"."
-        ) from e
-    return distributed
+    return require("distributed", "Running on a Dask cluster")
 
 
 #: Dask configuration in force while :func:`get_client` starts a local cluster's workers.
@@ -319,10 +314,8 @@ def _in_worker(fn: Callable[..., Any], item: Any) -> Any:
     from ._threads import limit_threads
 
     try:
-        from distributed import get_worker
-
-        nthreads = get_worker().state.nthreads
-    except (ImportError, ValueError):  # pragma: no cover - outside a worker
+        nthreads = require("distributed", "A Dask task").get_worker().state.nthreads
+    except (InputError, ValueError):  # pragma: no cover - outside a worker
         return fn(item)
     with limit_threads(max(1, nthreads)):
         return fn(item)

@@ -58,7 +58,7 @@ from threadpoolctl import threadpool_limits
 
 from .. import __version__
 from .._threads import honour_thread_limit
-from .._validation import InputError, validate_angle, validate_finite, validate_model
+from .._validation import InputError, validate_angle, validate_finite, validate_int, validate_model
 from ..uncertainty import UncertainParameter, parse_uncertain, sample_parameters
 from ._pencil import _gamma, _linear_matrices, _model_matrices, _modes_in_band, _state_eig, _threshold
 from ._scatter import _moments, _scatter_table, _uncertain
@@ -141,12 +141,6 @@ def _methods(method: str | Sequence[str]) -> tuple[str, ...]:
     if not chosen or bad:
         raise InputError(f"Parameter method={method!r}: give one or both of {', '.join(map(repr, METHODS))}.")
     return tuple(m for m in METHODS if m in chosen)
-
-
-def _positive_int(name: str, value: object, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
-        raise InputError(f"Parameter {name}={value!r} must be an integer >= {minimum}.")
-    return int(value)
 
 
 # ----------------------------------------------------------------------------- entry point
@@ -270,9 +264,9 @@ def robust_margins(
 
     validate_model(model)
     methods = _methods(method)
-    samples = _positive_int("samples", samples, 2)
-    batch_size = _positive_int("batch_size", batch_size, 1)
-    seed = _positive_int("seed", seed, 0)
+    samples = validate_int("samples", samples, 2)
+    batch_size = validate_int("batch_size", batch_size, 1)
+    seed = validate_int("seed", seed, 0)
     theta = validate_angle("theta", theta)
     tan_t = math.tan(theta)
     confidence = validate_finite("confidence", confidence)

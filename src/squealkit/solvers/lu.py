@@ -49,6 +49,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
+from .._optional import require
 from .._threads import honour_thread_limit
 from .._validation import InputError
 
@@ -229,7 +230,7 @@ class DenseLU(_FactorBase):
 @functools.cache
 def _mkl_pardiso():
     """MKL's ``pardiso`` routine (from the ``mkl_rt`` library pypardiso finds), typed for ctypes."""
-    from pypardiso import PyPardisoSolver
+    PyPardisoSolver = require("pypardiso", "The PARDISO LU").PyPardisoSolver
 
     fn = PyPardisoSolver().libmkl.pardiso
     i32 = ctypes.POINTER(ctypes.c_int32)

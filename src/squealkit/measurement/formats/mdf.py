@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..._validation import InputError
+from ..._optional import require
 from ._common import _TIME, _TIME_NAMES, DEFAULT_BLOCK, _fail, _library_error, _time_base, _time_extra
 from .source import RecordingSource
 
@@ -21,10 +21,7 @@ from .source import RecordingSource
 def _mdf(p: Path):
     """``asammdf.MDF(p)``, closed after use; a file it cannot open is one line, without asammdf's
     'Exception ignored in __del__' noise from the half-built object."""
-    try:
-        from asammdf import MDF
-    except ImportError as e:
-        raise InputError("Reading MDF4 needs asammdf: pip install 'squealkit[daq]'.") from e
+    MDF = require("asammdf", "Reading MDF4").MDF
     hook = sys.unraisablehook
 
     def quiet(u: Any) -> None:
@@ -110,7 +107,7 @@ def _master_blocks(mdf: Any, group: int, n: int, block: int = DEFAULT_BLOCK) -> 
 
 
 def blocks(src: RecordingSource, names: list[str], block: int, with_time: bool):
-    from asammdf import MDF
+    MDF = require("asammdf", "Reading MDF4").MDF
 
     # asammdf yields each channel in the chunks of its data blocks; cut them into equal blocks.
     # The time stamps come with the first requested channel's samples.
