@@ -29,7 +29,15 @@ from threadpoolctl import threadpool_limits
 
 from .. import __version__
 from .._validation import InputError, validate_dataset, validate_finite, validate_int, validate_model, validate_positive
-from .harmonic_balance import HBProblem, LimitCycle, SecondOrderSystem, _newton, contact_system, solve_fixed_p
+from .harmonic_balance import (
+    HBProblem,
+    LimitCycle,
+    SecondOrderSystem,
+    _newton,
+    contact_system,
+    n_time_samples,
+    solve_fixed_p,
+)
 from .hopf import HopfPoint, hopf_point
 
 __all__ = [
@@ -155,6 +163,9 @@ class Branch:
         The Hopf point the branch starts from.
     stop_reason : {"max_points", "corrector_failed", "left_range", "max_amplitude"}
         Why the continuation stopped.
+    stop_detail : str
+        Where it stopped and why, in one sentence (the parameter, amplitude and contact state of
+        the last point; for ``"corrector_failed"`` the smallest residual the correctors reached).
     """
 
     cycles: tuple[LimitCycle, ...]
@@ -164,6 +175,7 @@ class Branch:
     folds: tuple[int, ...]  # indices of the points nearest to each fold
     hopf: HopfPoint
     stop_reason: str
+    stop_detail: str = ""
 
 
 def _fold_indices(tp: NDArray, p: NDArray, thresh: float = 1e-3) -> tuple[int, ...]:
@@ -237,6 +249,92 @@ def continue_branch(
                          max_turn=max_turn, stability=stability)
 
 
+#: AFT samples per period, at least, of a branch whose contact may open. Each sample where the contact
+#: opens or closes puts a kink in the harmonic-balance residual, of a size ~ 1/samples; next to a
+#: vertical onset (a piecewise-linear law) the branch turns at each, and with the default 8 per
+#: harmonic (128 at H = 10) the turns defeat the corrector on lightly damped rigs.
+CONTACT_SAMPLES = 512
+#: Arclength steps, in units of the nominal step: the largest; the one at and below which a corrector
+#: that fails is restarted with another constraint (:func:`_restart`); the one below which the branch stops.
+_H_MAX, _H_RESTART, _H_MIN = 1.0, 1.0 / 64, 1e-4
+#: Steps of a restart (units of the nominal step: ``length_scale`` in the amplitude, ``step`` in p), smallest first.
+_RESTART_STEPS = (1.0 / 64, 1.0 / 16, 1.0 / 4)
+#: A point is a cycle when the scaled residual (``HBProblem.residual``, per ``k_ref length_scale``) is at most this.
+_TOL = 1e-8
+
+
+def _converged(z: NDArray, nr: float) -> bool:
+    return bool(nr <= _TOL and np.all(np.isfinite(z)))
+
+
+def _arclength_corrector(prob: HBProblem, y0: NDArray, t0: NDArray, h: float, W: NDArray):
+    """Newton from ``y0 + h t0`` on the hyperplane orthogonal to ``t0`` (weighted metric ``W^2``)."""
+    y_pred = y0 + h * t0
+    tw = t0 * W * W
+
+    def fun(z):
+        r, J = prob.residual(z)
+        return np.append(r, tw @ (z - y_pred)), np.vstack([J, tw])
+
+    return _newton(fun, y_pred, max_iter=12)
+
+
+def _restart(prob: HBProblem, y0: NDArray, ahead: NDArray, W: NDArray, ia: int, dp_nom: float):
+    """A point past a non-smooth spot where the arclength corrector fails for every step.
+
+    Where the contact starts to open at one more AFT sample the residual has a kink; the branch
+    turns there (most sharply next to a Hopf point whose cycles are vertical, as a piecewise-linear
+    law's are), and the hyperplane orthogonal to the incoming tangent may miss the outgoing piece at
+    any step. A fresh Newton from ``y0`` with another constraint, the amplitude ``a_1`` of the phase
+    DOF (index ``ia``) or the parameter fixed a small step on, crosses it: each in the direction the
+    branch was going, then against it, smallest step first. A candidate is taken if it converges,
+    lies ahead (``(z - y0) W^2 ahead > 0``, so it is not the piece already followed) and within two
+    nominal steps of ``y0``.
+
+    Returns
+    -------
+    (z, iterations, residual, Jacobian) or None
+    """
+    n_u = prob.n_u
+    Wa = W * W * ahead
+    for d in _RESTART_STEPS:
+        for k, delta in ((ia, d), (n_u + 1, d * dp_nom)):
+            first = 1.0 if ahead[k] >= 0 else -1.0
+            for sign in (first, -first):
+                row = np.zeros(n_u + 2)
+                row[k] = 1.0
+                target = y0[k] + sign * delta
+
+                def fun(z, row=row, target=target, k=k):
+                    r, J = prob.residual(z)
+                    return np.append(r, z[k] - target), np.vstack([J, row])
+
+                start = y0.copy()
+                start[k] = target
+                z, it, nr, J = _newton(fun, start, max_iter=20)
+                if (_converged(z, nr) and (z - y0) @ Wa > 0
+                        and float(np.linalg.norm((z - y0) * W)) <= 2.0):
+                    return z, it, nr, J
+    return None
+
+
+def _tangent_at(Jc: NDArray, secant: NDArray, W: NDArray) -> NDArray:
+    """Unit tangent (weighted norm) from a bordered Jacobian ``[J; c]``, oriented along ``secant``.
+
+    ``[J; c] t = e_last`` gives the null vector of ``J``; its sign follows the step just taken
+    (the secant), not the previous tangent: past a corner of the branch (a kink of the residual)
+    the previous tangent may point against the way the branch goes on.
+    """
+    e_last = np.zeros(Jc.shape[0])
+    e_last[-1] = 1.0
+    try:
+        t = np.linalg.solve(Jc, e_last)
+    except np.linalg.LinAlgError:
+        t = np.linalg.svd(Jc[:-1] / W[None, :])[2][-1] / W
+    t = t / np.linalg.norm(t * W)
+    return t if (t * W * W) @ secant >= 0 else -t
+
+
 def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_start, n_floquet, max_amplitude,
               max_turn, stability) -> Branch:
     from .hill import hill_multipliers
@@ -245,7 +343,8 @@ def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_st
     n = system.n_dof
     dp_nom = (hi - lo) / 50 if step is None else validate_positive("step", step)
     j = int(np.argmax(np.abs(hopf.shape)))
-    prob = HBProblem(system, H, hopf.omega, j)
+    n_time = n_time_samples(H) if system.contact_open is None else max(n_time_samples(H), CONTACT_SAMPLES)
+    prob = HBProblem(system, H, hopf.omega, j, n_time=n_time)
     n_u = prob.n_u
     W = np.r_[np.ones(n_u + 1), 1.0 / dp_nom]  # arclength weights on [u, w, p]
     ia = 1 * n + j  # index of a_1 of the phase DOF in u
@@ -269,63 +368,61 @@ def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_st
     if not nr <= 1e-8:
         raise InputError(f"No limit cycle found next to the Hopf point (residual {nr:.3g}).")
 
-    def tangent(J: NDArray, prev: NDArray | None) -> NDArray:
-        # null vector of J (n_u+1, n_u+2) in the weighted metric
-        Jw = J / W[None, :]
-        _, _, Vt = np.linalg.svd(Jw)
-        t = Vt[-1] / W
-        t = t / np.linalg.norm(t * W)
-        if prev is None:
-            return t if t[ia] > 0 else -t
-        return t if (t * W * W) @ prev >= 0 else -t
-
     r, J = prob.residual(y)
-    t = tangent(J, None)
-    ys, ts, nrs = [y], [t], [float(np.linalg.norm(r))]
-    e_last = np.zeros(n_u + 2)
-    e_last[-1] = 1.0
-    h = 1.0
+    # null vector of J (n_u+1, n_u+2) in the weighted metric, growing in amplitude
+    t = np.linalg.svd(J / W[None, :])[2][-1] / W
+    t = t / np.linalg.norm(t * W)
+    ys, ts, nrs = [y], [t if t[ia] > 0 else -t], [float(np.linalg.norm(r))]
+    h = _H_MAX
     reason = "max_points"
+    restarted = False  # a restart was tried since the last point
+    best_failed = math.inf  # the smallest residual of the correctors that failed since the last point
     while len(ys) < max_points:
-        y_pred = ys[-1] + h * ts[-1]
-        tw = ts[-1] * W * W
-
-        def fun(z, y_pred=y_pred, tw=tw):
-            r, J = prob.residual(z)
-            return np.append(r, tw @ (z - y_pred)), np.vstack([J, tw])
-
-        z, it, nr, Jc = _newton(fun, y_pred, max_iter=12)
-        if not (nr <= 1e-8 and np.all(np.isfinite(z))):
-            h *= 0.5
-            if h < 1e-4:
+        z, it, nr, Jc = _arclength_corrector(prob, ys[-1], ts[-1], h, W)
+        fresh = False
+        if not _converged(z, nr):
+            best_failed = min(best_failed, nr) if math.isfinite(nr) else best_failed
+            if h > _H_RESTART or (restarted and h > _H_MIN):
+                h *= 0.5
+                continue
+            if restarted:
                 reason = "corrector_failed"
                 break
-            continue
-        # the tangent at z: [J; t_prev W^2] t = e_last, with the corrector's final (bordered) Jacobian
-        t_new = np.linalg.solve(Jc, e_last)
-        t_new /= np.linalg.norm(t_new * W)
-        if (t_new * W * W) @ ts[-1] < math.cos(max_turn) and h > 1e-3:
+            restarted = True
+            ahead = ys[-1] - ys[max(0, len(ys) - 5)] if len(ys) > 1 else ts[-1]
+            out = _restart(prob, ys[-1], ahead, W, ia, dp_nom)
+            if out is None:
+                h *= 0.5
+                continue
+            z, it, nr, Jc = out
+            fresh = True
+        t_new = _tangent_at(Jc, z - ys[-1], W)
+        if not fresh and (t_new * W * W) @ ts[-1] < math.cos(max_turn) and h > 1e-3:
             h *= 0.5  # the branch turns sharply (a fold, contact loss setting in): smaller steps
             continue
+        restarted, best_failed = False, math.inf
         p = z[-1]
         if p < lo or p > hi:
             # end exactly on the range's bound: a fixed-parameter solve from the interpolated guess
+            # (or, where that does not converge, the cycle just found beyond it)
             edge = hi if p > hi else lo
             frac = (edge - ys[-1][-1]) / (p - ys[-1][-1])
             y_e, _, nr_e = solve_fixed_p(prob, ys[-1] + frac * (z - ys[-1]))
-            if nr_e <= 1e-8:
-                ys.append(y_e)
-                ts.append(t_new)
-                nrs.append(nr_e)
+            ok = _converged(y_e, nr_e)
+            ys.append(y_e if ok else z)
+            ts.append(t_new)
+            nrs.append(nr_e if ok else nr)
             reason = "left_range"
             break
         ys.append(z)
         ts.append(t_new)
         nrs.append(nr)
-        h = min(h * (1.5 if it <= 4 else 1.0 if it <= 7 else 0.6), 1.0)
+        h = 4 * _H_RESTART if fresh else min(h * (1.5 if it <= 4 else 1.0 if it <= 7 else 0.6), _H_MAX)
         if np.abs(z[:n_u]).max() > max_amplitude:
             reason = "max_amplitude"
             break
+    detail = _stop_detail(system, prob, reason, ys[-1], (lo, hi), max_points=max_points,
+                          max_amplitude=max_amplitude, residual=best_failed)
     cycles = []
     mult = []
     for y_i, r in zip(ys, nrs, strict=True):
@@ -339,7 +436,26 @@ def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_st
     err = np.abs(mult_a[:, -1] - 1.0)
     stable = np.abs(mult_a[:, :-1]).max(axis=1) <= 1 + np.maximum(FLOQUET_TOL, 3 * err)
     tp = np.array([t_i[-1] * W[-1] for t_i in ts])
-    return Branch(tuple(cycles), mult_a, stable, tp, _fold_indices(tp, np.array([c.p for c in cycles])), hopf, reason)
+    return Branch(tuple(cycles), mult_a, stable, tp, _fold_indices(tp, np.array([c.p for c in cycles])), hopf,
+                  reason, detail)
+
+
+def _stop_detail(system, prob: HBProblem, reason: str, y: NDArray, p_range: tuple[float, float], *,
+                 max_points: int, max_amplitude: float, residual: float) -> str:
+    """Where the continuation stopped and why, in one sentence (the attribute ``stop_detail``)."""
+    c = prob.cycle(y)
+    where = (f"{system.param} = {c.p:.6g} (amplitude {float(np.max(c.amplitude)):.4g} m"
+             + (f", contact open over {100 * c.contact_loss_fraction:.1f} % of the period)"
+                if math.isfinite(c.contact_loss_fraction) else ")"))
+    if reason == "left_range":
+        return f"reached the end of the range [{p_range[0]:g}, {p_range[1]:g}] at {where}"
+    if reason == "max_points":
+        return f"stopped after max_points = {max_points} points at {where}, inside the range"
+    if reason == "max_amplitude":
+        return f"stopped at {where}: an amplitude exceeded max_amplitude = {max_amplitude:g} length scales"
+    return (f"the corrector did not converge beyond {where}: neither arclength steps down to {_H_MIN:g} of the "
+            f"nominal step nor a restart with the amplitude or {system.param} fixed a step on "
+            f"(smallest residual {residual:.2g}, tolerance {_TOL:g})")
 
 
 def _onset_kind(hopf: HopfPoint, branch_p: NDArray, stable: NDArray) -> tuple[str, str]:
@@ -419,7 +535,9 @@ def limit_cycle_branch(
         multiplier modulus), ``fold``; over ``fold``: ``fold_mu`` (mu of each fold); attrs: ``hopf_mu``,
         ``hopf_frequency_hz``, ``lyapunov_coefficient``, ``hopf_kind``, ``hopf_kind_from``,
         ``hysteresis_mu`` (the range of mu where a quiet and a squealing state coexist,
-        NaN if none), ``harmonics``, ``harmonics_change``, ``stop_reason``, units.
+        NaN if none), ``harmonics``, ``harmonics_change``, ``stop_reason`` (``"left_range"``: the
+        branch reached the end of the range), ``stop_detail`` (where and why it stopped, one
+        sentence), units.
     """
     validate_model(model, kind="friction")
     harmonics = validate_int("harmonics", harmonics, 1)
@@ -633,6 +751,7 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
             "harmonics": harmonics,
             "harmonics_change": change,
             "stop_reason": br.stop_reason,
+            "stop_detail": br.stop_detail,
             "squealkit_version": __version__,
             **(attrs or {}),
         },
@@ -666,7 +785,8 @@ def limit_cycle_summary(ds: xr.Dataset) -> dict[str, object]:
         ``frequency_hz``, ``lyapunov_coefficient``, ``kind``, ``kind_from``; and
         ``theta_deg`` over a slope branch), ``folds`` (list of mu, or of theta_deg),
         ``hysteresis_mu`` (or ``hysteresis_theta_deg``: [start, end] or []), ``harmonics``,
-        ``harmonics_change``, ``stability_method``, ``stop_reason``, ``contact``; with
+        ``harmonics_change``, ``stability_method``, ``stop_reason``, ``stop_detail`` (where and why
+        the continuation stopped; empty for a branch saved before it existed), ``contact``; with
         ``harmonics_tol``: ``harmonics_tol`` and ``harmonics_converged``; with a
         level: ``level_db`` (list, dB SPL re 20 uPa), ``level_dof``, ``level_from``.
     """
@@ -703,6 +823,7 @@ def limit_cycle_summary(ds: xr.Dataset) -> dict[str, object]:
         "harmonics_change": float(a["harmonics_change"]),
         "stability_method": str(a.get("stability_method", "monodromy")),
         "stop_reason": str(a["stop_reason"]),
+        "stop_detail": str(a.get("stop_detail", "")),
         "contact": str(a.get("contact", "")),
     })
     if "harmonics_tol" in a:  # an adaptive branch
