@@ -32,6 +32,10 @@ from squealkit.models import model_from_dict
 from squealkit.nonlinear import contact_system, harmonic_balance, limit_cycle_branch, limit_cycle_branch_slope
 from squealkit.nonlinear.harmonic_balance import HBProblem, _Basis
 
+# rigs whose pin bends far above the disc's frequency need mu > 1 to squeal: the warning says so, the branch
+# is followed all the same
+pytestmark = pytest.mark.filterwarnings("ignore::squealkit.stability.critical.UnrealisticFrictionWarning")
+
 #: The user's damped rig (dampers c1, c2, c3 [N s/m]).
 RIG = {"rig": {"pin_diameter": "25 mm", "pin_length": "50 mm", "pin_youngs_modulus": "2.95 GPa", "pin_density": 1040.0,
                "disc_mass": 4.1, "disc_freq": "2.9 kHz", "pin_bending_freq": "3.3 kHz", "pin_axial_freq": "rod"},

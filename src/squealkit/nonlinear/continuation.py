@@ -377,6 +377,7 @@ def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_st
     reason = "max_points"
     restarted = False  # a restart was tried since the last point
     best_failed = math.inf  # the smallest residual of the correctors that failed since the last point
+    last_turn = math.inf  # the turn of the tangent [rad] at the last step refused for turning too far
     while len(ys) < max_points:
         z, it, nr, Jc = _arclength_corrector(prob, ys[-1], ts[-1], h, W)
         fresh = False
@@ -397,18 +398,29 @@ def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_st
             z, it, nr, Jc = out
             fresh = True
         t_new = _tangent_at(Jc, z - ys[-1], W)
-        if not fresh and (t_new * W * W) @ ts[-1] < math.cos(max_turn) and h > 1e-3:
-            h *= 0.5  # the branch turns sharply (a fold, contact loss setting in): smaller steps
+        turn = math.acos(min(1.0, max(-1.0, float((t_new * W * W) @ ts[-1]))))
+        # the branch turns sharply (a fold, contact loss setting in): smaller steps, unless the turn
+        # does not shrink with the step (a corner, where an AFT sample opens: no step rounds it)
+        if not fresh and turn > max_turn and h > 1e-3 and not turn > 0.75 * last_turn:
+            h *= 0.5
+            last_turn = turn
             continue
-        restarted, best_failed = False, math.inf
+        restarted, best_failed, last_turn = False, math.inf, math.inf
         p = z[-1]
         if p < lo or p > hi:
-            # end exactly on the range's bound: a fixed-parameter solve from the interpolated guess
-            # (or, where that does not converge, the cycle just found beyond it)
+            # end exactly on the range's bound: a fixed-parameter solve from the interpolated guess, or from
+            # the points on either side; where none converges, a shorter step that stops short of the bound
+            # and a solve from nearer; where even that fails, the cycle just found beyond the bound
             edge = hi if p > hi else lo
             frac = (edge - ys[-1][-1]) / (p - ys[-1][-1])
-            y_e, _, nr_e = solve_fixed_p(prob, ys[-1] + frac * (z - ys[-1]))
-            ok = _converged(y_e, nr_e)
+            for guess in (ys[-1] + frac * (z - ys[-1]), ys[-1], z):
+                y_e, _, nr_e = solve_fixed_p(prob, np.r_[guess[:-1], edge])
+                ok = _converged(y_e, nr_e)
+                if ok:
+                    break
+            if not ok and not fresh and h * frac > _H_RESTART:
+                h *= 0.9 * frac
+                continue
             ys.append(y_e if ok else z)
             ts.append(t_new)
             nrs.append(nr_e if ok else nr)
