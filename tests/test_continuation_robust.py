@@ -207,3 +207,19 @@ def test_a_branch_ends_at_its_range_or_says_where_and_why_it_stopped(c, pin_bend
     system = contact_system(model)
     for i in (1, ds.sizes["point"] // 2, ds.sizes["point"] - 1):
         assert _residual(system, ds, i) < 1e-7, (i, detail)
+
+
+@pytest.mark.parametrize(("c", "pin_bending_khz", "n_folds"), [(2.0, 3.3, 0), (8.0, 3.05, 2)])
+def test_folds_are_turns_of_the_branch_not_kinks_of_the_residual(c, pin_bending_khz, n_folds):
+    # The same branch followed with coarse and fine steps has the same folds: (8, 3.05) an S-shaped branch
+    # (it turns back at mu = 0.126, forward again at 0.078); (2, 3.3) none, where the one-sided tangents
+    # at the AFT samples that open next to the onset used to report two (mu = 0.2287 and 0.2348, coarse
+    # steps only).
+    from squealkit.stability import critical_friction
+
+    model = rig(c, pin_bending_khz)
+    mu_c = critical_friction(model, 0.0, damped=True, mu_max=2.0).mu_critical
+    folds = [limit_cycle_branch(model, (0.9 * mu_c, mu_c + 0.1), harmonics=HARMONICS, n_points=n, n_floquet=256,
+                                check_harmonics=False).fold_mu.values for n in (11, N_POINTS)]
+    assert len(folds[0]) == len(folds[1]) == n_folds
+    np.testing.assert_allclose(folds[0], folds[1], atol=2e-3)

@@ -178,16 +178,32 @@ class Branch:
     stop_detail: str = ""
 
 
-def _fold_indices(tp: NDArray, p: NDArray, thresh: float = 1e-3) -> tuple[int, ...]:
+def _fold_indices(tp: NDArray, p: NDArray, thresh: float = 1e-3, min_turn: float = 0.0) -> tuple[int, ...]:
     """Points of extreme ``p`` between consecutive tangents whose ``dp/ds`` changes sign
-    (tangents with ``abs(dp/ds)`` below ``thresh``, e.g. a vertical start, are skipped)."""
+    (tangents with ``abs(dp/ds)`` below ``thresh``, e.g. a vertical start, are skipped).
+
+    A fold turns the branch back in ``p``: the point must be an extreme of ``p`` against both its
+    neighbours (at a kink of the residual, where an AFT sample opens, the one-sided tangent can change
+    sign while ``p`` goes on the same way). Two opposite folds closer in ``p`` than ``min_turn`` (a
+    zigzag of the sampled branch, not a turn of the branch) are dropped together.
+    """
     sig = [(i, np.sign(t)) for i, t in enumerate(tp) if abs(t) > thresh]
-    out = []
+    out: list[int] = []
     for (i, s0), (j, s1) in itertools.pairwise(sig):
         if s0 != s1:
             seg = p[i:j + 1]
-            out.append(i + int(np.argmax(seg) if s0 > 0 else np.argmin(seg)))
-    return tuple(out)
+            k = i + int(np.argmax(seg) if s0 > 0 else np.argmin(seg))
+            turns = 0 < k < p.size - 1 and (min(p[k] - p[k - 1], p[k] - p[k + 1]) > 0 if s0 > 0
+                                             else max(p[k] - p[k - 1], p[k] - p[k + 1]) < 0)
+            if turns and (not out or out[-1] != k):
+                out.append(k)
+    kept: list[int] = []
+    for k in out:
+        if kept and abs(p[k] - p[kept[-1]]) < min_turn:
+            kept.pop()
+        else:
+            kept.append(k)
+    return tuple(kept)
 
 
 def continue_branch(
@@ -448,8 +464,8 @@ def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_st
     err = np.abs(mult_a[:, -1] - 1.0)
     stable = np.abs(mult_a[:, :-1]).max(axis=1) <= 1 + np.maximum(FLOQUET_TOL, 3 * err)
     tp = np.array([t_i[-1] * W[-1] for t_i in ts])
-    return Branch(tuple(cycles), mult_a, stable, tp, _fold_indices(tp, np.array([c.p for c in cycles])), hopf,
-                  reason, detail)
+    folds = _fold_indices(tp, np.array([c.p for c in cycles]), min_turn=0.1 * dp_nom)
+    return Branch(tuple(cycles), mult_a, stable, tp, folds, hopf, reason, detail)
 
 
 def _stop_detail(system, prob: HBProblem, reason: str, y: NDArray, p_range: tuple[float, float], *,
