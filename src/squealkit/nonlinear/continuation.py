@@ -4,8 +4,16 @@ The branch starts on the onset mode at a small amplitude (the mode shape and fre
 the Hopf point, :mod:`squealkit.nonlinear.hopf`), where the parameter is solved for at a
 fixed amplitude, and is followed by pseudo-arclength continuation (predictor along the
 tangent, Newton corrector orthogonal to it, step adapted to the corrector's effort; the
-next tangent comes from the corrector's last bordered Jacobian). A fold is where the
-parameter's component of the tangent changes sign. Each cycle's stability comes from its
+next tangent comes from the corrector's last bordered Jacobian, oriented along the step
+taken). A contact that opens makes the residual piecewise smooth: each AFT sample where it
+opens is a kink, where the branch turns (sharply next to the vertical onset of a piecewise-
+linear law). A turn that does not shrink with the step is such a corner and is stepped
+over; where the corrector fails for every step down to 1/64 of the nominal one, it is
+restarted from the last cycle with the amplitude or the parameter fixed a small step on
+(``_restart``); and the branch stops only when that fails too, saying where and why
+(``stop_reason``, ``stop_detail``). A fold is where the branch turns back in the parameter
+(the parameter's component of the tangent changes sign and the parameter itself turns).
+Each cycle's stability comes from its
 Floquet multipliers: the monodromy matrix of the variational equations along the
 harmonic-balance solution (compiled classical RK4 over one period, the step set by the
 variational system's fastest rate), or Hill's method (:mod:`squealkit.nonlinear.hill`); the
@@ -252,6 +260,11 @@ def continue_branch(
     Returns
     -------
     Branch
+        With ``stop_reason`` ``"left_range"`` when the branch reached a bound of ``p_range``
+        (its last cycle solved on the bound; beyond it, by less than a step, only when no
+        fixed-parameter solve on the bound converges), and ``stop_detail`` saying where and why
+        it stopped. Every cycle solves the harmonic-balance equations to a scaled residual of
+        at most 1e-8.
     """
     lo, hi = (float(v) for v in p_range)
     if not hi > lo:
@@ -722,11 +735,14 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
         # at the Hopf point itself a piecewise-linear law has cycles of any small amplitude
         # (a vertical start): the check is made where the parameter has moved off it
         moved = [c for c in cyc if abs(c.p - br.hopf.p) > 1e-6 * max(1.0, abs(br.hopf.p))]
+        # as many AFT samples as the branch's own (a contact that opens: at least CONTACT_SAMPLES)
+        n_time = (None if system.contact_open is None
+                  else max(n_time_samples(2 * harmonics), CONTACT_SAMPLES))
         with threadpool_limits(1, user_api="blas"):
             for c in moved[::5]:
                 try:
                     c2 = harmonic_balance(system, c.p, omega=c.omega, guess=c.coefficients,
-                                          harmonics=2 * harmonics, check_harmonics=False)
+                                          harmonics=2 * harmonics, check_harmonics=False, n_time=n_time)
                 except InputError:  # next to a vertical start the fixed-parameter solve is ill-posed: skip it
                     continue
                 changes.append(float(np.max(np.abs(c2.amplitude - c.amplitude)) / np.max(c2.amplitude)))
