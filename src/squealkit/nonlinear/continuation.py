@@ -368,7 +368,7 @@ def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_st
               max_turn, stability) -> Branch:
     from .hill import hill_multipliers
 
-    H = int(harmonics)
+    H = validate_int("harmonics", harmonics, 1)
     n = system.n_dof
     dp_nom = (hi - lo) / 50 if step is None else validate_positive("step", step)
     j = int(np.argmax(np.abs(hopf.shape)))
