@@ -4,8 +4,16 @@ The branch starts on the onset mode at a small amplitude (the mode shape and fre
 the Hopf point, :mod:`squealkit.nonlinear.hopf`), where the parameter is solved for at a
 fixed amplitude, and is followed by pseudo-arclength continuation (predictor along the
 tangent, Newton corrector orthogonal to it, step adapted to the corrector's effort; the
-next tangent comes from the corrector's last bordered Jacobian). A fold is where the
-parameter's component of the tangent changes sign. Each cycle's stability comes from its
+next tangent comes from the corrector's last bordered Jacobian, oriented along the step
+taken). A contact that opens makes the residual piecewise smooth: each AFT sample where it
+opens is a kink, where the branch turns (sharply next to the vertical onset of a piecewise-
+linear law). A turn that does not shrink with the step is such a corner and is stepped
+over; where the corrector fails for every step down to 1/64 of the nominal one, it is
+restarted from the last cycle with the amplitude or the parameter fixed a small step on
+(``_restart``); and the branch stops only when that fails too, saying where and why
+(``stop_reason``, ``stop_detail``). A fold is where the branch turns back in the parameter
+(the parameter's component of the tangent changes sign and the parameter itself turns).
+Each cycle's stability comes from its
 Floquet multipliers: the monodromy matrix of the variational equations along the
 harmonic-balance solution (compiled classical RK4 over one period, the step set by the
 variational system's fastest rate), or Hill's method (:mod:`squealkit.nonlinear.hill`); the
@@ -29,7 +37,15 @@ from threadpoolctl import threadpool_limits
 
 from .. import __version__
 from .._validation import InputError, validate_dataset, validate_finite, validate_int, validate_model, validate_positive
-from .harmonic_balance import HBProblem, LimitCycle, SecondOrderSystem, _newton, contact_system, solve_fixed_p
+from .harmonic_balance import (
+    HBProblem,
+    LimitCycle,
+    SecondOrderSystem,
+    _newton,
+    contact_system,
+    n_time_samples,
+    solve_fixed_p,
+)
 from .hopf import HopfPoint, hopf_point
 
 __all__ = [
@@ -153,6 +169,9 @@ class Branch:
         The Hopf point the branch starts from.
     stop_reason : {"max_points", "corrector_failed", "left_range", "max_amplitude"}
         Why the continuation stopped.
+    stop_detail : str
+        Where it stopped and why, in one sentence (the parameter, amplitude and contact state of
+        the last point; for ``"corrector_failed"`` the smallest residual the correctors reached).
     """
 
     cycles: tuple[LimitCycle, ...]
@@ -162,18 +181,35 @@ class Branch:
     folds: tuple[int, ...]  # indices of the points nearest to each fold
     hopf: HopfPoint
     stop_reason: str
+    stop_detail: str = ""
 
 
-def _fold_indices(tp: NDArray, p: NDArray, thresh: float = 1e-3) -> tuple[int, ...]:
+def _fold_indices(tp: NDArray, p: NDArray, thresh: float = 1e-3, min_turn: float = 0.0) -> tuple[int, ...]:
     """Points of extreme ``p`` between consecutive tangents whose ``dp/ds`` changes sign
-    (tangents with ``abs(dp/ds)`` below ``thresh``, e.g. a vertical start, are skipped)."""
+    (tangents with ``abs(dp/ds)`` below ``thresh``, e.g. a vertical start, are skipped).
+
+    A fold turns the branch back in ``p``: the point must be an extreme of ``p`` against both its
+    neighbours (at a kink of the residual, where an AFT sample opens, the one-sided tangent can change
+    sign while ``p`` goes on the same way). Two opposite folds closer in ``p`` than ``min_turn`` (a
+    zigzag of the sampled branch, not a turn of the branch) are dropped together.
+    """
     sig = [(i, np.sign(t)) for i, t in enumerate(tp) if abs(t) > thresh]
-    out = []
+    out: list[int] = []
     for (i, s0), (j, s1) in itertools.pairwise(sig):
         if s0 != s1:
             seg = p[i:j + 1]
-            out.append(i + int(np.argmax(seg) if s0 > 0 else np.argmin(seg)))
-    return tuple(out)
+            k = i + int(np.argmax(seg) if s0 > 0 else np.argmin(seg))
+            turns = 0 < k < p.size - 1 and (min(p[k] - p[k - 1], p[k] - p[k + 1]) > 0 if s0 > 0
+                                             else max(p[k] - p[k - 1], p[k] - p[k + 1]) < 0)
+            if turns and (not out or out[-1] != k):
+                out.append(k)
+    kept: list[int] = []
+    for k in out:
+        if kept and abs(p[k] - p[kept[-1]]) < min_turn:
+            kept.pop()
+        else:
+            kept.append(k)
+    return tuple(kept)
 
 
 def continue_branch(
@@ -222,6 +258,11 @@ def continue_branch(
     Returns
     -------
     Branch
+        With ``stop_reason`` ``"left_range"`` when the branch reached a bound of ``p_range``
+        (its last cycle solved on the bound; beyond it, by less than a step, only when no
+        fixed-parameter solve on the bound converges), and ``stop_detail`` saying where and why
+        it stopped. Every cycle solves the harmonic-balance equations to a scaled residual of
+        at most 1e-8.
     """
     lo, hi = (float(v) for v in p_range)
     if not hi > lo:
@@ -235,6 +276,92 @@ def continue_branch(
                          max_turn=max_turn, stability=stability)
 
 
+#: AFT samples per period, at least, of a branch whose contact may open. Each sample where the contact
+#: opens or closes puts a kink in the harmonic-balance residual, of a size ~ 1/samples; next to a
+#: vertical onset (a piecewise-linear law) the branch turns at each, and with the default 8 per
+#: harmonic (128 at H = 10) the turns defeat the corrector on lightly damped rigs.
+CONTACT_SAMPLES = 512
+#: Arclength steps, in units of the nominal step: the largest; the one at and below which a corrector
+#: that fails is restarted with another constraint (:func:`_restart`); the one below which the branch stops.
+_H_MAX, _H_RESTART, _H_MIN = 1.0, 1.0 / 64, 1e-4
+#: Steps of a restart (units of the nominal step: ``length_scale`` in the amplitude, ``step`` in p), smallest first.
+_RESTART_STEPS = (1.0 / 64, 1.0 / 16, 1.0 / 4)
+#: A point is a cycle when the scaled residual (``HBProblem.residual``, per ``k_ref length_scale``) is at most this.
+_TOL = 1e-8
+
+
+def _converged(z: NDArray, nr: float) -> bool:
+    return bool(nr <= _TOL and np.all(np.isfinite(z)))
+
+
+def _arclength_corrector(prob: HBProblem, y0: NDArray, t0: NDArray, h: float, W: NDArray):
+    """Newton from ``y0 + h t0`` on the hyperplane orthogonal to ``t0`` (weighted metric ``W^2``)."""
+    y_pred = y0 + h * t0
+    tw = t0 * W * W
+
+    def fun(z):
+        r, J = prob.residual(z)
+        return np.append(r, tw @ (z - y_pred)), np.vstack([J, tw])
+
+    return _newton(fun, y_pred, max_iter=12)
+
+
+def _restart(prob: HBProblem, y0: NDArray, ahead: NDArray, W: NDArray, ia: int, dp_nom: float):
+    """A point past a non-smooth spot where the arclength corrector fails for every step.
+
+    Where the contact starts to open at one more AFT sample the residual has a kink; the branch
+    turns there (most sharply next to a Hopf point whose cycles are vertical, as a piecewise-linear
+    law's are), and the hyperplane orthogonal to the incoming tangent may miss the outgoing piece at
+    any step. A fresh Newton from ``y0`` with another constraint, the amplitude ``a_1`` of the phase
+    DOF (index ``ia``) or the parameter fixed a small step on, crosses it: each in the direction the
+    branch was going, then against it, smallest step first. A candidate is taken if it converges,
+    lies ahead (``(z - y0) W^2 ahead > 0``, so it is not the piece already followed) and within two
+    nominal steps of ``y0``.
+
+    Returns
+    -------
+    (z, iterations, residual, Jacobian) or None
+    """
+    n_u = prob.n_u
+    Wa = W * W * ahead
+    for d in _RESTART_STEPS:
+        for k, delta in ((ia, d), (n_u + 1, d * dp_nom)):
+            first = 1.0 if ahead[k] >= 0 else -1.0
+            for sign in (first, -first):
+                row = np.zeros(n_u + 2)
+                row[k] = 1.0
+                target = y0[k] + sign * delta
+
+                def fun(z, row=row, target=target, k=k):
+                    r, J = prob.residual(z)
+                    return np.append(r, z[k] - target), np.vstack([J, row])
+
+                start = y0.copy()
+                start[k] = target
+                z, it, nr, J = _newton(fun, start, max_iter=20)
+                if (_converged(z, nr) and (z - y0) @ Wa > 0
+                        and float(np.linalg.norm((z - y0) * W)) <= 2.0):
+                    return z, it, nr, J
+    return None
+
+
+def _tangent_at(Jc: NDArray, secant: NDArray, W: NDArray) -> NDArray:
+    """Unit tangent (weighted norm) from a bordered Jacobian ``[J; c]``, oriented along ``secant``.
+
+    ``[J; c] t = e_last`` gives the null vector of ``J``; its sign follows the step just taken
+    (the secant), not the previous tangent: past a corner of the branch (a kink of the residual)
+    the previous tangent may point against the way the branch goes on.
+    """
+    e_last = np.zeros(Jc.shape[0])
+    e_last[-1] = 1.0
+    try:
+        t = np.linalg.solve(Jc, e_last)
+    except np.linalg.LinAlgError:
+        t = np.linalg.svd(Jc[:-1] / W[None, :])[2][-1] / W
+    t = t / np.linalg.norm(t * W)
+    return t if (t * W * W) @ secant >= 0 else -t
+
+
 def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_start, n_floquet, max_amplitude,
               max_turn, stability) -> Branch:
     from .hill import hill_multipliers
@@ -243,7 +370,8 @@ def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_st
     n = system.n_dof
     dp_nom = (hi - lo) / 50 if step is None else validate_positive("step", step)
     j = int(np.argmax(np.abs(hopf.shape)))
-    prob = HBProblem(system, H, hopf.omega, j)
+    n_time = n_time_samples(H) if system.contact_open is None else max(n_time_samples(H), CONTACT_SAMPLES)
+    prob = HBProblem(system, H, hopf.omega, j, n_time=n_time)
     n_u = prob.n_u
     W = np.r_[np.ones(n_u + 1), 1.0 / dp_nom]  # arclength weights on [u, w, p]
     ia = 1 * n + j  # index of a_1 of the phase DOF in u
@@ -267,63 +395,73 @@ def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_st
     if not nr <= 1e-8:
         raise InputError(f"No limit cycle found next to the Hopf point (residual {nr:.3g}).")
 
-    def tangent(J: NDArray, prev: NDArray | None) -> NDArray:
-        # null vector of J (n_u+1, n_u+2) in the weighted metric
-        Jw = J / W[None, :]
-        _, _, Vt = np.linalg.svd(Jw)
-        t = Vt[-1] / W
-        t = t / np.linalg.norm(t * W)
-        if prev is None:
-            return t if t[ia] > 0 else -t
-        return t if (t * W * W) @ prev >= 0 else -t
-
     r, J = prob.residual(y)
-    t = tangent(J, None)
-    ys, ts, nrs = [y], [t], [float(np.linalg.norm(r))]
-    e_last = np.zeros(n_u + 2)
-    e_last[-1] = 1.0
-    h = 1.0
+    # null vector of J (n_u+1, n_u+2) in the weighted metric, growing in amplitude
+    t = np.linalg.svd(J / W[None, :])[2][-1] / W
+    t = t / np.linalg.norm(t * W)
+    ys, ts, nrs = [y], [t if t[ia] > 0 else -t], [float(np.linalg.norm(r))]
+    h = _H_MAX
     reason = "max_points"
+    restarted = False  # a restart was tried since the last point
+    best_failed = math.inf  # the smallest residual of the correctors that failed since the last point
+    last_turn = math.inf  # the turn of the tangent [rad] at the last step refused for turning too far
     while len(ys) < max_points:
-        y_pred = ys[-1] + h * ts[-1]
-        tw = ts[-1] * W * W
-
-        def fun(z, y_pred=y_pred, tw=tw):
-            r, J = prob.residual(z)
-            return np.append(r, tw @ (z - y_pred)), np.vstack([J, tw])
-
-        z, it, nr, Jc = _newton(fun, y_pred, max_iter=12)
-        if not (nr <= 1e-8 and np.all(np.isfinite(z))):
-            h *= 0.5
-            if h < 1e-4:
+        z, it, nr, Jc = _arclength_corrector(prob, ys[-1], ts[-1], h, W)
+        fresh = False
+        if not _converged(z, nr):
+            best_failed = min(best_failed, nr) if math.isfinite(nr) else best_failed
+            if h > _H_RESTART or (restarted and h > _H_MIN):
+                h *= 0.5
+                continue
+            if restarted:
                 reason = "corrector_failed"
                 break
+            restarted = True
+            ahead = ys[-1] - ys[max(0, len(ys) - 5)] if len(ys) > 1 else ts[-1]
+            out = _restart(prob, ys[-1], ahead, W, ia, dp_nom)
+            if out is None:
+                h *= 0.5
+                continue
+            z, it, nr, Jc = out
+            fresh = True
+        t_new = _tangent_at(Jc, z - ys[-1], W)
+        turn = math.acos(min(1.0, max(-1.0, float((t_new * W * W) @ ts[-1]))))
+        # the branch turns sharply (a fold, contact loss setting in): smaller steps, unless the turn
+        # does not shrink with the step (a corner, where an AFT sample opens: no step rounds it)
+        if not fresh and turn > max_turn and h > 1e-3 and not turn > 0.75 * last_turn:
+            h *= 0.5
+            last_turn = turn
             continue
-        # the tangent at z: [J; t_prev W^2] t = e_last, with the corrector's final (bordered) Jacobian
-        t_new = np.linalg.solve(Jc, e_last)
-        t_new /= np.linalg.norm(t_new * W)
-        if (t_new * W * W) @ ts[-1] < math.cos(max_turn) and h > 1e-3:
-            h *= 0.5  # the branch turns sharply (a fold, contact loss setting in): smaller steps
-            continue
+        restarted, best_failed, last_turn = False, math.inf, math.inf
         p = z[-1]
         if p < lo or p > hi:
-            # end exactly on the range's bound: a fixed-parameter solve from the interpolated guess
+            # end exactly on the range's bound: a fixed-parameter solve from the interpolated guess, or from
+            # the points on either side; where none converges, a shorter step that stops short of the bound
+            # and a solve from nearer; where even that fails, the cycle just found beyond the bound
             edge = hi if p > hi else lo
             frac = (edge - ys[-1][-1]) / (p - ys[-1][-1])
-            y_e, _, nr_e = solve_fixed_p(prob, ys[-1] + frac * (z - ys[-1]))
-            if nr_e <= 1e-8:
-                ys.append(y_e)
-                ts.append(t_new)
-                nrs.append(nr_e)
+            for guess in (ys[-1] + frac * (z - ys[-1]), ys[-1], z):
+                y_e, _, nr_e = solve_fixed_p(prob, np.r_[guess[:-1], edge])
+                ok = _converged(y_e, nr_e)
+                if ok:
+                    break
+            if not ok and not fresh and h * frac > _H_RESTART:
+                h *= 0.9 * frac
+                continue
+            ys.append(y_e if ok else z)
+            ts.append(t_new)
+            nrs.append(nr_e if ok else nr)
             reason = "left_range"
             break
         ys.append(z)
         ts.append(t_new)
         nrs.append(nr)
-        h = min(h * (1.5 if it <= 4 else 1.0 if it <= 7 else 0.6), 1.0)
+        h = 4 * _H_RESTART if fresh else min(h * (1.5 if it <= 4 else 1.0 if it <= 7 else 0.6), _H_MAX)
         if np.abs(z[:n_u]).max() > max_amplitude:
             reason = "max_amplitude"
             break
+    detail = _stop_detail(system, prob, reason, ys[-1], (lo, hi), max_points=max_points,
+                          max_amplitude=max_amplitude, residual=best_failed)
     cycles = []
     mult = []
     for y_i, r in zip(ys, nrs, strict=True):
@@ -337,7 +475,26 @@ def _continue(system, hopf, lo, hi, *, harmonics, step, max_points, amplitude_st
     err = np.abs(mult_a[:, -1] - 1.0)
     stable = np.abs(mult_a[:, :-1]).max(axis=1) <= 1 + np.maximum(FLOQUET_TOL, 3 * err)
     tp = np.array([t_i[-1] * W[-1] for t_i in ts])
-    return Branch(tuple(cycles), mult_a, stable, tp, _fold_indices(tp, np.array([c.p for c in cycles])), hopf, reason)
+    folds = _fold_indices(tp, np.array([c.p for c in cycles]), min_turn=0.1 * dp_nom)
+    return Branch(tuple(cycles), mult_a, stable, tp, folds, hopf, reason, detail)
+
+
+def _stop_detail(system, prob: HBProblem, reason: str, y: NDArray, p_range: tuple[float, float], *,
+                 max_points: int, max_amplitude: float, residual: float) -> str:
+    """Where the continuation stopped and why, in one sentence (the attribute ``stop_detail``)."""
+    c = prob.cycle(y)
+    where = (f"{system.param} = {c.p:.6g} (amplitude {float(np.max(c.amplitude)):.4g} m"
+             + (f", contact open over {100 * c.contact_loss_fraction:.1f} % of the period)"
+                if math.isfinite(c.contact_loss_fraction) else ")"))
+    if reason == "left_range":
+        return f"reached the end of the range [{p_range[0]:g}, {p_range[1]:g}] at {where}"
+    if reason == "max_points":
+        return f"stopped after max_points = {max_points} points at {where}, inside the range"
+    if reason == "max_amplitude":
+        return f"stopped at {where}: an amplitude exceeded max_amplitude = {max_amplitude:g} length scales"
+    return (f"the corrector did not converge beyond {where}: neither arclength steps down to {_H_MIN:g} of the "
+            f"nominal step nor a restart with the amplitude or {system.param} fixed a step on "
+            f"(smallest residual {residual:.2g}, tolerance {_TOL:g})")
 
 
 def _onset_kind(hopf: HopfPoint, branch_p: NDArray, stable: NDArray) -> tuple[str, str]:
@@ -417,7 +574,9 @@ def limit_cycle_branch(
         multiplier modulus), ``fold``; over ``fold``: ``fold_mu`` (mu of each fold); attrs: ``hopf_mu``,
         ``hopf_frequency_hz``, ``lyapunov_coefficient``, ``hopf_kind``, ``hopf_kind_from``,
         ``hysteresis_mu`` (the range of mu where a quiet and a squealing state coexist,
-        NaN if none), ``harmonics``, ``harmonics_change``, ``stop_reason``, units.
+        NaN if none), ``harmonics``, ``harmonics_change``, ``stop_reason`` (``"left_range"``: the
+        branch reached the end of the range), ``stop_detail`` (where and why it stopped, one
+        sentence), units.
     """
     validate_model(model, kind="friction")
     harmonics = validate_int("harmonics", harmonics, 1)
@@ -574,11 +733,14 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
         # at the Hopf point itself a piecewise-linear law has cycles of any small amplitude
         # (a vertical start): the check is made where the parameter has moved off it
         moved = [c for c in cyc if abs(c.p - br.hopf.p) > 1e-6 * max(1.0, abs(br.hopf.p))]
+        # as many AFT samples as the branch's own (a contact that opens: at least CONTACT_SAMPLES)
+        n_time = (None if system.contact_open is None
+                  else max(n_time_samples(2 * harmonics), CONTACT_SAMPLES))
         with threadpool_limits(1, user_api="blas"):
             for c in moved[::5]:
                 try:
                     c2 = harmonic_balance(system, c.p, omega=c.omega, guess=c.coefficients,
-                                          harmonics=2 * harmonics, check_harmonics=False)
+                                          harmonics=2 * harmonics, check_harmonics=False, n_time=n_time)
                 except InputError:  # next to a vertical start the fixed-parameter solve is ill-posed: skip it
                     continue
                 changes.append(float(np.max(np.abs(c2.amplitude - c.amplitude)) / np.max(c2.amplitude)))
@@ -631,6 +793,7 @@ def branch_dataset(system: SecondOrderSystem, br: Branch, *, harmonics: int, che
             "harmonics": harmonics,
             "harmonics_change": change,
             "stop_reason": br.stop_reason,
+            "stop_detail": br.stop_detail,
             "squealkit_version": __version__,
             **(attrs or {}),
         },
@@ -664,7 +827,8 @@ def limit_cycle_summary(ds: xr.Dataset) -> dict[str, object]:
         ``frequency_hz``, ``lyapunov_coefficient``, ``kind``, ``kind_from``; and
         ``theta_deg`` over a slope branch), ``folds`` (list of mu, or of theta_deg),
         ``hysteresis_mu`` (or ``hysteresis_theta_deg``: [start, end] or []), ``harmonics``,
-        ``harmonics_change``, ``stability_method``, ``stop_reason``, ``contact``; with
+        ``harmonics_change``, ``stability_method``, ``stop_reason``, ``stop_detail`` (where and why
+        the continuation stopped; empty for a branch saved before it existed), ``contact``; with
         ``harmonics_tol``: ``harmonics_tol`` and ``harmonics_converged``; with a
         level: ``level_db`` (list, dB SPL re 20 uPa), ``level_dof``, ``level_from``.
     """
@@ -701,6 +865,7 @@ def limit_cycle_summary(ds: xr.Dataset) -> dict[str, object]:
         "harmonics_change": float(a["harmonics_change"]),
         "stability_method": str(a.get("stability_method", "monodromy")),
         "stop_reason": str(a["stop_reason"]),
+        "stop_detail": str(a.get("stop_detail", "")),
         "contact": str(a.get("contact", "")),
     })
     if "harmonics_tol" in a:  # an adaptive branch
