@@ -32,42 +32,71 @@ import math
 import numpy as np
 from numba import njit, prange
 
+#: Rows of a run's bundled matrices ``mats`` (6, n, n) and vectors ``vecs`` (7, n) (see :func:`_bundle`).
+_C, _K0, _KN, _KF, _KNX, _KFX = range(6)
+_BM, _FM, _F0, _FN, _FF, _B, _FHAT = range(7)
+
+
+@njit(cache=True, error_model="numpy")
+def _bundle(C, K0, Kn, Kf, Knx, Kfx, bM, fM, F0, fn, ff, b, fhat):
+    """One run's model arrays in two: the right-hand side takes 2 arrays instead of 13 (each array
+    passed to a compiled call costs a reference count up and down, in the innermost loop)."""
+    n = C.shape[0]
+    mats = np.empty((6, n, n))
+    vecs = np.empty((7, n))
+    for i in range(n):
+        for j in range(n):
+            mats[_C, i, j] = C[i, j]
+            mats[_K0, i, j] = K0[i, j]
+            mats[_KN, i, j] = Kn[i, j]
+            mats[_KF, i, j] = Kf[i, j]
+            mats[_KNX, i, j] = Knx[i, j]
+            mats[_KFX, i, j] = Kfx[i, j]
+        vecs[_BM, i] = bM[i]
+        vecs[_FM, i] = fM[i]
+        vecs[_F0, i] = F0[i]
+        vecs[_FN, i] = fn[i]
+        vecs[_FF, i] = ff[i]
+        vecs[_B, i] = b[i]
+        vecs[_FHAT, i] = fhat[i]
+    return mats, vecs
+
 
 @njit(cache=True, inline="always")
-def _rhs(x, xd, q, t, mu, v, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, opts, r, acc):
-    """Accelerations ``acc`` at state (x, xd); returns (N cos theta, effective mu)."""
-    n = x.shape[0]
+def _rhs(x, ox, xd, od, n, q, t, mu, v, kin, kc, s, mats, vecs, opts, acc):
+    """Accelerations ``acc`` at the displacements ``x[ox:ox + n]`` and velocities ``xd[od:od + n]``;
+    returns (N cos theta, effective mu). ``mats``, ``vecs``: the run's arrays (:func:`_bundle`)."""
     for i in range(n):
-        ri = F0[i]
+        ri = vecs[_F0, i]
         for j in range(n):
-            ri -= K0[i, j] * x[j] + C[i, j] * xd[j]
-        r[i] = ri
+            ri -= mats[_K0, i, j] * x[ox + j] + mats[_C, i, j] * xd[od + j]
+        acc[i] = ri
     nc = 0.0
     me = mu
     if opts[0] == 0.0:
         g = 1.0 - mu * t
         e = s * (mu + t)
         for i in range(n):
-            kn = -q * fn[i]
-            kf = -q * ff[i]
+            kn = -q * vecs[_FN, i]
+            kf = -q * vecs[_FF, i]
             for j in range(n):
-                kn += Kn[i, j] * x[j]
-                kf += Kf[i, j] * x[j]
+                kn += mats[_KN, i, j] * x[ox + j]
+                kf += mats[_KF, i, j] * x[ox + j]
             if kin != 0.0:
                 for j in range(n):
-                    kn += s * t * Knx[i, j] * x[j]
-                    kf += s * t * Kfx[i, j] * x[j]
-            r[i] -= g * kn + e * kf
+                    kn += s * t * mats[_KNX, i, j] * x[ox + j]
+                    kf += s * t * mats[_KFX, i, j] * x[ox + j]
+            acc[i] -= g * kn + e * kf
     else:
         d = -q
         for j in range(n):
-            d += (b[j] + kin * s * t * fhat[j]) * x[j]
+            d += (vecs[_B, j] + kin * s * t * vecs[_FHAT, j]) * x[ox + j]
         nc = -kc * d
         if opts[1] != 0.0 and nc < 0.0:
             nc = 0.0
         w = v
         for j in range(n):
-            w -= s * fhat[j] * xd[j]
+            w -= s * vecs[_FHAT, j] * xd[od + j]
         mw = mu
         if opts[3] != 0.0:
             mw = mu + (opts[5] - mu) * math.exp(-abs(w) / opts[6])
@@ -78,9 +107,7 @@ def _rhs(x, xd, q, t, mu, v, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b
         g = 1.0 - me * t
         e = s * (me + t)
         for i in range(n):
-            r[i] += nc * (g * bM[i] + e * fM[i])
-    for i in range(n):
-        acc[i] = r[i]
+            acc[i] += nc * (g * vecs[_BM, i] + e * vecs[_FM, i])
     return nc, me
 
 
@@ -113,18 +140,16 @@ def integrate_chunk(
         k3x = np.empty(n)
         k3v = np.empty(n)
         k4v = np.empty(n)
-        work = np.empty(n)
         o = o_start
         mu_r, v_r, kc_r, s_r = mu[r], v[r], kc[r], s[r]
-        bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r = bM[r], fM[r], C[r], K0[r], Kn[r], Kf[r]
-        Knx_r, Kfx_r, kin_r = Knx[r], Kfx[r], kin[r]
-        F0_r, fn_r, ff_r, b_r, f_r, fhat_r = F0[r], fn[r], ff[r], b[r], f[r], fhat[r]
+        kin_r = kin[r]
+        mats, vecs = _bundle(C[r], K0[r], Kn[r], Kf[r], Knx[r], Kfx[r], bM[r], fM[r], F0[r], fn[r], ff[r], b[r],
+                             fhat[r])
         for k in range(n_steps + 1):
             i0 = 2 * k
             if k % stride == 0 and (k < n_steps or n_steps == 0):
-                nc, me = _rhs(x, xd, qh[r, i0], th[r, i0], mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
-                              Knx_r, Kfx_r, kin_r,
-                 F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k1v)
+                nc, me = _rhs(x, 0, xd, 0, n, qh[r, i0], th[r, i0], mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts,
+                              k1v)
                 bad = False
                 for i in range(n):
                     if not (abs(x[i]) <= limit):
@@ -146,26 +171,22 @@ def integrate_chunk(
             q0, t0 = qh[r, i0], th[r, i0]
             q1, t1 = qh[r, i0 + 1], th[r, i0 + 1]
             q2, t2 = qh[r, i0 + 2], th[r, i0 + 2]
-            _rhs(x, xd, q0, t0, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
-                 F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k1v)
+            _rhs(x, 0, xd, 0, n, q0, t0, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k1v)
             for i in range(n):
                 k1x[i] = xd[i]
                 xt[i] = x[i] + 0.5 * dt * k1x[i]
                 vt[i] = xd[i] + 0.5 * dt * k1v[i]
-            _rhs(xt, vt, q1, t1, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
-                 F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k2v)
+            _rhs(xt, 0, vt, 0, n, q1, t1, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k2v)
             for i in range(n):
                 k2x[i] = vt[i]
                 xt[i] = x[i] + 0.5 * dt * k2x[i]
                 vt[i] = xd[i] + 0.5 * dt * k2v[i]
-            _rhs(xt, vt, q1, t1, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
-                 F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k3v)
+            _rhs(xt, 0, vt, 0, n, q1, t1, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k3v)
             for i in range(n):
                 k3x[i] = vt[i]
                 xt[i] = x[i] + dt * k3x[i]
                 vt[i] = xd[i] + dt * k3v[i]
-            _rhs(xt, vt, q2, t2, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, kin_r,
-                 F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, k4v)
+            _rhs(xt, 0, vt, 0, n, q2, t2, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k4v)
             for i in range(n):
                 x[i] += dt / 6.0 * (k1x[i] + 2.0 * k2x[i] + 2.0 * k3x[i] + vt[i])
                 xd[i] += dt / 6.0 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i])
@@ -213,16 +234,23 @@ def _forcing(tt, tg0, hg, qg, tgr, vel):
 
 
 @njit(cache=True, inline="always")
-def _f(tt, z, dz, n, tg0, hg, qg, tgr, mu, v, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat,
-       kc, s, opts, work, acc):
-    """First-order right-hand side dz = [x', x''] at (tt, z); returns (N cos theta, mu_eff, q, tan theta)."""
+def _f(tt, z, dz, k, n, tg0, hg, qg, tgr, mu, v, kin, kc, s, mats, vecs, opts, acc):
+    """First-order right-hand side ``dz[k] = [x', x'']`` at (tt, z); returns (N cos theta, mu_eff, q, tan theta).
+
+    Inlined where the integrators call it every stage (one call site in each one's step); elsewhere
+    :func:`_f_call`: each inlined copy of the right-hand side costs seconds of compile time."""
     q, tan_t = _forcing(tt, tg0, hg, qg, tgr, v)
-    nc, me = _rhs(z[:n], z[n:], q, tan_t, mu, v, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat,
-                  kc, s, opts, work, acc)
+    nc, me = _rhs(z, 0, z, n, n, q, tan_t, mu, v, kin, kc, s, mats, vecs, opts, acc)
     for i in range(n):
-        dz[i] = z[n + i]
-        dz[n + i] = acc[i]
+        dz[k, i] = z[n + i]
+        dz[k, n + i] = acc[i]
     return nc, me, q, tan_t
+
+
+@njit(cache=True, error_model="numpy")
+def _f_call(tt, z, dz, k, n, tg0, hg, qg, tgr, mu, v, kin, kc, s, mats, vecs, opts, acc):
+    """:func:`_f` compiled once, called: for the first sample of a chunk and the dense output."""
+    return _f(tt, z, dz, k, n, tg0, hg, qg, tgr, mu, v, kin, kc, s, mats, vecs, opts, acc)
 
 
 @njit(cache=True, inline="always")
@@ -237,7 +265,7 @@ def _gap_and_slip(x, xd, q, tan_t, v, b, fhat, kc, s, kin):
     return -kc * d, abs(w)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy")
 def _dense(z, K, P, h, th, out):
     """State at t + th h from the step's stages (4th-order continuous extension)."""
     m = z.shape[0]
@@ -252,7 +280,7 @@ def _dense(z, K, P, h, th, out):
         out[i] = z[i] + h * acc
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy")
 def _dense_ros(z, z1, U, Dd, th, out):
     """Rodas4's 3rd-order continuous extension at t + th h."""
     m = z.shape[0]
@@ -294,7 +322,7 @@ def _locate(slip, side_old, n_iter, z, z1, St, Co, h, rosenbrock, t, tg0, hg, qg
     return hi
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy")
 def _log_event(r, t_ev, kind, ev_t, ev_k, n_ev):
     """Record event ``kind`` at ``t_ev`` for run ``r`` (counted even when the buffer is full)."""
     k_ev = n_ev[r]
@@ -304,7 +332,7 @@ def _log_event(r, t_ev, kind, ev_t, ev_k, n_ev):
     n_ev[r] = k_ev + 1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy")
 def _store(r, o, o_base, z, dz, nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
     """Write output sample ``o`` of run ``r`` at row ``o - o_base`` of the output buffers; False
     (nothing written) if some |x_i| > ``limit``."""
@@ -355,20 +383,20 @@ def integrate_adaptive(
         zt = np.empty(m)
         znew = np.empty(m)
         zd = np.empty(m)
-        dzd = np.empty(m)
-        work = np.empty(n)
+        dzd1 = np.empty((1, m))  # the dense output's derivative (a row, as the stages')
+        dzd = dzd1[0]
         acc = np.empty(n)
         mu_r, v_r, kc_r, s_r, kin_r = mu[r], v[r], kc[r], s[r], kin[r]
-        bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r = bM[r], fM[r], C[r], K0[r], Kn[r], Kf[r]
-        Knx_r, Kfx_r = Knx[r], Kfx[r]
-        F0_r, fn_r, ff_r, b_r, f_r, fhat_r = F0[r], fn[r], ff[r], b[r], f[r], fhat[r]
+        b_r, fhat_r = b[r], fhat[r]
+        mats, vecs = _bundle(C[r], K0[r], Kn[r], Kf[r], Knx[r], Kfx[r], bM[r], fM[r], F0[r], fn[r], ff[r], b_r,
+                             fhat_r)
         qg_r, tg_r = qg[r], tgr[r]
         t = t_a
         h = H[r]
         o = o_first
         # the first sample of the chunk may sit exactly at t_a
-        nc, me, q, tt_ = _f(t, z, K[0], n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
-                            Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+        nc, me, q, tt_ = _f_call(t, z, K, 0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs,
+                                 opts, acc)
         counts[r, 2] += 1
         if o <= o_last and o / fs <= t + 1e-12 / fs:
             if not _store(r, o, o_base, z, K[0], nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
@@ -385,24 +413,26 @@ def integrate_adaptive(
             if t + h >= t_b:
                 h = t_b - t
                 last = True
-            # stages
-            for k in range(1, S):
-                for i in range(m):
-                    a = 0.0
-                    for j in range(k):
-                        a += A[k, j] * K[j, i]
-                    zt[i] = z[i] + h * a
-                _f(t + Cn[k] * h, zt, K[k], n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r,
-                   Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
-            for i in range(m):
-                a = 0.0
-                for j in range(S):
-                    a += Bw[j] * K[j, i]
-                znew[i] = z[i] + h * a
             t_new = t + h if not last else t_b
-            nc, me, q, tt_ = _f(t_new, znew, K[S], n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r,
-                                Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r,
-                                opts, work, acc)
+            # the stages, then the FSAL stage f(t_new, znew): one call site, so one inlined copy of _f
+            for k in range(1, S + 1):
+                if k < S:
+                    for i in range(m):
+                        a = 0.0
+                        for j in range(k):
+                            a += A[k, j] * K[j, i]
+                        zt[i] = z[i] + h * a
+                    tk = t + Cn[k] * h
+                else:
+                    for i in range(m):
+                        a = 0.0
+                        for j in range(S):
+                            a += Bw[j] * K[j, i]
+                        znew[i] = z[i] + h * a
+                        zt[i] = znew[i]
+                    tk = t_new
+                nc, me, q, tt_ = _f(tk, zt, K, k, n, tg0, hg, qg_r, tg_r, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs,
+                                    opts, acc)
             counts[r, 2] += S
             err = 0.0
             for i in range(m):
@@ -450,9 +480,8 @@ def integrate_adaptive(
             # output samples inside (t, t_new] by dense output
             while o <= o_last and o / fs <= t_new * (1.0 + 1e-15):
                 _dense(z, K, P, h, min((o / fs - t) / h, 1.0), zd)
-                ncs, mes, _q, _t = _f(o / fs, zd, dzd, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r,
-                                      Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r,
-                                      s_r, opts, work, acc)
+                ncs, mes, _q, _t = _f_call(o / fs, zd, dzd1, 0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, kin_r, kc_r,
+                                           s_r, mats, vecs, opts, acc)
                 if not _store(r, o, o_base, zd, dzd, ncs, mes, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
                     status[r] = 1
                     break
@@ -623,30 +652,28 @@ def integrate_rosenbrock(
             z[i] = X[r, i]
             z[n + i] = V[r, i]
         U = np.empty((S, m))
-        F = np.empty(m)
-        f0 = np.empty(m)
-        ft = np.empty(m)
-        fa = np.empty(m)
+        Fs = np.empty((4, m))  # f(t, z), f(t + dtf, z), f(t - dtf, z) and the stage's f, as rows
+        f0, ft, fa, F = Fs[0], Fs[1], Fs[2], Fs[3]
         zt = np.empty(m)
         znew = np.empty(m)
         zd = np.empty(m)
-        dzd = np.empty(m)
+        dzd1 = np.empty((1, m))
+        dzd = dzd1[0]
         W = np.empty((m, m))
         piv = np.empty(m, dtype=np.int64)
         Jx = np.empty((n, n))
         Jv = np.empty((n, n))
-        work = np.empty(n)
         acc = np.empty(n)
         mu_r, v_r, kc_r, s_r, kin_r = mu[r], v[r], kc[r], s[r], kin[r]
         bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r = bM[r], fM[r], C[r], K0[r], Kn[r], Kf[r]
-        Knx_r, Kfx_r = Knx[r], Kfx[r]
-        F0_r, fn_r, ff_r, b_r, f_r, fhat_r = F0[r], fn[r], ff[r], b[r], f[r], fhat[r]
+        Knx_r, Kfx_r, b_r, fhat_r = Knx[r], Kfx[r], b[r], fhat[r]
+        mats, vecs = _bundle(C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, bM_r, fM_r, F0[r], fn[r], ff[r], b_r, fhat_r)
         qg_r, tg_r = qg[r], tgr[r]
         t = t_a
         h = H[r]
         o = o_first
-        nc, me, q, tt_ = _f(t, z, f0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
-                            Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+        nc, me, q, tt_ = _f_call(t, z, Fs, 0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs,
+                                 opts, acc)
         counts[r, 2] += 1
         if o <= o_last and o / fs <= t + 1e-12 / fs:
             if not _store(r, o, o_base, z, f0, nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
@@ -665,12 +692,12 @@ def integrate_rosenbrock(
                 h = t_b - t
                 last = True
             # f(t, z) (f0), f_t and the Jacobian at the start of the step
-            nc, me, q, tt_ = _f(t, z, f0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
-                                Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
-            _f(t + dtf, z, ft, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
-               Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
-            _f(t - dtf, z, fa, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r,
-               Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+            for c in range(3):  # one call site, so one inlined copy of _f
+                tc = t if c == 0 else (t + dtf if c == 1 else t - dtf)
+                ncc, mec, qc, ttc = _f(tc, z, Fs, c, n, tg0, hg, qg_r, tg_r, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs,
+                                       opts, acc)
+                if c == 0:
+                    nc, me, q, tt_ = ncc, mec, qc, ttc
             for i in range(m):
                 ft[i] = (ft[i] - fa[i]) / (2.0 * dtf)
             counts[r, 2] += 3
@@ -704,8 +731,8 @@ def integrate_rosenbrock(
                         for j in range(k):
                             a += RA[k, j] * U[j, i]
                         zt[i] = z[i] + a
-                    _f(t + RAL[k] * h, zt, F, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r, Kn_r,
-                       Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r, s_r, opts, work, acc)
+                    _f(t + RAL[k] * h, zt, Fs, 3, n, tg0, hg, qg_r, tg_r, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs,
+                       opts, acc)
                     counts[r, 2] += 1
                 for i in range(m):
                     a = F[i] + h * RD[k] * ft[i]
@@ -756,9 +783,8 @@ def integrate_rosenbrock(
                 _log_event(r, t + hi * h, EVENT_STICK if w_new < opts[4] else EVENT_SLIP, ev_t, ev_k, n_ev)
             while o <= o_last and o / fs <= t_new * (1.0 + 1e-15):
                 _dense_ros(z, znew, U, RDD, min((o / fs - t) / h, 1.0), zd)
-                ncs, mes, _q, _t = _f(o / fs, zd, dzd, n, tg0, hg, qg_r, tg_r, mu_r, v_r, bM_r, fM_r, C_r, K0_r,
-                                      Kn_r, Kf_r, Knx_r, Kfx_r, kin_r, F0_r, fn_r, ff_r, b_r, f_r, fhat_r, kc_r,
-                                      s_r, opts, work, acc)
+                ncs, mes, _q, _t = _f_call(o / fs, zd, dzd1, 0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, kin_r, kc_r,
+                                           s_r, mats, vecs, opts, acc)
                 if not _store(r, o, o_base, zd, dzd, ncs, mes, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
                     status[r] = 1
                     break
