@@ -58,6 +58,8 @@ ALLOWED: dict[str, tuple[str, ...]] = {
     "test_refusals.py": ("squealkit._validation.check_budget", "squealkit._validation.MAX_POINTS",
                          "squealkit.nonlinear.continuation._sample"),
     # the CLI's range grammar under hypothesis (thousands of examples; through the CLI each costs a command)
+    # the warm-up child's call of the integrator against the report's: the child is the subject
+    "test_coldstart_kernels.py": ("squealkit._warmup",),
     "test_properties.py": ("squealkit._validation.parse_range",),
     # internal steps against independent references (NumPy, lfilter, mpmath, closed forms)
     "test_measurement_analysis.py": ("squealkit.measurement.analysis.kernels._",
