@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import ast
 import inspect
+from pathlib import Path
 
 import numba
 import numpy as np
@@ -23,8 +24,11 @@ from squealkit.models import get_preset
 from squealkit.solvers import ode
 from squealkit.transient import Contact, SineRunOut, simulate
 
-TREE = ast.parse(inspect.getsource(ode))
-FUNCS = {node.name: node for node in TREE.body if isinstance(node, ast.FunctionDef)}
+_SOURCE = Path(inspect.getfile(ode))
+#: every function of the integrators, by name: the modules of the package ``solvers/ode/`` (or the one module)
+FUNCS = {node.name: node
+         for path in (sorted(_SOURCE.parent.glob("*.py")) if _SOURCE.name == "__init__.py" else [_SOURCE])
+         for node in ast.parse(path.read_text(encoding="utf-8")).body if isinstance(node, ast.FunctionDef)}
 
 
 def _calls(func: str, callee: str) -> int:
