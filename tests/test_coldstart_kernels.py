@@ -56,11 +56,6 @@ def test_each_integrator_inlines_its_right_hand_side_once_per_loop(kernel, sites
     assert not _inlined("_f_call")
 
 
-def test_rk4_inlines_its_right_hand_side_in_its_stages_and_its_output():
-    # the four stages in one loop (on main: four call sites), and the recorded sample's acceleration
-    assert _calls("integrate_chunk", "_rhs") == 2
-
-
 @pytest.mark.parametrize("helper", ["_store", "_dense", "_dense_ros", "_log_event", "_locate", "_f_call", "_bundle"])
 def test_helpers_of_the_output_and_the_events_are_compiled_once(helper):
     # called per output sample or per event, not per stage: a call costs nothing measurable there

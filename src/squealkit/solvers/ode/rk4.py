@@ -30,9 +30,13 @@ def integrate_chunk(
         xd = V[r].copy()
         xt = np.empty(n)
         vt = np.empty(n)
-        kx = np.empty((3, n))  # the stages' x' (the fourth is vt)
-        kv = np.empty((4, n))  # the stages' x''
-        k1v = kv[0]
+        k1x = np.empty(n)
+        k1v = np.empty(n)
+        k2x = np.empty(n)
+        k2v = np.empty(n)
+        k3x = np.empty(n)
+        k3v = np.empty(n)
+        k4v = np.empty(n)
         o = o_start
         mu_r, v_r, kc_r, s_r = mu[r], v[r], kc[r], s[r]
         kin_r = kin[r]
@@ -61,20 +65,28 @@ def integrate_chunk(
                 o += 1
             if k == n_steps:
                 break
-            # the four stages in one loop: one call site, so one inlined copy of the right-hand side
-            for c in range(4):
-                j = i0 if c == 0 else (i0 + 1 if c < 3 else i0 + 2)  # q, tan(theta) at t, t + dt/2, t + dt
-                _rhs(x if c == 0 else xt, 0, xd if c == 0 else vt, 0, n, qh[r, j], th[r, j], mu_r, v_r, kin_r, kc_r,
-                     s_r, mats, vecs, opts, kv[c])
-                if c < 3:
-                    w = 0.5 * dt if c < 2 else dt
-                    for i in range(n):
-                        kx[c, i] = xd[i] if c == 0 else vt[i]
-                        xt[i] = x[i] + w * kx[c, i]
-                        vt[i] = xd[i] + w * kv[c, i]
+            q0, t0 = qh[r, i0], th[r, i0]
+            q1, t1 = qh[r, i0 + 1], th[r, i0 + 1]
+            q2, t2 = qh[r, i0 + 2], th[r, i0 + 2]
+            _rhs(x, 0, xd, 0, n, q0, t0, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k1v)
             for i in range(n):
-                x[i] += dt / 6.0 * (kx[0, i] + 2.0 * kx[1, i] + 2.0 * kx[2, i] + vt[i])
-                xd[i] += dt / 6.0 * (kv[0, i] + 2.0 * kv[1, i] + 2.0 * kv[2, i] + kv[3, i])
+                k1x[i] = xd[i]
+                xt[i] = x[i] + 0.5 * dt * k1x[i]
+                vt[i] = xd[i] + 0.5 * dt * k1v[i]
+            _rhs(xt, 0, vt, 0, n, q1, t1, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k2v)
+            for i in range(n):
+                k2x[i] = vt[i]
+                xt[i] = x[i] + 0.5 * dt * k2x[i]
+                vt[i] = xd[i] + 0.5 * dt * k2v[i]
+            _rhs(xt, 0, vt, 0, n, q1, t1, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k3v)
+            for i in range(n):
+                k3x[i] = vt[i]
+                xt[i] = x[i] + dt * k3x[i]
+                vt[i] = xd[i] + dt * k3v[i]
+            _rhs(xt, 0, vt, 0, n, q2, t2, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k4v)
+            for i in range(n):
+                x[i] += dt / 6.0 * (k1x[i] + 2.0 * k2x[i] + 2.0 * k3x[i] + vt[i])
+                xd[i] += dt / 6.0 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i])
         for i in range(n):
             X[r, i] = x[i]
             V[r, i] = xd[i]
