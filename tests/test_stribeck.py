@@ -85,9 +85,9 @@ def test_linearised_friction_is_the_derivative_of_the_transient_force(kinematics
     opts = Contact(mu_static=law.mu_static, v_stribeck=law.v_stribeck).options()
     x_s = model.static_equilibrium(law.mu(mu, V), t, 0.0)
 
-    mats, vecs = transient_kernels._bundle(Minv @ model.damping_matrix(), Minv @ K0, Minv @ Kn, Minv @ Kf,
-                                           Minv @ Knx, Minv @ Kfx, Minv @ pc.b, Minv @ pc.f, Minv @ F0, Minv @ fn,
-                                           Minv @ ff, pc.b, pc.fhat)
+    # the kernel's bundled arrays: [C, K0, Kn, Kf, Knx, Kfx] and [bM, fM, F0, fn, ff, b, fhat], premultiplied by M^-1
+    mats = np.stack([Minv @ a for a in (model.damping_matrix(), K0, Kn, Kf, Knx, Kfx)])
+    vecs = np.stack([Minv @ pc.b, Minv @ pc.f, Minv @ F0, Minv @ fn, Minv @ ff, pc.b, pc.fhat])
 
     def acc(x, xd):
         out = np.empty(3)

@@ -128,7 +128,8 @@ def test_analytic_jacobian_matches_finite_differences(contact, kin):
     xd = 1e-4 * rng.standard_normal(3)
     q, t, mu, v = 1e-6, 0.05, 0.4, 2e-4
 
-    mats, vecs = K._bundle(C, K0, Kn, Kf, Knx, Kfx, bM, fM, F0, fn, ff, b, fhat)
+    # the kernel's bundled arrays: [C, K0, Kn, Kf, Knx, Kfx] and [bM, fM, F0, fn, ff, b, fhat]
+    mats, vecs = np.stack([C, K0, Kn, Kf, Knx, Kfx]), np.stack([bM, fM, F0, fn, ff, b, fhat])
 
     def acc(x, xd):
         a = np.empty(3)
