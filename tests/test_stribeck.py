@@ -85,12 +85,14 @@ def test_linearised_friction_is_the_derivative_of_the_transient_force(kinematics
     opts = Contact(mu_static=law.mu_static, v_stribeck=law.v_stribeck).options()
     x_s = model.static_equilibrium(law.mu(mu, V), t, 0.0)
 
+    # the kernel's bundled arrays: [C, K0, Kn, Kf, Knx, Kfx] and [bM, fM, F0, fn, ff, b, fhat], premultiplied by M^-1
+    mats = np.stack([Minv @ a for a in (model.damping_matrix(), K0, Kn, Kf, Knx, Kfx)])
+    vecs = np.stack([Minv @ pc.b, Minv @ pc.f, Minv @ F0, Minv @ fn, Minv @ ff, pc.b, pc.fhat])
+
     def acc(x, xd):
-        out, work = np.empty(3), np.empty(3)
-        transient_kernels._rhs(x, xd, 0.0, t, mu, V, Minv @ pc.b, Minv @ pc.f, Minv @ model.damping_matrix(),
-                               Minv @ K0, Minv @ Kn, Minv @ Kf, Minv @ Knx, Minv @ Kfx, float(model.slope_coupled),
-                               Minv @ F0, Minv @ fn, Minv @ ff, pc.b, pc.f,
-                               pc.fhat, pc.kc, s, opts, work, out)
+        out = np.empty(3)
+        transient_kernels._rhs(x, 0, xd, 0, 3, 0.0, t, mu, V, float(model.slope_coupled), pc.kc, s, mats, vecs, opts,
+                               out)
         return out
 
     np.testing.assert_allclose(acc(x_s, np.zeros(3)), 0.0, atol=1e-9)  # an equilibrium

@@ -128,9 +128,12 @@ def test_analytic_jacobian_matches_finite_differences(contact, kin):
     xd = 1e-4 * rng.standard_normal(3)
     q, t, mu, v = 1e-6, 0.05, 0.4, 2e-4
 
+    # the kernel's bundled arrays: [C, K0, Kn, Kf, Knx, Kfx] and [bM, fM, F0, fn, ff, b, fhat]
+    mats, vecs = np.stack([C, K0, Kn, Kf, Knx, Kfx]), np.stack([bM, fM, F0, fn, ff, b, fhat])
+
     def acc(x, xd):
-        r, a = np.empty(3), np.empty(3)
-        K._rhs(x, xd, q, t, mu, v, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, opts, r, a)
+        a = np.empty(3)
+        K._rhs(x, 0, xd, 0, 3, q, t, mu, v, kin, kc, s, mats, vecs, opts, a)
         return a
 
     Jx, Jv = np.empty((3, 3)), np.empty((3, 3))
