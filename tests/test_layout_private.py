@@ -85,6 +85,11 @@ ALLOWED: dict[str, tuple[str, ...]] = {
                                "squealkit.report.steps_nonlinear._settle_text"),
     # the warm-up child's call of the integrator against the report's: the child is the subject
     "test_coldstart_kernels.py": ("squealkit._warmup",),
+    # the harmonic-balance residual recomputed from a branch's stored coefficients on a finer time grid (the
+    # independent check that every cycle returned solves harmonic balance): the AFT basis is the subject
+    "test_continuation_robust.py": ("squealkit.nonlinear.harmonic_balance._Basis",),
+    # the optional-package table and require(): the static check that every optional import goes through it
+    "test_optional_dependencies.py": ("squealkit._optional",),
 }
 
 

@@ -6,6 +6,13 @@ same settings and asserts ``np.array_equal`` against the stored arrays. The case
 integrator (Dormand-Prince 5(4), Rodas4, fixed-step RK4), the paper's run-out, loss of contact with
 its located events, the Stribeck law, a batch of runs in parallel, ``floquet``/``floquet_map`` (the
 transient monodromy) and the limit-cycle branch whose Floquet multipliers use the nonlinear monodromy.
+
+A case is rewritten only where its numbers change on purpose, with the change said here:
+``limit_cycle_branch.npz`` was rewritten when a branch whose contact may open went from 128 to 512
+time samples per period (harmonic balance's AFT, to make the kinks of the opening contact 4x smaller:
+the continuation robustness change). Against the 128-sample case: amplitudes and mu of the points moved
+by up to 6.6e-4 relative, frequencies by 5.8e-6 relative (0.014 Hz), the largest Floquet multiplier by
+1.0e-4; the same number of points and the same stability flags.
 """
 
 from __future__ import annotations

@@ -15,19 +15,18 @@ The right-hand side they all integrate, the contact force of eq. 4, and its Jaco
 :mod:`.force`. Each integrator inlines it (numba ``inline="always"``) at one call site in its
 step loop only: every inlined copy costs seconds of compile time on a first run (issue #27).
 
-Private: :mod:`squealkit.transient.simulate` prepares the arrays. Each call advances a
+Private (no ``__all__``: not part of the documented API): :mod:`squealkit.transient._setup` prepares
+the arrays and :mod:`squealkit.transient._driver` calls the kernels. Each call advances a
 batch of R independent runs by one chunk of steps, in parallel over runs (``prange``).
 """
 
-from .dp5 import integrate_adaptive
-from .events import EVENT_CONTACT_CLOSES, EVENT_CONTACT_OPENS, EVENT_SLIP, EVENT_STICK
+# internal kernels, re-exported for the transient driver, Floquet and the limit cycles that import them from here
+from .dp5 import integrate_adaptive  # noqa: F401
+from .events import EVENT_CONTACT_CLOSES, EVENT_CONTACT_OPENS, EVENT_SLIP, EVENT_STICK  # noqa: F401
 from .force import _bundle as _bundle  # private, for the tests of the force law
 from .force import _jacobian as _jacobian
 from .force import _rhs as _rhs
 from .periodic import _sampled_monodromy as _sampled_monodromy  # private, for the test of numba's cache
-from .periodic import monodromy, monodromy_rk4, sampled_rhs
-from .rk4 import integrate_chunk
-from .rosenbrock import integrate_rosenbrock
-
-__all__ = ["EVENT_CONTACT_CLOSES", "EVENT_CONTACT_OPENS", "EVENT_SLIP", "EVENT_STICK", "integrate_adaptive",
-           "integrate_chunk", "integrate_rosenbrock", "monodromy", "monodromy_rk4", "sampled_rhs"]
+from .periodic import monodromy, monodromy_rk4, sampled_rhs  # noqa: F401
+from .rk4 import integrate_chunk  # noqa: F401
+from .rosenbrock import integrate_rosenbrock  # noqa: F401
