@@ -158,14 +158,12 @@ def test_no_new_import_circle_through_packages():
 
 def test_fe_and_solver_modules_are_short():
     # issue #28: no module over ~800 lines unless it is one algorithm
-    # one algorithm, over the limit: the compiled integrators with their shared event location (issue #28 leaves
-    # ode.py whole: its bundled-argument split ran 3-4x slower and was taken back). The small-model kernels are
-    # two (solvers/small/: the roots with their error radii, and what the roots say), each under the limit.
-    one_algorithm = {"ode.py"}
+    # no exception left: the compiled integrators are a package of one algorithm a module (solvers/ode/: force,
+    # events, dp5, rosenbrock, rk4, periodic), the small-model kernels two (solvers/small/: the roots with their
+    # error radii, and what the roots say), each under the limit
     for folder in ("fe", "solvers", "io"):
         for p in (SRC / folder).rglob("*.py"):
-            if p.name not in one_algorithm:
-                assert len(p.read_text(encoding="utf-8").splitlines()) <= 800, p
+            assert len(p.read_text(encoding="utf-8").splitlines()) <= 800, p
     for name in ("maps.py", "_schema.py", "fe_sweep.py", "eigen.py"):
         assert len((SRC / "stability" / name).read_text(encoding="utf-8").splitlines()) <= 800, name
 
