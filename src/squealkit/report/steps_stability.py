@@ -14,6 +14,7 @@ import numpy as np
 
 from ..io import save_dataset
 from ..models import FrictionModel, PinOnDiscRig, cantilever_bending_frequency, rod_axial_frequency
+from ..models._base import damping_names
 from ..stability import (
     REALISTIC_MU_MAX,
     UnrealisticFrictionWarning,
@@ -199,7 +200,7 @@ def fig2_step(model: FrictionModel, figures: Path, data: Path, *, n_mu: int = 16
     else:
         first += (f" Unstable modes appear between {band[0]:.0f} and {band[1]:.0f} rad/s "
                   f"({band[0] / (2 * math.pi):.0f}-{band[1] / (2 * math.pi):.0f} Hz).")
-    if has_damping(model):  # the map leaves the dampers out: say so, and where they put the onset
+    if damping_names(model):  # the map leaves the dampers out: say so, and where they put the onset
         cd = critical_friction(model, 0.0, damped=True)
         damp = f" ({damping_text(model)})" if damping_text(model) else ""
         first += (f" The map is undamped, as the paper's; with the model's damping{damp} "
@@ -232,11 +233,8 @@ def critical_step(model: FrictionModel, figures: Path, data: Path, *,
     with onset_said_in_words():
         section = _critical_step(model, figures, data, settings=settings or ReportSettings.paper())
     if section.numbers.get("onset_unrealistic"):
-        warnings.warn(f"Mode coupling needs friction mu_crit = {section.numbers['onset_unrealistic']:.4g} or more, "
-                      f"beyond brake friction materials (about 0.3-0.7, at most {REALISTIC_MU_MAX:g}), with or "
-                      "without the model's damping: the modes that couple are far apart in frequency (for a "
-                      "pin-on-disc rig compare the pin bending and disc frequencies).",
-                      UnrealisticFrictionWarning, stacklevel=2)
+        warnings.warn(UnrealisticFrictionWarning.for_onset(section.numbers["onset_unrealistic"],
+                                                          "with or without the model's damping"), stacklevel=2)
     return section
 
 
@@ -251,7 +249,7 @@ def _critical_step(model: FrictionModel, figures: Path, data: Path, *, settings:
     tol = runout_tolerance(model, mu_design, wavelength=wavelength, damped=False)
     # the report's operating point is placed from the damped onset: with dampers the tolerance that binds
     # there is the damped one, stated beside the paper's undamped one (eq. 7)
-    tol_d = runout_tolerance(model, mu_design, wavelength=wavelength, damped=True) if has_damping(model) else None
+    tol_d = runout_tolerance(model, mu_design, wavelength=wavelength, damped=True) if damping_names(model) else None
     fin = mu_e[np.isfinite(mu_e)]
     spread = float(np.ptp(fin) / np.mean(fin)) if fin.size == mu_e.size else math.nan
     rows = tuple((float(np.degrees(t)), float(m), float(me), float(f)) for t, m, me, f in zip(
@@ -358,11 +356,6 @@ def _unrealistic(mu_undamped: np.ndarray, cd) -> tuple[str, float]:
         return text + (f" With the model's damping onset comes at mu_crit = {cd.mu_critical:.4f}, within that "
                        "range."), 0.0
     return text, float(fin.min())
-
-
-def has_damping(model: FrictionModel) -> bool:
-    """Whether the model's damping matrix has a non-zero entry (its dampers change its stability)."""
-    return bool(np.any(np.asarray(model.damping_matrix()) != 0))
 
 
 def _tolerance_clause(tol, mu_design: float, wavelength: float) -> str:

@@ -45,6 +45,15 @@ REALISTIC_MU_MAX = 1.0
 class UnrealisticFrictionWarning(UserWarning):
     """Mode coupling sets in only at a friction coefficient no brake material has."""
 
+    @classmethod
+    def for_onset(cls, mu_crit: float, damping: str = "") -> UnrealisticFrictionWarning:
+        """The warning for a lowest onset ``mu_crit``; ``damping`` qualifies it (e.g. "with or without the
+        model's damping")."""
+        return cls(f"Mode coupling needs friction mu_crit = {mu_crit:.4g} or more, beyond brake friction materials "
+                   f"(about 0.3-0.7, at most {REALISTIC_MU_MAX:g})" + (f", {damping}" if damping else "")
+                   + ": the modes that couple are far apart in frequency (for a pin-on-disc rig compare the pin "
+                   "bending and disc frequencies).")
+
 
 __all__ = [
     "ONSET_STATUS",
@@ -270,11 +279,7 @@ def critical_friction_curve(
         omega[ok] = _onset_frequency(model, mu_c[ok] + 1e-6 * np.maximum(1.0, np.abs(mu_c[ok])), t[ok], damped, fr)
     onsets = mu_c[status == 0]
     if onsets.size and onsets.min() > REALISTIC_MU_MAX:
-        warnings.warn(
-            f"Mode coupling needs friction mu_crit = {onsets.min():.4g} or more, beyond brake friction materials "
-            f"(about 0.3-0.7, at most {REALISTIC_MU_MAX:g}): the modes that couple are far apart in frequency "
-            "(for a pin-on-disc rig compare the pin bending and disc frequencies).",
-            UnrealisticFrictionWarning, stacklevel=2)
+        warnings.warn(UnrealisticFrictionWarning.for_onset(float(onsets.min())), stacklevel=2)
     uns = _intervals_array(up, B, True)
     ind = _intervals_array(up, B, False)
     if np.isfinite(ind).any():
