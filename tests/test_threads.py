@@ -127,3 +127,28 @@ def test_cli_bad_thread_count_is_one_line_exit_2(runner, args, env, message):
     assert r.exit_code == 2
     assert message in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
+
+
+def test_blas_loaded_after_the_first_bounded_call_is_bounded_too():
+    # found by the suite under load (tests/test_smaller_27.py saw 2 BLAS threads under SQUEALKIT_THREADS=1):
+    # the BLAS controller was made once, at the first bounded call; a BLAS library loaded later (scipy's
+    # own OpenBLAS, MKL with PARDISO) was not in it and kept its threads. Reference: threadpoolctl's own
+    # report of every BLAS loaded, inside the bounded block, in a fresh process.
+    import subprocess
+    import sys
+
+    code = (
+        "import numpy\n"
+        "from squealkit._threads import honour_thread_limit\n"
+        "honour_thread_limit(lambda: None)()\n"  # the first bounded call: numpy's BLAS only
+        "import scipy.linalg\n"
+        "from threadpoolctl import threadpool_info, threadpool_limits\n"
+        "seen = []\n"
+        "with threadpool_limits(2, user_api='blas'):\n"
+        "    honour_thread_limit(lambda: seen.extend(i['num_threads'] for i in threadpool_info()\n"
+        "                                             if i['user_api'] == 'blas'))()\n"
+        "print(sorted(set(seen)))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], env={**__import__("os").environ, ENV_VAR: "1"},
+                         capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[1]"

@@ -43,6 +43,7 @@ import contextvars
 import functools
 import numbers
 import os
+import sys
 from collections.abc import Callable, Iterator
 from typing import Any, TypeVar
 
@@ -195,17 +196,22 @@ def limit_threads(n: int) -> Iterator[int]:
         numba.set_num_threads(before)
 
 
-#: threadpoolctl's controller of the BLAS libraries loaded (made at first use: by then numpy's
-#: and scipy's are loaded; reused, as a new one costs ~3 ms of library scanning per call).
+#: threadpoolctl's controller of the BLAS libraries loaded, and ``len(sys.modules)`` when it was made.
+#: A new controller costs ~3 ms of library scanning, so it is reused while no module has been imported
+#: since; a BLAS library comes with an import (scipy.linalg's own OpenBLAS, MKL with PARDISO), and one
+#: loaded after the controller was made would otherwise keep its own thread count.
 _BLAS_CONTROLLER: Any = None
+_BLAS_SCANNED_AT = -1
 
 
 def _blas_controller() -> Any:
-    global _BLAS_CONTROLLER
-    if _BLAS_CONTROLLER is None:
+    global _BLAS_CONTROLLER, _BLAS_SCANNED_AT
+    if _BLAS_CONTROLLER is None or len(sys.modules) != _BLAS_SCANNED_AT:
         from threadpoolctl import ThreadpoolController
 
+        _BLAS_SCANNED_AT = len(sys.modules)  # before: the import itself may add modules
         _BLAS_CONTROLLER = ThreadpoolController().select(user_api="blas")
+        _BLAS_SCANNED_AT = len(sys.modules)
     return _BLAS_CONTROLLER
 
 
