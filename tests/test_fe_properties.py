@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from squealkit.models import FEModel, MatrixModel
@@ -192,9 +192,12 @@ def test_fill_reducing_order_is_a_permutation_that_cuts_fill():
 
 @settings(max_examples=20, deadline=None)
 @given(seed=st.integers(0, 10**6), n=st.integers(3, 40), k=st.integers(1, 12), block=st.integers(1, 3))
+@example(seed=283, n=3, k=2, block=1)  # the worst seen: 1.9e-12 (400 seeds in a row: at most 9.2e-13)
 def test_shift_invert_finds_the_nearest_eigenvalues(seed, n, k, block):
     # block Krylov-Schur at one shift against LAPACK on the dense companion pencil: the k
-    # eigenvalues nearest the shift, each to 1e-10, with backward errors near machine precision
+    # eigenvalues nearest the shift, each to 1e-10, with backward errors at the solver's convergence
+    # test: a Ritz pair is accepted at ||Op z - theta z|| <= tol |theta| (tol = 1e-12), so the pencil's
+    # backward error is of order tol, not of machine precision: bounded here by 10 tol
     rng = np.random.default_rng(seed)
     w = 2 * np.pi * np.sort(rng.uniform(100.0, 3000.0, n))
     KR = sp.random(n, n, density=0.2, random_state=seed % 2**32) * 1e6
@@ -212,7 +215,7 @@ def test_shift_invert_finds_the_nearest_eigenvalues(seed, n, k, block):
     np.testing.assert_allclose(d, np.abs(ref[:k] - s), rtol=1e-9, atol=1e-9 * abs(s))
     for x in lam:
         assert np.min(np.abs(ref - x)) <= 1e-10 * np.abs(ref).max()
-    assert np.all(band_solver.pencil_backward_errors(M, C, K, lam, X) < 1e-12)
+    assert np.all(band_solver.pencil_backward_errors(M, C, K, lam, X) < 10 * op.tol)
 
 
 @settings(max_examples=12, deadline=None)
