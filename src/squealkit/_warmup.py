@@ -71,8 +71,9 @@ def _stability() -> None:
 
     The parent compiles the roots' kernels (:func:`~squealkit.solvers.small.charpoly_table`,
     :func:`~squealkit.solvers.small.quadratic_eigvals`, the largest) in the Fig. 2 step;
-    the child compiles, in the order the grid calls them, the root finder's error radii,
-    the verdicts, the mode selection, the tracking along mu and theta and the derived
+    the child compiles, in the order the grid calls them, the root finder's error radii (the
+    engine, :mod:`squealkit.solvers.small`), the verdicts and the mode selection (the analysis,
+    :mod:`squealkit.stability._verdicts`), the tracking along mu and theta and the derived
     quantities, and the parent loads those the child got to first from the cache. Measured:
     first in the child, this group delays the integrator, the child's critical path, more
     than it saves the parent (an idle machine: 64.7 s against 55.8 s); after it, it helps
@@ -83,7 +84,7 @@ def _stability() -> None:
     import numba as nb
 
     from .solvers import small
-    from .stability import tracking
+    from .stability import _verdicts, tracking
 
     c2, f2, i2 = nb.complex128[:, ::1], nb.float64[:, ::1], nb.int64[:, ::1]
     i1, f1 = nb.int8[::1], nb.float64[::1]
@@ -91,12 +92,12 @@ def _stability() -> None:
     # e, perms, signs, table, Knx, Kfx, st, roots, radii, even, start, stop)
     small._radii_range.compile((f2, f2, f2, f2, f2, f1, f1, i2, f1, nb.float64[:, :, ::1], f2, f2, f1, c2, f2,
                                 nb.boolean[::1], nb.int64, nb.int64))
-    small.classify_points.compile((c2, f2, nb.boolean[::1], nb.float64, i1, f1))
-    small.select_modes.compile((c2, f2, c2, f2))
+    _verdicts.classify_points.compile((c2, f2, nb.boolean[::1], nb.float64, i1, f1))
+    _verdicts.select_modes.compile((c2, f2, c2, f2))
     tracking._track_column.compile((c2, i2))
     tracking._track_rows.compile((nb.complex128[:, :, ::1], c2, i2))
     tracking._carry.compile((c2, f2, c2, f2))
-    small.derived_quantities.compile((c2, f2, f1, i1, nb.float64))
+    _verdicts.derived_quantities.compile((c2, f2, f1, i1, nb.float64))
 
 
 def _transient() -> None:
