@@ -126,6 +126,11 @@ def test_the_circle_finder_finds_a_circle_hidden_in_a_function(tmp_path):
     (pkg / "sub" / "__init__.py").write_text("from .. import c\n")
     assert _circles(_import_graph(pkg)) == []
     assert _circles(_import_graph(pkg, packages=True)) == [["pkg.a", "pkg.c", "pkg.sub"]]
+    # an import for type names only (under TYPE_CHECKING) counts too: the annotation names the other module,
+    # a dependency of the design if not of the run (none is needed: results are duck-typed where drawn)
+    (pkg / "sub" / "__init__.py").write_text("")
+    (pkg / "sub" / "b.py").write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from .. import a\n")
+    assert _circles(_import_graph(pkg)) == [["pkg.a", "pkg.sub.b"]]
 
 
 def test_no_import_circle_among_squealkit_modules():
