@@ -112,16 +112,14 @@ def _imports(tree):
     return out
 
 
-def test_plotting_imports_nothing_computational_from_measurement():
-    # plotting/ draws what measurement/ returns: from measurement it may import nothing but the
-    # deprecated call forms' bridge to the one function that computes the signals (with a warning)
+def test_plotting_imports_nothing_from_measurement():
+    # plotting/ draws what measurement/ returns: it imports nothing of measurement/, at module level or in a
+    # function (the result's plot() imports plotting; an import back was a circle, issue #28). It was allowed
+    # the deprecated recording call forms' bridge to figure_signals, now refused (see below).
     import ast
 
     import squealkit.plotting as plotting
 
-    allowed = {("measurement.py", "_legacy_signals", "figure_signals"),
-               ("measurement.py", "measurement_figures", "measurement_signals"),
-               ("measurement.py", "__getattr__", "squeal_views")}
     found = set()
     for path in Path(plotting.__file__).parent.glob("*.py"):
         for func, mod, names in _imports(ast.parse(path.read_text())):
@@ -129,29 +127,20 @@ def test_plotting_imports_nothing_computational_from_measurement():
                 found |= {(path.name, func, n) for n in names}
             if path.name == "measurement.py":  # no signal processing library either
                 assert not any(n.startswith("scipy") for n in (mod or "", *names)), (func, mod, names)
-    assert found <= allowed, found - allowed
+    assert found == set()
 
 
-@pytest.mark.parametrize("func, kw", [
-    ("runout_plot", dict(rpm=900.0, lowpass_freq=1000.0, macro_orders=10)),
-    ("band_vs_pressure_plot", dict(band=(1430.0, 2980.0))),
-    ("spectrogram_plot", dict(freq_max=8000.0)),
-])
-def test_old_call_with_a_recording_warns_and_draws_the_same(golden_cases, func, kw):
-    # reference: the same figure drawn from figure_signals, the new call form
-    from _cases import _artist_arrays
-
-    from squealkit.measurement import figure_signals
+@pytest.mark.parametrize("func", ["runout_plot", "band_vs_pressure_plot", "spectrogram_plot"])
+def test_a_recording_is_refused_with_the_call_that_replaces_it(golden_cases, func):
+    # the recording call form computed the signals inside plotting: refused, naming figure_signals
+    from squealkit import InputError
     from squealkit.plotting import measurement as mp
 
     rec = golden_cases["const"][0]
-    with pytest.warns(DeprecationWarning, match=f"{func}"):
-        old = getattr(mp, func)(rec, **kw)
-    sig_kw = {k: v for k, v in kw.items() if k != "rpm"}
-    new = getattr(mp, func)(figure_signals(rec, rpm=kw.get("rpm"), **sig_kw))
-    a, b = _artist_arrays(old), _artist_arrays(new)
-    assert sorted(a) == sorted(b)
-    assert [k for k in a if digest(a[k]) != digest(b[k])] == []
+    with pytest.raises(InputError, match=rf"{func}\(\) draws the signals .*figure_signals\(recording"):
+        getattr(mp, func)(rec)
+    with pytest.raises(TypeError, match="rpm"):  # the old form's keywords are gone, not ignored
+        getattr(mp, func)(rec, rpm=900.0)
 
 
 def test_measurement_figures_without_signals_says_what_to_do(golden_cases):
@@ -160,6 +149,9 @@ def test_measurement_figures_without_signals_says_what_to_do(golden_cases):
 
     with pytest.raises(InputError, match="keep_signals=True"):
         measurement_figures(golden_cases["const"][1])
+    rec, res, _ = golden_cases["const"]
+    with pytest.raises(InputError, match=r"measurement_figures\(result, measurement_signals\(recording, result\)\)"):
+        measurement_figures(rec, res)
 
 
 # -- layout: one concept per module, old paths still work ------------------------------------------
@@ -277,5 +269,5 @@ def test_result_plot_draws_its_signals(golden_cases):
     b = _artist_arrays(runout_plot(sig, t_range=(0.1, 0.2)))
     assert [k for k in a if digest(a[k]) != digest(b[k])] == []
     # an old call's keyword with the signals is refused, not ignored
-    with pytest.raises(InputError, match="rpm"):
+    with pytest.raises(TypeError, match="rpm"):
         runout_plot(sig, rpm=600.0)

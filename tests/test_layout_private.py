@@ -34,11 +34,16 @@ ALLOWED: dict[str, tuple[str, ...]] = {
     "conftest.py": ("squealkit._warmup",),
     # owned by the warm-up and transient work of issue #28 (not edited here); the lead settles them at merge
     "test_warmup.py": ("squealkit._warmup", "squealkit.stability._schema", "squealkit.stability._solve",
-                       "squealkit.transient._step", "squealkit.transient._result"),
+                       "squealkit.stability._verdicts", "squealkit.transient._step", "squealkit.transient._result"),
     # which compiled kernels the warm-up child compiles (their dispatchers' signatures) and which stay in
     # numba's on-disk cache from one process to the next: the kernels themselves are the subject
     "test_warmup_stability.py": ("squealkit._warmup", "squealkit.stability.tracking._track_column",
-                                 "squealkit.stability.tracking._track_rows", "squealkit.stability.tracking._carry"),
+                                 "squealkit.stability.tracking._track_rows", "squealkit.stability.tracking._carry",
+                                 "squealkit.stability._verdicts", "squealkit.solvers.small._radii_range"),
+    # the small-model kernels split between the engine (roots) and the analysis (verdicts): the paths are the subject
+    "test_splits_layout.py": ("squealkit.stability._verdicts", "squealkit.stability._kernels"),
+    # the one operating point the report and its warm-up child share (issue #28: was an import circle)
+    "test_layout_circles.py": ("squealkit._operating_point",),
     "test_kernel_cache.py": ("squealkit.solvers.ode._sampled_monodromy",),
     "test_transient_rosenbrock.py": ("squealkit.solvers.ode._rhs", "squealkit.solvers.ode._jacobian"),
     # the integrator's chunk sizes cut small, so that a short run crosses several compiled calls (a streamed run

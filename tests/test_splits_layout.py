@@ -43,16 +43,27 @@ def test_the_old_simulate_module_path_still_has_its_names():
     assert module.METHODS == ("dopri5", "rosenbrock", "rk4") and module.STEP_FACTOR == 0.25
 
 
-#: what ``from squealkit.solvers.small import ...`` gave the analyses and the warm-up before it became a package
-_SMALL_NAMES = ("DIVERGENCE", "FLUTTER", "INDETERMINATE", "STABLE", "UNDECIDED", "ZERO_ROOT_REACH", "charpoly_table",
-                "classify_points", "derived_quantities", "inclusion_radii", "permutations_table", "quadratic_eigvals",
-                "quadratic_eigvals_stack", "select_modes", "_radii_range", "_REAL_RTOL", "_locked_in")
+#: what ``from squealkit.solvers.small import ...`` gave the analyses and the warm-up before it became a package,
+#: split (issue #28) between the engine (the roots and their error radii: solvers/small) and the analysis' reading
+#: of them (verdicts, one root per mode, unstable flags, lock-in: stability/_verdicts.py, was solvers/small/modes.py)
+_ENGINE_NAMES = ("charpoly_table", "inclusion_radii", "permutations_table", "quadratic_eigvals",
+                 "quadratic_eigvals_stack", "_radii_range")
+_ANALYSIS_NAMES = ("DIVERGENCE", "FLUTTER", "INDETERMINATE", "STABLE", "UNDECIDED", "ZERO_ROOT_REACH", "VERDICTS",
+                   "classify_points", "derived_quantities", "select_modes", "_REAL_RTOL", "_locked_in")
 
 
-def test_the_small_kernels_keep_their_import_path():
+def test_the_small_kernels_are_split_between_engine_and_analysis():
     small = importlib.import_module("squealkit.solvers.small")
-    for name in _SMALL_NAMES:
-        assert hasattr(small, name), name
-    from squealkit.solvers.small import modes, roots
+    verdicts = importlib.import_module("squealkit.stability._verdicts")
+    old = importlib.import_module("squealkit.stability._kernels")  # the private path of the one old module
+    for name in _ENGINE_NAMES:
+        assert hasattr(small, name) and getattr(old, name) is getattr(small, name), name
+    for name in _ANALYSIS_NAMES:
+        assert not hasattr(small, name), name  # the engine speaks no analysis vocabulary
+        assert hasattr(verdicts, name), name
+        if name != "VERDICTS":
+            assert getattr(old, name) is getattr(verdicts, name), name
+    assert not (SRC / "solvers" / "small" / "modes.py").exists()
+    from squealkit.stability import VERDICTS
 
-    assert small.classify_points is modes.classify_points and small.quadratic_eigvals is roots.quadratic_eigvals
+    assert VERDICTS is verdicts.VERDICTS and VERDICTS[verdicts.FLUTTER] == "flutter"

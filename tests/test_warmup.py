@@ -12,14 +12,14 @@ def test_transient_group_compiles_no_stability_kernel(monkeypatch):
     # The parent compiles the stability kernels while the child compiles the integrator: the
     # child's run must not call one (it would compile it a second time, on the other core).
     from squealkit.solvers import small as _kernels
-    from squealkit.stability import _schema, _solve, eigen, tracking
+    from squealkit.stability import _schema, _solve, _verdicts, eigen, tracking
 
     def refuse(*args, **kwargs):
         raise AssertionError("the warm-up child called a stability kernel")
 
     # the kernels where the stability modules call them (imported by name: patched there, undone
     # after this test, so that a later test's eigenvalues get the real kernels)
-    for module in (_kernels, eigen, _solve, _schema, tracking):
+    for module in (_kernels, _verdicts, eigen, _solve, _schema, tracking):
         for name in dir(module):
             if isinstance(getattr(module, name), numba.core.registry.CPUDispatcher):
                 monkeypatch.setattr(module, name, refuse)

@@ -12,11 +12,11 @@ def test_stability_group_compiles_the_types_a_grid_passes():
     # must add none to the kernels the group compiles (else the parent compiles them itself)
     from squealkit.models import get_preset
     from squealkit.solvers import small
-    from squealkit.stability import stability_map, tracking
+    from squealkit.stability import _verdicts, stability_map, tracking
 
     _warmup._stability()
-    kernels = (small.classify_points, small.select_modes, tracking._track_column, tracking._track_rows,
-               tracking._carry, small.derived_quantities)
+    kernels = (small._radii_range, _verdicts.classify_points, _verdicts.select_modes, tracking._track_column,
+               tracking._track_rows, tracking._carry, _verdicts.derived_quantities)
     held = [set(k.signatures) for k in kernels]
     assert all(held)
     stability_map(get_preset("lv2013"), np.linspace(0.0, 0.8, 5), np.radians(np.linspace(-8.0, 8.0, 5)),

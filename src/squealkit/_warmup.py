@@ -21,7 +21,9 @@ Nothing is started when it would not pay: on one core, with ``SQUEALKIT_THREADS=
 cache already holds the kernels of this version of squealkit. A child that fails or dies
 costs nothing but time: the step compiles the kernel itself, as without the child.
 
-Private: used by :func:`squealkit.report.reproduce`.
+Private: started and waited for by the report's runner (:func:`squealkit.report.runner.run_report`);
+it imports nothing of the report: the operating points it compiles for are the report's, from
+:mod:`squealkit._operating_point`.
 """
 
 from __future__ import annotations
@@ -69,8 +71,9 @@ def _stability() -> None:
 
     The parent compiles the roots' kernels (:func:`~squealkit.solvers.small.charpoly_table`,
     :func:`~squealkit.solvers.small.quadratic_eigvals`, the largest) in the Fig. 2 step;
-    the child compiles, in the order the grid calls them, the root finder's error radii,
-    the verdicts, the mode selection, the tracking along mu and theta and the derived
+    the child compiles, in the order the grid calls them, the root finder's error radii (the
+    engine, :mod:`squealkit.solvers.small`), the verdicts and the mode selection (the analysis,
+    :mod:`squealkit.stability._verdicts`), the tracking along mu and theta and the derived
     quantities, and the parent loads those the child got to first from the cache. Measured:
     first in the child, this group delays the integrator, the child's critical path, more
     than it saves the parent (an idle machine: 64.7 s against 55.8 s); after it, it helps
@@ -81,7 +84,7 @@ def _stability() -> None:
     import numba as nb
 
     from .solvers import small
-    from .stability import tracking
+    from .stability import _verdicts, tracking
 
     c2, f2, i2 = nb.complex128[:, ::1], nb.float64[:, ::1], nb.int64[:, ::1]
     i1, f1 = nb.int8[::1], nb.float64[::1]
@@ -89,33 +92,32 @@ def _stability() -> None:
     # e, perms, signs, table, Knx, Kfx, st, roots, radii, even, start, stop)
     small._radii_range.compile((f2, f2, f2, f2, f2, f1, f1, i2, f1, nb.float64[:, :, ::1], f2, f2, f1, c2, f2,
                                 nb.boolean[::1], nb.int64, nb.int64))
-    small.classify_points.compile((c2, f2, nb.boolean[::1], nb.float64, i1, f1))
-    small.select_modes.compile((c2, f2, c2, f2))
+    _verdicts.classify_points.compile((c2, f2, nb.boolean[::1], nb.float64, i1, f1))
+    _verdicts.select_modes.compile((c2, f2, c2, f2))
     tracking._track_column.compile((c2, i2))
     tracking._track_rows.compile((nb.complex128[:, :, ::1], c2, i2))
     tracking._carry.compile((c2, f2, c2, f2))
-    small.derived_quantities.compile((c2, f2, f1, i1, nb.float64))
+    _verdicts.derived_quantities.compile((c2, f2, f1, i1, nb.float64))
 
 
 def _transient() -> None:
     import importlib
 
+    from ._operating_point import SPEED
     from .models import get_preset
     from .transient import SineRunOut, simulate
 
     for name in ("_step", "_result"):  # where a run calls eigenvalues: its step bound and its growth rate
         importlib.import_module(f"squealkit.transient.{name}").eigenvalues = _lapack_eigenvalues
-    simulate(get_preset("lv2013"), mu=0.4, profile=SineRunOut(0.08e-3, 1e-3), speed=0.02, duration=2e-4)
+    simulate(get_preset("lv2013"), mu=0.4, profile=SineRunOut(0.08e-3, 1e-3), speed=SPEED, duration=2e-4)
 
 
 def _nonlinear() -> None:
+    from ._operating_point import CYCLE_HARMONICS, CYCLE_MU_RANGE, SPEED
     from .models import get_preset
     from .nonlinear import limit_cycle_branch
-    from .report.settings import ReportSettings
-    from .report.steps_nonlinear import HARMONICS, MU_RANGE
 
-    speed = ReportSettings.__dataclass_fields__["speed"].default
-    limit_cycle_branch(get_preset("lv2013"), MU_RANGE, harmonics=HARMONICS, n_points=2, speed=speed)
+    limit_cycle_branch(get_preset("lv2013"), CYCLE_MU_RANGE, harmonics=CYCLE_HARMONICS, n_points=2, speed=SPEED)
     # the branch's Floquet multipliers (one RK4 step over samples of A, the report's types): the
     # two points above end before any cycle needs them
     import numpy as np
@@ -126,11 +128,11 @@ def _nonlinear() -> None:
 
 
 def _measurement() -> None:
+    from ._operating_point import RIG_FS, RIG_RADIUS, RIG_RPM
     from .measurement import analyze_recording, synthetic_recording
-    from .report.steps_measurement import FS, RADIUS, RPM
 
-    rec = synthetic_recording(duration=0.25, fs=FS, rpm=RPM, radius=RADIUS, freq=2400.0, seed=1)
-    analyze_recording(rec, mic="mic", displacement="displacement", rpm=RPM, radius=RADIUS)
+    rec = synthetic_recording(duration=0.25, fs=RIG_FS, rpm=RIG_RPM, radius=RIG_RADIUS, freq=2400.0, seed=1)
+    analyze_recording(rec, mic="mic", displacement="displacement", rpm=RIG_RPM, radius=RIG_RADIUS)
 
 
 #: Kernel groups the child can compile, in the order a report needs them.

@@ -141,8 +141,8 @@ def _predict_small(model: FrictionModel, points: xr.Dataset, scale_names: list[s
                    theta: float, client: Any) -> dict[str, Any]:
     from .._threads import limit_threads, threads_for
     from ..scale import map_tasks
-    from ..solvers.small import derived_quantities
     from ..stability._schema import UNSTABLE_RTOL
+    from ..stability._verdicts import derived_quantities
 
     keys, inverse = _distinct(points, scale_names, speed=False)  # (no speed in a small model without a law)
     # one model per distinct set of parameter scales

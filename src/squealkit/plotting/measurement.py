@@ -2,6 +2,11 @@
 
 Every function returns a :class:`matplotlib.figure.Figure` (no pyplot state) and imports
 matplotlib only when called. Synthetic recordings say so in the title.
+
+They draw what they are given, a :class:`~squealkit.measurement.MeasurementResult` and the signals
+of :func:`~squealkit.measurement.figure_signals` (``result.signals``), and import nothing of
+:mod:`squealkit.measurement`: the result's :meth:`~squealkit.measurement.MeasurementResult.plot`
+calls them, never the other way round.
 """
 
 from __future__ import annotations
@@ -44,28 +49,15 @@ def _is_signals(ds: Any) -> bool:
     return isinstance(ds, xr.Dataset) and ds.attrs.get("kind") == "measurement_signals"
 
 
-def _signals(func: str, ds: xr.Dataset, legacy: dict[str, Any], **defaults: Any) -> xr.Dataset:
-    """``ds`` if it holds the signals; a recording (deprecated call form) is filtered by
-    :func:`_legacy_signals`. The old call's keywords apply to a recording only."""
-    if _is_signals(ds):
-        if legacy:
-            raise InputError(f"{func}() takes {', '.join(sorted(legacy))} with a recording only; the signals "
-                             "already carry them (see figure_signals).")
-        return ds
-    return _legacy_signals(func, ds, **{**defaults, **legacy})
-
-
-def _legacy_signals(func: str, rec: xr.Dataset, **kw: Any) -> xr.Dataset:
-    """The signals of a recording passed where the figure now takes them (deprecated call form):
-    computed by :func:`squealkit.measurement.figure_signals`, the one place that filters them."""
-    import warnings
-
-    from ..measurement.analysis.views import figure_signals
-
-    warnings.warn(f"{func}(recording, ...) is deprecated; use {func}(figure_signals(recording, ...)) or the "
-                  "result's signals (analyze_recording(..., keep_signals=True)) (same meaning).",
-                  DeprecationWarning, stacklevel=3)
-    return figure_signals(rec, **kw)
+def _signals(func: str, ds: Any) -> xr.Dataset:
+    """``ds`` if it holds the signals a figure draws; a recording is refused with the call that replaces
+    it (plotting draws, never filters: :func:`squealkit.measurement.figure_signals` computes the signals)."""
+    if not _is_signals(ds):
+        kind = ds.attrs.get("kind") if isinstance(ds, xr.Dataset) else type(ds).__name__
+        raise InputError(f"{func}() draws the signals of a recording (kind 'measurement_signals'), not {kind!r}: "
+                         "pass figure_signals(recording, ...) or the result's signals "
+                         "(analyze_recording(..., keep_signals=True)).")
+    return ds
 
 
 def _t_sel(t: np.ndarray, t_range: tuple[float, float] | None) -> Any:
@@ -106,7 +98,7 @@ def time_history_plot(rec: xr.Dataset, *, mic: str = "mic", displacement: str = 
     return fig
 
 
-def spectrogram_plot(signals: xr.Dataset, result: Any = None, **legacy: Any):
+def spectrogram_plot(signals: xr.Dataset, result: Any = None):
     """Spectrograms of both channels in dB (paper Figs. 8-9), with the squeal ridge if given.
 
     Parameters
@@ -116,15 +108,12 @@ def spectrogram_plot(signals: xr.Dataset, result: Any = None, **legacy: Any):
         ``mic_level`` and ``displacement_level`` [dB] are drawn.
     result : MeasurementResult, optional
         Its analysis: the ridge of the frames above the threshold is drawn on the sound.
-    **legacy
-        ``mic``, ``displacement``, ``nperseg``, ``freq_max`` of the deprecated call with a
-        recording instead of its signals.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
-    signals = _signals("spectrogram_plot", signals, legacy, rpm=None)
+    signals = _signals("spectrogram_plot", signals)
     fig = _figure(figsize=(8, 6))
     axes = fig.subplots(2, 1, sharex=True)
     names = (signals.attrs.get("mic_channel", "mic"), signals.attrs.get("displacement_channel", "displacement"))
@@ -146,7 +135,7 @@ def spectrogram_plot(signals: xr.Dataset, result: Any = None, **legacy: Any):
     return fig
 
 
-def runout_plot(signals: xr.Dataset, *, t_range: tuple[float, float] | None = None, **legacy: Any):
+def runout_plot(signals: xr.Dataset, *, t_range: tuple[float, float] | None = None):
     """Low-passed displacement with its macro and micro run-out (paper Fig. 12).
 
     Parameters
@@ -156,15 +145,12 @@ def runout_plot(signals: xr.Dataset, *, t_range: tuple[float, float] | None = No
         ``runout_lowpass``, ``runout_macro`` and ``runout_micro`` [m] are drawn.
     t_range : (float, float), optional
         Time window [s] drawn (default: all).
-    **legacy
-        ``displacement``, ``rpm``, ``lowpass_freq``, ``macro_orders`` of the deprecated call with a
-        recording instead of its signals.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
-    signals = _signals("runout_plot", signals, legacy)
+    signals = _signals("runout_plot", signals)
     a = signals.attrs
     t = signals["time"].values
     sel = _t_sel(t, t_range)
@@ -181,7 +167,7 @@ def runout_plot(signals: xr.Dataset, *, t_range: tuple[float, float] | None = No
     return fig
 
 
-def band_vs_pressure_plot(signals: xr.Dataset, *, t_range: tuple[float, float] | None = None, **legacy: Any):
+def band_vs_pressure_plot(signals: xr.Dataset, *, t_range: tuple[float, float] | None = None):
     """Band-passed displacement against the sound pressure (paper Fig. 13: 1000-2500 Hz).
 
     Parameters
@@ -191,15 +177,12 @@ def band_vs_pressure_plot(signals: xr.Dataset, *, t_range: tuple[float, float] |
         and ``displacement_band`` [m] are drawn.
     t_range : (float, float), optional
         Time window [s] drawn (default: all).
-    **legacy
-        ``mic``, ``displacement``, ``band`` of the deprecated call with a recording instead of its
-        signals.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
-    signals = _signals("band_vs_pressure_plot", signals, legacy, rpm=None)
+    signals = _signals("band_vs_pressure_plot", signals)
     band = (signals.attrs["freq_lower"], signals.attrs["freq_upper"])
     t = signals["time"].values
     sel = _t_sel(t, t_range)
@@ -345,7 +328,7 @@ def event_phase_plot(result: Any, ax: Any = None):
 
 
 def measurement_figures(result: Any, signals: xr.Dataset | None = None, *,
-                        zoom: tuple[float, float] | None = None, **legacy: Any) -> dict[str, Any]:
+                        zoom: tuple[float, float] | None = None) -> dict[str, Any]:
     """All figures of a measurement, keyed by a short name (for ``analyze --plot``).
 
     The zoom, the band-pass of Fig. 13 and the spectrogram follow the squeal found
@@ -362,23 +345,15 @@ def measurement_figures(result: Any, signals: xr.Dataset | None = None, *,
         ``result.signals`` (``analyze_recording(..., keep_signals=True)``).
     zoom : (float, float), optional
         Time window [s] of the zoomed figures (default: the signals' ``zoom_start``, ``zoom_end``).
-    **legacy
-        ``mic``, ``displacement`` of the deprecated call ``measurement_figures(rec, result)``.
 
     Returns
     -------
     dict of str to matplotlib.figure.Figure
         ``time``, ``spectrogram``, ``zoom``, ``runout``, ``band``, ``level`` and ``polar``.
     """
-    if isinstance(result, xr.Dataset):  # deprecated: measurement_figures(rec, result, mic=..., displacement=...)
-        import warnings
-
-        from ..measurement.analysis.views import measurement_signals
-
-        warnings.warn("measurement_figures(recording, result) is deprecated; use measurement_figures(result, "
-                      "measurement_signals(recording, result)) (same meaning).", DeprecationWarning, stacklevel=2)
-        rec, result = result, signals
-        signals = measurement_signals(rec, result, zoom=zoom, **legacy)
+    if isinstance(result, xr.Dataset):  # the recording call form (rec, result) computed the signals here
+        raise InputError("measurement_figures() draws a result and its signals: use measurement_figures(result, "
+                         "measurement_signals(recording, result)), not measurement_figures(recording, result).")
     if signals is None:
         signals = result.signals
     if not _is_signals(signals):
@@ -396,15 +371,3 @@ def measurement_figures(result: Any, signals: xr.Dataset | None = None, *,
         "polar": polar_plot(result),
     }
 
-
-def __getattr__(name: str) -> Any:
-    """``squeal_views`` moved to :mod:`squealkit.measurement` (it computes; plotting only draws)."""
-    if name == "squeal_views":
-        import warnings
-
-        from ..measurement.analysis.views import squeal_views
-
-        warnings.warn("squealkit.plotting.measurement.squeal_views is deprecated; use "
-                      "squealkit.measurement.squeal_views (same meaning).", DeprecationWarning, stacklevel=2)
-        return squeal_views
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

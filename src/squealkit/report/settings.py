@@ -30,6 +30,7 @@ from dataclasses import MISSING, Field, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any, ClassVar
 
+from .._operating_point import SPEED
 from .._validation import InputError, validate_finite, validate_int, validate_positive
 from ..models import FrictionModel
 
@@ -238,7 +239,7 @@ class ReportSettings:
     mu_cycle: float = report_key(0.5, unit="1", doc="friction at which the limit-cycle amplitude is quoted")
     sro_amplitude: float = report_key(80e-6, unit="m", kind="positive", doc="sine run-out amplitude q0")
     sro_wavelength: float = report_key(1e-3, unit="m", kind="positive", doc="sine run-out wavelength")
-    speed: float = report_key(0.02, unit="m/s", kind="positive", doc="sliding speed")
+    speed: float = report_key(SPEED, unit="m/s", kind="positive", doc="sliding speed")
     source: str = "the paper's operating point (§4, Fig. 4)"
     #: Whose ``[report]`` table this is, in messages.
     table_of: ClassVar[str] = "a small model's report"
@@ -293,7 +294,7 @@ class ReportSettings:
         wavelength = 1e-3
         return cls(mu_design=_round(0.75 * c), mu_transient=_round(0.9 * c), mu_unstable=_round(1.5 * c),
                    mu_cycle=_round(1.3 * c), sro_amplitude=float(f"{0.3 * c * wavelength / (2 * math.pi):.2g}"),
-                   sro_wavelength=wavelength, speed=0.02,
+                   sro_wavelength=wavelength, speed=SPEED,
                    source=f"placed from this model's damped onset on a flat disc, mu_crit = {c:.4g}")
 
     @classmethod

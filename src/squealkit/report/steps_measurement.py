@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._operating_point import RIG_FS, RIG_RADIUS, RIG_RPM, RIG_SQUEAL_FREQ
 from ..io import save_dataset
 from ..measurement import analyze_recording, squeal_views, synthetic_recording
 from ..models import FrictionModel
@@ -16,7 +17,7 @@ from .steps_stability import _save_fig, onset_said_in_words
 
 # Paper §5: 900 rpm, 10 N, 40 kHz sampling; squeal main frequency about 2388 Hz, once per disc turn on the
 # rising SRO. The probe radius is not given; 50 mm is assumed.
-RPM, FS, RADIUS, F_PUBLISHED = 900.0, 40_000.0, 0.05, 2388.0
+RPM, FS, RADIUS, F_PUBLISHED = RIG_RPM, RIG_FS, RIG_RADIUS, RIG_SQUEAL_FREQ
 
 def _captions(res, t_end: float) -> dict[str, str]:
     """Captions of the §5 figures from what they show: the zoom's revolutions at the actual speed,

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from .._operating_point import CYCLE_HARMONICS, CYCLE_MU_RANGE
 from ..io import save_dataset
 from ..models import FrictionModel
 from .document import FigureRef, Section, Table
@@ -31,7 +32,7 @@ V_REF = 1e-9
 #: Contact open over less than this fraction of the period: the cycle is not bounded by loss of contact.
 OPEN_MIN = 0.01
 #: Friction range of the flat-disc branch, and the harmonics of every cycle.
-MU_RANGE, HARMONICS = (0.3, 1.0), 10
+MU_RANGE, HARMONICS = CYCLE_MU_RANGE, CYCLE_HARMONICS
 #: The DOF whose amplitude the section reports (the pin's, as the paper's Fig. 3-4 accelerations).
 DOF = "x1"
 

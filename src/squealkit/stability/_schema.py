@@ -12,8 +12,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from ..solvers.small import derived_quantities
-from ._solve import VERDICTS
+from ._verdicts import VERDICTS, derived_quantities
 
 __all__ = ["UNSTABLE_RTOL", "derived_variables", "eigen_variables"]
 
@@ -27,7 +26,7 @@ _BLOCK = 1 << 16
 def derived_variables(lam: NDArray, err: NDArray, thr: NDArray, verdict: NDArray, lock_in_rtol: float):
     """Growth rate, frequency, damping ratio, flags and per-point summaries of eigenvalues over a grid.
 
-    The compiled :func:`~squealkit.solvers.small.derived_quantities` on the grid flattened to
+    The compiled :func:`~squealkit.stability._verdicts.derived_quantities` on the grid flattened to
     ``(points, modes)``, reshaped back.
 
     Parameters

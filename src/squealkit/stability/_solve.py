@@ -4,7 +4,7 @@ Every grid point goes through up to three solvers, each only where the one befor
 decide (see :func:`solve_points`):
 
 1. the compiled characteristic-polynomial kernel (n <= 4) with an a-posteriori error radius
-   per root (:func:`~squealkit.solvers.small.root_radii`): near a double root, e.g. a
+   per root (:func:`~squealkit.solvers.small.inclusion_radii`): near a double root, e.g. a
    disc doublet or the lock-in point, the radius grows to the true rounding reach,
    about sqrt(eps) |lambda|, so a doublet split by rounding is never called unstable;
 2. LAPACK on the balanced 2n x 2n state matrix, with the Bauer-Fike radius
@@ -32,23 +32,21 @@ from fractions import Fraction
 import numpy as np
 from numpy.typing import NDArray
 
-from ..solvers.small import (
+from ..solvers.small import inclusion_radii
+from ._verdicts import (
     DIVERGENCE,
     FLUTTER,
     INDETERMINATE,
     STABLE,
     UNDECIDED,
+    VERDICTS,
     ZERO_ROOT_REACH,
     classify_points,
-    inclusion_radii,
     select_modes,
 )
 
 __all__ = ["VERDICTS", "IndeterminateWarning", "exact_verdict", "solve_points"]
 
-#: Point verdicts, indexed by their code.
-VERDICTS = ("stable", "flutter", "divergence", "indeterminate")
-assert (STABLE, FLUTTER, DIVERGENCE, INDETERMINATE) == (0, 1, 2, 3)
 #: Digits of the high-precision stage.
 _MP_DPS = 50
 #: Points refined in high precision per call at most; beyond, they stay indeterminate.
@@ -188,7 +186,7 @@ def solve_points(
     Returns
     -------
     lam, err : ndarray, shape (P, n)
-        One root per mode (see :func:`~squealkit.solvers.small.select_modes`) and its
+        One root per mode (see :func:`~squealkit.stability._verdicts.select_modes`) and its
         error radius [1/s].
     verdict : ndarray of int8, shape (P,)
         Codes into :data:`VERDICTS`.
@@ -425,7 +423,7 @@ def exact_verdict(M: NDArray, C: NDArray, K: NDArray, thr: float, *, zero_reach:
     by 1e-10, or an exact one, is decided like any other point.
 
     With ``zero_reach`` > ``thr`` (the reach of a zero root split by the rounding of the
-    matrices, see :data:`~squealkit.solvers.small.ZERO_ROOT_REACH`), the roots beyond
+    matrices, see :data:`~squealkit.stability._verdicts.ZERO_ROOT_REACH`), the roots beyond
     ``zero_reach`` decide; where the only roots beyond ``thr`` lie within ``zero_reach``
     they may be a rigid-body mode's rounding, and the point is indeterminate.
     """

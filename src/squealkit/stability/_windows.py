@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..solvers.small import DIVERGENCE, FLUTTER, INDETERMINATE, STABLE
+from ._verdicts import DIVERGENCE, FLUTTER, INDETERMINATE, STABLE
 
 #: ``evaluate(rows, x, high_precision=True) -> (verdict, lam, thr)``: the verdict code, the
 #: modes (P, n) and the growth-rate threshold of row ``rows[p]`` at path parameter ``x[p]``;

@@ -20,7 +20,7 @@ from .._deprecation import keyword_only
 from .._threads import honour_thread_limit, limit_threads, threads_for
 from .._validation import InputError, validate_array_finite, validate_finite
 from ..models import FrictionModel
-from ..solvers.small import DIVERGENCE, FLUTTER, INDETERMINATE
+from ._verdicts import DIVERGENCE, FLUTTER, INDETERMINATE
 from ._windows import ONSET_STATUS, SCAN_POINTS, find_windows
 from .eigen import _TAN_THETA_WHY, _solve_models, check_magnitudes
 

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..solvers.mac import MacTracker as _MacTracker  # noqa: F401  (moved; the old private name kept)
-from ..solvers.small import _REAL_RTOL, _locked_in
+from ._verdicts import _REAL_RTOL, _locked_in
 
 __all__ = ["lock_in", "track_modes"]
 

@@ -1,30 +1,16 @@
 """Compiled kernels of small (few-DOF) models over large grids of points.
 
-- :mod:`~squealkit.solvers.small.roots`: all 2n eigenvalues of ``M s^2 + C s + K`` per point as
-  the roots of the characteristic polynomial (Leibniz expansion, Aberth-Ehrlich iteration warm-started
-  along a row, LAPACK where it does not converge), each with an a-posteriori error radius;
-- :mod:`~squealkit.solvers.small.modes`: what those roots say: the point's verdict, one root per
-  mode, growth rates, damping ratios and lock-in.
+:mod:`~squealkit.solvers.small.roots`: all 2n eigenvalues of ``M s^2 + C s + K`` per point as the
+roots of the characteristic polynomial (Leibniz expansion, Aberth-Ehrlich iteration warm-started
+along a row, LAPACK where it does not converge), each with an a-posteriori error radius.
 
-The names the analyses use are importable from ``squealkit.solvers.small``, as when this was one module.
+What those roots say (the point's verdict, one root per mode, growth rates, damping ratios and
+lock-in) is the stability analysis' reading of them: :mod:`squealkit.stability._verdicts` (it was
+``solvers/small/modes.py``; issue #28: the solvers know no analysis).
 """
 
 # internal kernels (no __all__: not part of the documented API), re-exported for the analyses that import them
-# from here, as when this was one module; _radii_range is compiled by the warm-up, _REAL_RTOL and _locked_in
-# are reused by mode tracking
-from .modes import (  # noqa: F401
-    _REAL_RTOL,
-    DIVERGENCE,
-    FLUTTER,
-    INDETERMINATE,
-    STABLE,
-    UNDECIDED,
-    ZERO_ROOT_REACH,
-    _locked_in,
-    classify_points,
-    derived_quantities,
-    select_modes,
-)
+# from here, as when this was one module; _radii_range is compiled by the warm-up
 from .roots import (  # noqa: F401
     _radii_range,
     charpoly_table,

@@ -18,7 +18,7 @@ call overhead and Hessenberg reduction) by a few hundred flops per point.
 
 Every root leaves with an a-posteriori error radius from the kernel's own rounding
 (:func:`inclusion_radii`); what the roots mean (a verdict per point, one root per mode,
-growth rates and lock-in) is decided from them in :mod:`squealkit.solvers.small.modes`.
+growth rates and lock-in) is the stability analysis' reading of them, in :mod:`squealkit.stability._verdicts`.
 """
 
 from __future__ import annotations

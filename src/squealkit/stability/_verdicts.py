@@ -1,10 +1,14 @@
-"""Compiled kernels: what the certified roots of a grid say, point by point.
+"""Compiled kernels of the stability analysis: what the certified roots of a grid say, point by point.
 
-From the 2n roots of each point and their error radii (:mod:`squealkit.solvers.small.roots`):
-the point's verdict (:func:`classify_points`: stable, flutter, divergence, or undecided where
-only a more accurate solver can tell), one root per mode in ascending frequency
-(:func:`select_modes`), and per mode its growth rate, frequency, damping ratio and whether two
-modes have locked in (:func:`derived_quantities`).
+The engine (:mod:`squealkit.solvers.small`) gives the 2n roots of each point and their error
+radii; this module reads them in the analysis' words: the point's verdict (:func:`classify_points`:
+stable, flutter, divergence, or undecided where only a more accurate solver can tell;
+:data:`VERDICTS`), one root per mode in ascending frequency, the most unstable real root never
+dropped (:func:`select_modes`), and per mode its growth rate, frequency, damping ratio, whether it
+is unstable and whether two modes have locked in (:func:`derived_quantities`).
+
+Moved from ``squealkit/solvers/small/modes.py`` (issue #28: the solvers know no analysis); numba
+caches these kernels under this module's path.
 """
 
 from __future__ import annotations
@@ -12,8 +16,9 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-#: Verdict codes of a grid point (see :data:`squealkit.stability.VERDICTS`).
+#: Verdict codes of a grid point, and their words (:data:`squealkit.stability.VERDICTS`) by code.
 STABLE, FLUTTER, DIVERGENCE, INDETERMINATE = 0, 1, 2, 3
+VERDICTS = ("stable", "flutter", "divergence", "indeterminate")
 #: the point needs a more accurate solver (internal; never in a result)
 UNDECIDED = 4
 
