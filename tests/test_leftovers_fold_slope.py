@@ -72,7 +72,7 @@ def folded_section(tmp_path_factory):
     """The report's "How loud" section on the paper's rig, with the flat-disc branch replaced by the folded one
     (and no slope branch): only the text is under test; the run-out transient is the quick one."""
     import squealkit.nonlinear as nl
-    from squealkit._validation import InputError
+    from squealkit import InputError
     from squealkit.models import get_preset
     from squealkit.report.settings import ReportSettings
     from squealkit.report.steps_nonlinear import nonlinear_step
@@ -98,3 +98,34 @@ def test_the_report_says_the_branch_folds_and_quotes_the_cycle_before_the_fold(f
     assert "The branch folds at mu = 0.4538" in text
     assert "At mu = 0.42 this branch has 2 limit cycles (x1: 0.250 um (stable), 0.750 um (stable)" in text
     assert "reached the end of the range [0.3, 1] at mu = 0.41" in text  # where the continuation stopped
+
+
+# --- the flat-disc onset, once per report ---------------------------------------------------------------
+
+
+@pytest.mark.slow
+def test_a_report_computes_the_damped_flat_disc_onset_once(tmp_path, monkeypatch):
+    """The operating point, Fig. 2, the critical-friction and the measurement sections each computed
+    critical_friction(model, 0, damped=True) (4 times per report on main); a report's steps now share one.
+    A damped Hoffmann model of one's own: a quick report in seconds that has every one of those readers
+    (the limit-cycle section, whose engine finds its own Hopf point, is for pin-on-disc models only)."""
+    import traceback
+
+    import squealkit.stability.critical as critical
+    from squealkit.models import Hoffmann2002
+    from squealkit.report import reproduce
+
+    curve = critical.critical_friction_curve
+    by_report = []
+
+    def counting(model, theta, *args, damped=None, **kwargs):
+        # who called critical_friction: a module of squealkit.report (the engines' own calls are not counted)
+        stack = [f for f in traceback.extract_stack()[:-1] if not f.filename.endswith("_threads.py")]
+        i = max(k for k, f in enumerate(stack) if f.name == "critical_friction")
+        if damped and "/report/" in stack[i - 1].filename.replace("\\", "/"):
+            by_report.append(stack[i - 1].name)
+        return curve(model, theta, *args, damped=damped, **kwargs)
+
+    monkeypatch.setattr(critical, "critical_friction_curve", counting)
+    reproduce(tmp_path / "out", quick=True, model=Hoffmann2002(c=5.0))
+    assert len(by_report) == 1, by_report

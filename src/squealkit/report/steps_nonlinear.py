@@ -20,6 +20,7 @@ import xarray as xr
 
 from ..io import save_dataset
 from ..models import FrictionModel
+from .context import ReportContext, flat_onset
 from .document import FigureRef, Section, Table
 from .settings import ReportSettings
 
@@ -146,21 +147,21 @@ def _settle_text(low: tuple[float, float, float, float], high: tuple[float, floa
 
 
 def nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: bool = False,
-                   settings: ReportSettings | None = None) -> Section:
+                   settings: ReportSettings | None = None, context: ReportContext | None = None) -> Section:
     """The section "How loud": limit cycles over friction and run-out slope, beside the Fig. 4 transient."""
     from ..stability.critical import UnrealisticFrictionWarning
 
     with warnings.catch_warnings():  # the critical-friction section already says so
         warnings.simplefilter("ignore", UnrealisticFrictionWarning)
-        return _nonlinear_step(model, figures, data, quick=quick, settings=settings or ReportSettings.paper())
+        return _nonlinear_step(model, figures, data, quick=quick, settings=settings or ReportSettings.paper(),
+                               context=context)
 
 
 def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: bool,
-                    settings: ReportSettings) -> Section:
+                    settings: ReportSettings, context: ReportContext | None) -> Section:
     from .._validation import InputError
     from ..nonlinear import limit_cycle_branch, limit_cycle_branch_slope
     from ..plotting.limitcycle import how_loud_level_plot, how_loud_plot
-    from ..stability import critical_friction
     from ..transient import Contact, SineRunOut, TensileContactWarning, simulate
     from ..transient.simulate import response_envelope
     from .steps_stability import _save_fig
@@ -172,7 +173,7 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
     if DOF not in model.dof_names:
         return Section("how_loud", title, (f"This model has no DOF {DOF!r} (the pin's); the limit-cycle section is "
                                            "written for the pin-on-disc model.",))
-    crit = critical_friction(model, 0.0, damped=True, mu_max=2.0)
+    crit = flat_onset(model, context)  # up to mu = 2 (critical_friction's mu_max)
     if crit.status != "onset":
         why = {"stable_in_range": "stays stable for every mu up to 2",
                "unstable_at_start": "is already unstable without friction (mu = 0)",
