@@ -129,3 +129,91 @@ def test_a_report_computes_the_damped_flat_disc_onset_once(tmp_path, monkeypatch
     monkeypatch.setattr(critical, "critical_friction_curve", counting)
     reproduce(tmp_path / "out", quick=True, model=Hoffmann2002(c=5.0))
     assert len(by_report) == 1, by_report
+
+
+# --- a transient at a fixed incline -------------------------------------------------------------------
+
+
+def _envelope_rate(ds, t0, t1):
+    from squealkit.transient import response_envelope
+
+    env = response_envelope(ds, "x1", highpass_freq=1000.0)
+    t = env["time"].values
+    keep = (t > t0) & (t < t1)
+    return float(np.polyfit(t[keep], np.log(env.values[keep]), 1)[0])
+
+
+@pytest.mark.parametrize(("mu", "tan_theta", "method"), [(0.35, 0.15, "dopri5"), (0.30, 0.02, "dopri5"),
+                                                          (0.35, 0.15, "rosenbrock")])
+def test_a_run_at_a_fixed_incline_grows_at_the_eigenvalue_of_that_incline(mu, tan_theta, method):
+    # reference: the real part of the rightmost eigenvalue of the damped linear model at (mu, tan theta)
+    # (squealkit.stability.eigenvalues, LAPACK); the linear contact never opens, so the run is a linear ODE
+    # whose vibration about the equilibrium grows (or decays) at that rate. mu + tan(theta) = 0.5 lies above
+    # the paper rig's damped onset 0.3977, 0.32 below it.
+    from squealkit.models import get_preset
+    from squealkit.stability import eigenvalues
+    from squealkit.transient import ConstantIncline, simulate
+
+    model = get_preset("lv2013")
+    sigma = float(eigenvalues(model, mu=mu, tan_theta=tan_theta, damped=True).real.max())
+    ds = simulate(model, mu=mu, profile=ConstantIncline(tan_theta), duration=0.04, perturbation=1e-9,
+                  rng=np.random.default_rng(1), method=method)
+    assert np.all(ds["tan_theta"].values == tan_theta) and np.all(ds["q"].values == 0.0)
+    # after the other modes have decayed (their rates are below -200 1/s: e^-2 by 10 ms)
+    assert _envelope_rate(ds, 0.01, 0.035) == pytest.approx(sigma, rel=0.01)
+
+
+def test_the_incline_from_its_angle_and_on_the_cli(tmp_path, run):
+    from squealkit import InputError
+    from squealkit.io import load_dataset
+    from squealkit.transient import ConstantIncline
+
+    assert ConstantIncline.from_theta(math.radians(4.0)).tan_theta == pytest.approx(math.tan(math.radians(4.0)))
+    with pytest.raises(InputError, match="theta"):
+        ConstantIncline.from_theta(math.pi / 2)
+    out = tmp_path / "run.nc"
+    r = run("simulate", "--mu", "0.35", "--theta", "4", "--duration", "0.002", "--out", str(out), "--json")
+    assert r.exit_code == 0, r.output
+    ds = load_dataset(out)
+    assert np.allclose(ds["tan_theta"].values, math.tan(math.radians(4.0)), rtol=1e-12)
+    assert np.all(ds["q"].values == 0.0)
+    r = run("simulate", "--theta", "4", "--sro", "sine", "--duration", "0.002")
+    assert r.exit_code == 2 and "without --sro" in r.output
+    r = run("simulate", "--theta", "90", "--duration", "0.002")
+    assert r.exit_code == 2 and "--theta" in r.output
+
+
+# --- UFF 58's six significant digits ------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(("fs", "written"), [(48_000.0, "2.08333e-05"), (44_100.0, "2.26757e-05"),
+                                             (1_000.0, "1.00000e-03")])
+def test_a_uff_file_of_a_whole_rate_reads_that_rate(tmp_path, fs, written):
+    # pyuff writes the abscissa increment in E13.5 (its own file, as written, is the reference): 1/48000 s as
+    # 2.08333e-05, whose inverse is 48000.077 Hz; 48000 Hz lies within half a unit of the last digit
+    from squealkit.measurement import read_recording, recording_dataset
+    from squealkit.measurement.formats import write_recording
+
+    n = 480
+    rec = recording_dataset({"mic": np.sin(np.arange(n) * 0.3), "probe": np.zeros(n)}, fs)
+    f = write_recording(rec, tmp_path / "r.uff")
+    assert f" {written} " in f.read_text().splitlines()[8]
+    ds = read_recording(f)
+    assert ds.attrs["fs"] == fs
+    assert ds["time"].values[-1] == (n - 1) / fs
+    if 1.0 / float(written) != fs:
+        assert ds.attrs["fs_from_file"] == 1.0 / float(written)
+        assert "whole rate" in ds.attrs["fs_rounding"] and written in ds.attrs["fs_rounding"]
+    else:  # nothing was rounded: nothing to say
+        assert "fs_from_file" not in ds.attrs
+
+
+def test_a_uff_rate_that_is_not_whole_within_the_precision_is_read_as_written(tmp_path):
+    # 1/3.33337e-05 = 29999.64 Hz; the text stands for 29999.59-29999.69 Hz, no whole number of Hz
+    from squealkit.measurement import read_recording, recording_dataset
+    from squealkit.measurement.formats import write_recording
+
+    f = write_recording(recording_dataset({"mic": np.zeros(64)}, 30_000.0), tmp_path / "r.uff")
+    f.write_text(f.read_text().replace("3.33333e-05", "3.33337e-05"))
+    ds = read_recording(f)
+    assert ds.attrs["fs"] == 1.0 / 3.33337e-05 and "fs_from_file" not in ds.attrs
