@@ -72,8 +72,9 @@ ALLOWED: dict[str, tuple[str, ...]] = {
     # the one sample-rate estimate: the streaming fit against a one-shot least squares, block sizes no file
     # of a test's size reaches; an in-memory recording's rate, which only the analysis takes
     # how the report reads a limit-cycle branch that folds (along its arclength), against interpolation by hand:
-    # a folding branch is built by hand, no public call reaches these readers without a whole report
-    "test_leftovers_fold_slope.py": ("squealkit.report.steps_nonlinear._at",
+    # a folding branch is built by hand, no public call reaches these readers without a whole report;
+    # and the one check whether an optional package is there and imports (squealkit._optional.available)
+    "test_leftovers_fold_slope.py": ("squealkit._optional.available", "squealkit.report.steps_nonlinear._at",
                                      "squealkit.report.steps_nonlinear._cycles_at",
                                      "squealkit.report.steps_nonlinear._segments"),
     "test_leftovers_fs.py": ("squealkit.measurement.formats._common",

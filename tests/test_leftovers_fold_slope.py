@@ -217,3 +217,56 @@ def test_a_uff_rate_that_is_not_whole_within_the_precision_is_read_as_written(tm
     f.write_text(f.read_text().replace("3.33333e-05", "3.33337e-05"))
     ds = read_recording(f)
     assert ds.attrs["fs"] == 1.0 / 3.33337e-05 and "fs_from_file" not in ds.attrs
+
+
+# --- one way to ask whether an optional package is there ----------------------------------------------
+
+
+@pytest.fixture()
+def broken_package(tmp_path, monkeypatch):
+    """A package found on the path whose import fails as pypardiso's does without MKL (an OSError from the
+    shared library loader): installed, but broken."""
+    pkg = tmp_path / "sk_broken_pkg"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("raise OSError('libmkl_rt.so.2: cannot open shared object file')\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    return "sk_broken_pkg"
+
+
+def test_a_broken_install_is_not_available(broken_package):
+    from squealkit._optional import available
+
+    assert not available(broken_package)
+    assert not available("sk_no_such_pkg") and not available("sk_no_such_pkg.sub")
+    assert available("numpy")
+
+
+def test_an_lu_backend_whose_module_does_not_import_is_refused_in_one_line(broken_package):
+    # main asked importlib.util.find_spec, which finds the broken package: the backend was handed out and
+    # failed when used, with the loader's OSError
+    from squealkit import InputError
+    from squealkit.solvers.lu import LU_BACKENDS, DenseLU, get_lu_backend, register_lu_backend
+
+    register_lu_backend("sk-broken", lambda P, perm: DenseLU(P), requires=(broken_package,), install="reinstall it")
+    try:
+        with pytest.raises(InputError, match=f"needs {broken_package} .*does not import.*reinstall it"):
+            get_lu_backend("sk-broken")
+    finally:
+        del LU_BACKENDS["sk-broken"]
+
+
+def test_every_is_it_installed_question_goes_through_available():
+    # the static rule: importlib.util.find_spec (or a bare try-import) to test for a package appears only
+    # in squealkit._optional
+    import ast
+    from pathlib import Path
+
+    src = Path(__file__).resolve().parents[1] / "src" / "squealkit"
+    uses = []
+    for f in src.rglob("*.py"):
+        if f.name == "_optional.py":
+            continue
+        for node in ast.walk(ast.parse(f.read_text())):
+            if isinstance(node, ast.Attribute) and node.attr == "find_spec":
+                uses.append(f"{f.relative_to(src)}:{node.lineno}")
+    assert not uses, uses
