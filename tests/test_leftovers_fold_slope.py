@@ -270,3 +270,29 @@ def test_every_is_it_installed_question_goes_through_available():
             if isinstance(node, ast.Attribute) and node.attr == "find_spec":
                 uses.append(f"{f.relative_to(src)}:{node.lineno}")
     assert not uses, uses
+
+
+def test_the_limit_cycle_branch_takes_the_onset_a_report_has_already(monkeypatch):
+    # the report's limit-cycle section handed its onset over, and the branch computed it again: now the
+    # branch from a given onset is the branch it computes itself (same Hopf point, same cycles), without a
+    # second critical_friction
+    import squealkit.stability.critical as critical
+    from squealkit.models import get_preset
+    from squealkit.nonlinear import limit_cycle_branch
+    from squealkit.stability import critical_friction
+
+    model = get_preset("lv2013")
+    kw = dict(n_points=11, max_points=4, check_harmonics=False, harmonics=4)
+    own = limit_cycle_branch(model, (0.3, 1.0), **kw)
+    onset = critical_friction(model, 0.0, damped=True)
+    calls = []
+    curve = critical.critical_friction_curve
+    monkeypatch.setattr(critical, "critical_friction_curve", lambda *a, **k: calls.append(1) or curve(*a, **k))
+    given = limit_cycle_branch(model, (0.3, 1.0), onset=onset, **kw)
+    assert not calls
+    assert given.attrs["hopf_mu"] == own.attrs["hopf_mu"]
+    np.testing.assert_array_equal(given["amplitude"].values, own["amplitude"].values)
+    # an onset of another incline is not taken: computed as without it
+    other = critical_friction(model, 0.05, damped=True)
+    limit_cycle_branch(model, (0.3, 1.0), onset=other, **kw)
+    assert calls

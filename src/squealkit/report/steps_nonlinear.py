@@ -184,7 +184,7 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
     mu_range = (min(MU_RANGE[0], 0.9 * crit.mu_critical), max(MU_RANGE[1], crit.mu_critical + 0.3))
     n = 11 if quick else 26
     try:
-        branch = limit_cycle_branch(model, mu_range, harmonics=HARMONICS, n_points=n, speed=speed)
+        branch = limit_cycle_branch(model, mu_range, harmonics=HARMONICS, n_points=n, speed=speed, onset=crit)
     except InputError as e:
         return Section("how_loud", title, (f"The limit cycles could not be followed for this model: {e}",))
     t_max = 2 * math.pi * q0 / wavelength  # the steepest slope of the Fig. 4 run-out (eq. 11)
