@@ -76,6 +76,7 @@ ALLOWED: dict[str, tuple[str, ...]] = {
     # and the one check whether an optional package is there and imports (squealkit._optional.available)
     "test_leftovers_fold_slope.py": ("squealkit._optional.available", "squealkit.report.steps_nonlinear._at",
                                      "squealkit.report.steps_nonlinear._cycles_at",
+                                     "squealkit.report.steps_nonlinear._fold_text",
                                      "squealkit.report.steps_nonlinear._segments"),
     "test_leftovers_fs.py": ("squealkit.measurement.formats._common",
                              "squealkit.measurement.analysis.framing._DatasetSource"),

@@ -67,6 +67,23 @@ def test_a_branch_saved_without_fold_flags_splits_where_mu_turns_back():
     assert len(_cycles_at(ds, "mu", 0.44)) == 2
 
 
+
+def test_an_s_shaped_branch_has_three_cycles_between_its_folds_and_goes_on_past_them():
+    from squealkit.report.steps_nonlinear import _cycles_at, _fold_text
+
+    ds = folded_branch()
+    mu = np.array([0.40, 0.40, 0.42, 0.45, 0.43, 0.42, 0.44, 0.48, 0.50])  # folds at 0.45 (point 3), 0.42 (5)
+    fold = np.zeros(mu.size, bool)
+    fold[[3, 5]] = True
+    s = ds.assign_coords(mu=("point", mu)).assign(fold=("point", fold), fold_mu=("fold", mu[[3, 5]]))
+    # by hand: 0.43 is crossed on the way up (points 2-3: 0.2 + 0.1 / 3 um), at point 4 (0.4 um) and on
+    # the way up again (points 5-6: 0.5 + 0.05 um)
+    a = [round(v * 1e9, 6) for v, _ in _cycles_at(s, "mu", 0.43)]
+    assert a == pytest.approx([200 + 100 / 3, 400.0, 550.0])
+    text = _fold_text(s, "mu", 0.43)
+    assert "3 limit cycles" in text and "folds at mu = 0.45, 0.42, turning back and forth" in text
+    assert "none beyond" not in text
+
 @pytest.fixture(scope="module")
 def folded_section(tmp_path_factory):
     """The report's "How loud" section on the paper's rig, with the flat-disc branch replaced by the folded one

@@ -100,9 +100,11 @@ def _fold_text(ds: xr.Dataset, param: str, mu_1: float) -> str:
     if folds:
         x = ds[param].values
         detail = str(ds.attrs.get("stop_detail", "")) or str(ds.attrs.get("stop_reason", "")).replace("_", " ")
-        text += (f" The branch folds at mu = {', '.join(f'{f:.4g}' for f in folds)}: the cycles followed from the "
-                 f"onset turn back there, so this branch has none beyond mu = {max(folds):.4g}; the continuation "
-                 f"went on to mu = {x[-1]:.4g} and stopped ({detail}).")
+        text += f" The branch folds at mu = {', '.join(f'{f:.4g}' for f in folds)}"
+        # the largest mu reached is a fold: no cycle of this branch beyond it (else the branch goes on past it)
+        text += (f": the cycles followed from the onset turn back there, so this branch has none beyond mu = "
+                 f"{max(folds):.4g}" if max(folds) >= float(x.max()) else ", turning back and forth in mu")
+        text += f"; the continuation went on to mu = {x[-1]:.4g} and stopped ({detail})."
     return text
 
 
@@ -221,9 +223,9 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
 
     a = branch.attrs
     mu_c, f_c = float(a["hopf_mu"]), float(a["hopf_frequency_hz"])
-    # the far end of the cycles followed from the onset: the first fold beyond it, else the branch's end
+    # the largest mu the branch reaches: its end, or the fold where it turns back (said so by _fold_text)
+    mu_hi = float(branch["mu"].values.max())
     beyond = [float(f) for f in branch["fold_mu"].values if f > mu_c + 1e-9]
-    mu_hi = beyond[0] if beyond else float(branch["mu"].values.max())
     mu_1 = settings.mu_cycle
     a_05, a_hi = _at(branch, "mu", mu_1), _at(branch, "mu", mu_hi)
     l_05, l_hi = (_at(branch, "mu", m, "velocity_level_db") for m in (mu_1, mu_hi))
