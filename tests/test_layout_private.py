@@ -76,6 +76,13 @@ ALLOWED: dict[str, tuple[str, ...]] = {
     "test_user_inputs.py": ("squealkit.measurement.analysis.framing._DatasetSource",),
     # the one sample-rate estimate: the streaming fit against a one-shot least squares, block sizes no file
     # of a test's size reaches; an in-memory recording's rate, which only the analysis takes
+    # how the report reads a limit-cycle branch that folds (along its arclength), against interpolation by hand:
+    # a folding branch is built by hand, no public call reaches these readers without a whole report;
+    # and the one check whether an optional package is there and imports (squealkit._optional.available)
+    "test_leftovers_fold_slope.py": ("squealkit._optional.available", "squealkit.report.steps_nonlinear._at",
+                                     "squealkit.report.steps_nonlinear._cycles_at",
+                                     "squealkit.report.steps_nonlinear._fold_text",
+                                     "squealkit.report.steps_nonlinear._segments"),
     "test_leftovers_fs.py": ("squealkit.measurement.formats._common",
                              "squealkit.measurement.analysis.framing._DatasetSource"),
     "test_nonlinear.py": ("squealkit.nonlinear.harmonic_balance._Basis",

@@ -6,13 +6,17 @@ campaign stores, Dask clusters and the faster sparse LU come with extras; a comm
 needs one that is missing stops with :class:`~squealkit._validation.InputError` (exit code 2
 on the command line), naming the package and the extra that brings it, never a traceback.
 
-Every import of an optional package in squealkit goes through :func:`require` (checked by
-``tests/test_optional_dependencies.py``).
+Every import of an optional package in squealkit goes through :func:`require`, and every question
+"is it there?" through :func:`available` (both checked by ``tests/test_optional_dependencies.py``).
+A package counts as available only if it imports: one found on the path whose import fails (a
+broken install, a shared library missing, as pypardiso without MKL) is not, so that what
+squealkit picks on its own (the ``"auto"`` LU backend, the FE report's VTK files) never picks it.
 """
 
 from __future__ import annotations
 
 import importlib
+import importlib.util
 from types import ModuleType
 
 from ._validation import InputError
@@ -59,22 +63,33 @@ def require(module: str, purpose: str) -> ModuleType:
         return importlib.import_module(module)
     except ImportError as e:
         raise InputError(f"{purpose} needs {dist}: pip install 'squealkit[{extra}]'.") from e
+    except OSError as e:  # installed, but a shared library it loads is missing
+        raise InputError(f"{purpose} needs {dist}, which is installed but does not import ({e}): reinstall it "
+                         f"(pip install --force-reinstall 'squealkit[{extra}]').") from e
 
 
 def available(module: str) -> bool:
-    """Whether an optional module can be imported (for output that is written only when it is there).
+    """Whether a module can be used: it is installed and it imports.
+
+    The one check squealkit makes before choosing something optional (output written only when a
+    package is there, a backend picked only when it works). ``importlib.util.find_spec`` first
+    answers "not installed" without importing anything; a module it finds is then imported, since
+    only the import tells a working install from a broken one (and using it imports it anyway).
 
     Parameters
     ----------
     module : str
-        As for :func:`require`.
+        A module name, e.g. ``"meshio"`` or ``"ansys.mapdl.reader"`` (one of :data:`OPTIONAL` or any
+        other, e.g. what a registered LU backend requires).
 
     Returns
     -------
     bool
     """
     try:
-        require(module, "")
-    except InputError:
+        if importlib.util.find_spec(module) is None:
+            return False
+        importlib.import_module(module)
+    except (ImportError, OSError, ValueError):  # ValueError: a module in sys.modules without a spec
         return False
     return True

@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 import xarray as xr
 
-from .._validation import InputError, parse_range
+from .._validation import InputError, parse_range, validate_finite
 from ._options import (
     RUNOUT_WAVELENGTH,
     SRO_AMPLITUDE_ONE,
@@ -38,6 +38,9 @@ from ._options import (
               help="Sine wavelength lambda, or longest random wavelength [m].")
 @click.option("--sro-file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Profile for --sro file: two columns, position [m] and q [m].")
+@click.option("--theta", "theta_deg", default=None, type=NumberOrRange(single=True, needs="one run-out incline"),
+              help="Hold the run-out incline fixed at this angle in DEGREES on a mean-flat disc (q = 0), the "
+                   "frozen slope of the stability map; replaces --sro.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of random roughness and perturbation.")
 @click.option("--perturbation", type=float, default=0.0, show_default=True,
               help="RMS of a random initial displacement [m] (a flat disc needs one to leave equilibrium).")
@@ -58,8 +61,9 @@ from ._options import (
               help="Relative tolerance of dopri5 and rosenbrock.")
 @scheduler_option
 @output_options()
-def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, sro_file, seed, perturbation, contact,
-             stribeck_spec, speed, duration, fs, method, rtol, scheduler, as_json, out_path, plot_path) -> None:
+def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, sro_file, theta_deg, seed,
+             perturbation, contact, stribeck_spec, speed, duration, fs, method, rtol, scheduler, as_json, out_path,
+             plot_path) -> None:
     """Simulate the time response of a model driven by disc surface run-out.
 
     \b
@@ -70,6 +74,8 @@ def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, 
       squealkit simulate --sro none --perturbation 1e-9 --plot fig3.png
     A batch of 64 runs over mu, written run block by run block to zarr, on a cluster:
       squealkit simulate --mu 0.2:0.8:64 --out batch.zarr --scheduler local --json
+    A fixed incline of 2 deg at mu = 0.35 (the stability map's frozen slope), from a perturbation:
+      squealkit simulate --mu 0.35 --theta 2 --perturbation 1e-9 --duration 0.05 --json
     Friction falling with speed (Stribeck) at a low sliding speed, smooth disc:
       squealkit simulate --mu 0.2 --sro none --stribeck 0.6,0.001 --speed 0.0015 \\
           --perturbation 1e-14 --duration 0.01 --json
@@ -85,9 +91,11 @@ def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, 
     the linear contact pulled), lists with one entry per run. A single run's --json
     also has method, steps, events, tensile_fraction and min_normal_force [N].
     """
+    import math
+
     import numpy as np
 
-    from ..transient import Contact, RandomRoughness, SampledProfile, SineRunOut, Smooth
+    from ..transient import ConstantIncline, Contact, RandomRoughness, SampledProfile, SineRunOut, Smooth
     from ..transient import simulate as run_simulation
     from ..transient.simulate import transient_summary
 
@@ -101,7 +109,14 @@ def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, 
         kw = {"mu_static": law.mu_static, "v_stribeck": law.v_stribeck}
         contact = Contact(**kw) if contact == "linear" else Contact.nonlinear(**kw)
     rng = np.random.default_rng(seed)
-    if sro == "sine":
+    if theta_deg is not None:
+        if click.get_current_context().get_parameter_source("sro") != click.core.ParameterSource.DEFAULT:
+            raise InputError(f"--theta {theta_deg:g} holds a fixed incline on a mean-flat disc: give it without --sro.")
+        theta_deg = validate_finite("--theta", theta_deg)
+        if abs(theta_deg) >= 90.0:
+            raise InputError(f"--theta {theta_deg!r}: the angle must lie strictly between -90 and 90 deg.")
+        profile = ConstantIncline.from_theta(math.radians(theta_deg))
+    elif sro == "sine":
         profile = SineRunOut(sro_amplitude, sro_wavelength)
     elif sro == "file":
         if sro_file is None:
@@ -144,7 +159,7 @@ def simulate(preset, config, sets, mu_spec, sro, sro_amplitude, sro_wavelength, 
         check_memory(8.0 * ds.sizes["time"] * (len(ds.data_vars) + 2) * 3, f"--plot of {ds.sizes['time']} samples",
                      "Plot a shorter --duration.")
         ds = ds.load()
-        fig = fig3_plot(ds) if sro == "none" else fig4_plot(ds)
+        fig = fig3_plot(ds) if sro == "none" or theta_deg is not None else fig4_plot(ds)
         save_figure(fig, plot_path)
     summary = transient_summary(ds)
     ds.close()

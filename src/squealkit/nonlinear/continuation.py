@@ -524,6 +524,7 @@ def limit_cycle_branch(
     check_harmonics: bool = True,
     stability: str = "monodromy",
     harmonics_tol: float | None = None,
+    onset=None,
 ) -> xr.Dataset:
     """Squeal limit cycles of a squealkit model over friction, from the Hopf point (harmonic balance).
 
@@ -564,6 +565,11 @@ def limit_cycle_branch(
         until the amplitude changes by at most this much (relative) at 2H; attributes
         ``harmonics_tol`` and ``harmonics_converged`` (with a warning when it is not).
         None (default): H stays ``harmonics`` and the change is only reported.
+    onset : CriticalFriction, optional
+        ``critical_friction(model, theta, damped=True)`` when the caller has it already (a report
+        computes it once for every section): used instead of computing it again. Only an onset
+        (status ``"onset"``) of the damped model at this ``theta`` is taken, and only for a contact
+        without static friction (whose onset needs the friction law); otherwise it is computed.
 
     Returns
     -------
@@ -592,7 +598,9 @@ def limit_cycle_branch(
     n_points = validate_int("n_points", n_points, 2)
     t = math.tan(theta)
     fr = {} if contact.mu_static is None else {"friction": contact.friction_law, "speed": speed}
-    crit = critical_friction(model, theta, damped=True, mu_max=max(2.0, 2 * hi), **fr)
+    given = (onset is not None and not fr and getattr(onset, "status", None) == "onset"
+             and getattr(onset, "damped", False) and getattr(onset, "theta", None) == theta)
+    crit = onset if given else critical_friction(model, theta, damped=True, mu_max=max(2.0, 2 * hi), **fr)
     if crit.status != "onset":
         raise InputError(f"No squeal onset at theta = {math.degrees(theta):g} deg (status {crit.status}); "
                          "there is no Hopf point to start a limit-cycle branch from.")

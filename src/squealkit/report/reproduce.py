@@ -15,6 +15,7 @@ from typing import Any
 
 from ..io import check_output
 from ..models import FrictionModel, PinOnDiscRig, get_preset
+from .context import ReportContext
 from .runner import REPORT_FILES, ReportStep, ReproduceResult, run_report
 from .settings import ReportSettings, load_report_settings
 
@@ -63,6 +64,7 @@ class RecordingSpec:
 def _paper_steps(
     model: FrictionModel, rig: PinOnDiscRig | None, published: bool, quick: bool,
     recording: RecordingSpec | None = None, settings: ReportSettings | None = None,
+    context: ReportContext | None = None,
 ) -> list[ReportStep]:
     from .steps_measurement import measurement_step, recording_step
     from .steps_stability import critical_step, fig2_step, parameters_step
@@ -70,11 +72,12 @@ def _paper_steps(
 
     n = 41 if quick else 161
     op = settings or ReportSettings.paper()
+    ctx = context or ReportContext()  # the flat-disc onset, computed once for every step that reads it
     steps = [
         ReportStep("parameters", lambda fig, dat: parameters_step(model, rig, fig, dat, settings=op)),
         ReportStep("Fig. 2 eigenvalues", lambda fig, dat: fig2_step(model, fig, dat, n_mu=n, n_theta=n,
-                                                                    published=published)),
-        ReportStep("critical friction", lambda fig, dat: critical_step(model, fig, dat, settings=op)),
+                                                                    published=published, context=ctx)),
+        ReportStep("critical friction", lambda fig, dat: critical_step(model, fig, dat, settings=op, context=ctx)),
         ReportStep("Figs. 3-4 transients", lambda fig, dat: transient_step(model, fig, dat, quick=quick, settings=op,
                                                                            published=published),
                    kernels=("transient",)),
@@ -86,16 +89,16 @@ def _paper_steps(
         from .steps_nonlinear import nonlinear_step
 
         steps.append(ReportStep("how loud", lambda fig, dat: nonlinear_step(model, fig, dat, quick=quick,
-                                                                            settings=op),
+                                                                            settings=op, context=ctx),
                                 kernels=("transient", "nonlinear")))
     if recording is None:
         steps.append(ReportStep("Figs. 6-13 measurement", lambda fig, dat: measurement_step(
-            model, fig, dat, quick=quick, published=published), kernels=("measurement",)))
+            model, fig, dat, quick=quick, published=published, context=ctx), kernels=("measurement",)))
     else:
         r = recording
         steps.append(ReportStep("Figs. 6-13 your recording", lambda fig, dat: recording_step(
             r.path, fig, dat, mic=r.mic, displacement=r.displacement, rpm=r.rpm, radius=r.radius, fs=r.fs,
-            model=model, scale=r.scale, units=r.units, options=r.options), kernels=("measurement",)))
+            model=model, scale=r.scale, units=r.units, options=r.options, context=ctx), kernels=("measurement",)))
     return steps
 
 
@@ -157,9 +160,11 @@ def reproduce(
     paper = get_preset("lv2013")
     # verdicts against the published numbers only for the paper's rig; other models show them for reference
     paper_model = type(model) is type(paper) and model == paper
+    context = ReportContext()  # what several steps read (the flat-disc onset), computed once
     if settings is None:
-        settings = load_report_settings(config, model, paper=paper_model)
-    steps = _paper_steps(model, rig, published=paper_model, quick=quick, recording=recording, settings=settings)
+        settings = load_report_settings(config, model, paper=paper_model, context=context)
+    steps = _paper_steps(model, rig, published=paper_model, quick=quick, recording=recording, settings=settings,
+                         context=context)
     from .steps_conclusions import conclusions_step
 
     title = title or ("Lv, Zhang & Yu (2013), reproduced by squealkit" if default else "squealkit report")

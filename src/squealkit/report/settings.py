@@ -33,6 +33,7 @@ from typing import Any, ClassVar
 from .._operating_point import SPEED
 from .._validation import InputError, validate_finite, validate_int, validate_positive
 from ..models import FrictionModel
+from .context import ReportContext
 
 __all__ = ["ReportSettings", "load_report_settings"]
 
@@ -264,7 +265,7 @@ class ReportSettings:
         return cls()
 
     @classmethod
-    def for_model(cls, model: FrictionModel) -> ReportSettings:
+    def for_model(cls, model: FrictionModel, *, context: ReportContext | None = None) -> ReportSettings:
         """An operating point placed from the model's damped onset mu_c on a flat disc.
 
         The tolerance at 0.75 mu_c, the transients just below onset (0.9 mu_c) and clearly above
@@ -276,17 +277,20 @@ class ReportSettings:
         ----------
         model : FrictionModel
             The report's model.
+        context : ReportContext, optional
+            The report's shared results: its flat-disc onset is computed once per report.
 
         Returns
         -------
         ReportSettings
             With ``source`` saying where the values come from.
         """
-        from ..stability import UnrealisticFrictionWarning, critical_friction
+        from ..stability import UnrealisticFrictionWarning
+        from .context import flat_onset
 
         with warnings.catch_warnings():  # an onset beyond friction materials: the report's §3 says so
             warnings.simplefilter("ignore", UnrealisticFrictionWarning)
-            crit = critical_friction(model, 0.0, damped=True)
+            crit = flat_onset(model, context)
         if crit.status != "onset" or not math.isfinite(crit.mu_critical) or crit.mu_critical <= 0:
             return replace(cls(), source="the paper's operating point: this model has no damped onset on a flat "
                                          "disc up to mu = 2 to place one from")
@@ -326,7 +330,8 @@ def _round(x: float) -> float:
     return float(f"{x:.3g}")
 
 
-def load_report_settings(path: str | Path | None, model: FrictionModel, *, paper: bool) -> ReportSettings:
+def load_report_settings(path: str | Path | None, model: FrictionModel, *, paper: bool,
+                         context: ReportContext | None = None) -> ReportSettings:
     """The operating point of a report on ``model``: a model file's ``[report]`` table over the defaults.
 
     Parameters
@@ -337,10 +342,12 @@ def load_report_settings(path: str | Path | None, model: FrictionModel, *, paper
         The report's model, to place the defaults from.
     paper : bool
         The model is the paper's: its defaults are the paper's values.
+    context : ReportContext, optional
+        The report's shared results (the flat-disc onset the defaults are placed from).
 
     Returns
     -------
     ReportSettings
     """
-    return settings_from_file(path, ReportSettings,
-                              ReportSettings.paper if paper else lambda: ReportSettings.for_model(model))
+    return settings_from_file(path, ReportSettings, ReportSettings.paper if paper
+                              else lambda: ReportSettings.for_model(model, context=context))

@@ -11,7 +11,7 @@ from .._operating_point import RIG_FS, RIG_RADIUS, RIG_RPM, RIG_SQUEAL_FREQ
 from ..io import save_dataset
 from ..measurement import analyze_recording, squeal_views, synthetic_recording
 from ..models import FrictionModel
-from ..stability import critical_friction
+from .context import ReportContext, flat_onset
 from .document import Comparison, FigureRef, Section, Table
 from .steps_stability import _save_fig, onset_said_in_words
 
@@ -55,7 +55,7 @@ def _save_measurement_figures(figs: dict, figures: Path, prefix: str, captions: 
     return tuple(refs)
 
 
-def model_frequency(model: FrictionModel) -> tuple[float | None, str]:
+def model_frequency(model: FrictionModel, context: ReportContext | None = None) -> tuple[float | None, str]:
     """The frequency a model says a rig squeals at, and where it comes from.
 
     The damped onset on a flat disc (the mode that loses stability first, eq. 4 with C); a
@@ -63,14 +63,14 @@ def model_frequency(model: FrictionModel) -> tuple[float | None, str]:
     instead (eq. 7, Fig. 2); None when it never loses stability up to mu = 2.
     """
     with onset_said_in_words():  # the critical-friction section says whether onset is realistic
-        return _model_frequency(model)
+        return _model_frequency(model, context)
 
 
-def _model_frequency(model: FrictionModel) -> tuple[float | None, str]:
-    onset = critical_friction(model, 0.0, damped=True)
+def _model_frequency(model: FrictionModel, context: ReportContext | None) -> tuple[float | None, str]:
+    onset = flat_onset(model, context)
     if math.isfinite(onset.frequency_hz):
         return onset.frequency_hz, f"the model's damped onset (mu_crit = {onset.mu_critical:.4f}, flat disc)"
-    onset = critical_friction(model, 0.0, damped=False)
+    onset = flat_onset(model, context, damped=False)
     if math.isfinite(onset.frequency_hz):
         return onset.frequency_hz, (f"the model's undamped coalescence (mu_crit = {onset.mu_critical:.4f}, flat "
                                     "disc; damped it stays stable)")
@@ -80,7 +80,7 @@ def _model_frequency(model: FrictionModel) -> tuple[float | None, str]:
 def recording_step(recording: Path, figures: Path, data: Path, *, mic: str, displacement: str, rpm: float | None,
                    radius: float, fs: float | None = None, model: FrictionModel | None = None,
                    scale: dict[str, float] | None = None, units: dict[str, str] | None = None,
-                   options: dict | None = None) -> Section:
+                   options: dict | None = None, context: ReportContext | None = None) -> Section:
     """Figs. 6-13 on the user's own recording; with a model, its onset frequency beside the measured squeal.
 
     ``scale`` and ``units`` are applied where the channels are read (as ``analyze --scale/--unit``);
@@ -114,7 +114,7 @@ def recording_step(recording: Path, figures: Path, data: Path, *, mic: str, disp
     numbers = {"squeal_frequency_hz": f_sq if f_sq is not None else math.nan,
                "rising_fraction": rf if rf is not None else math.nan, "events": float(len(res.events))}
     if model is not None:
-        f_model, source = model_frequency(model)
+        f_model, source = model_frequency(model, context)
         diff = 100.0 * (f_sq / f_model - 1) if f_sq is not None and f_model is not None else None
         tables.append(Table(
             "Model against measurement", ("quantity", "model [Hz]", "measured [Hz]", "difference [%]", "model source"),
@@ -136,7 +136,7 @@ def recording_step(recording: Path, figures: Path, data: Path, *, mic: str, disp
 
 
 def measurement_step(model: FrictionModel, figures: Path, data: Path, *, quick: bool = False,
-                     seed: int = 2013, published: bool = True) -> Section:
+                     seed: int = 2013, published: bool = True, context: ReportContext | None = None) -> Section:
     """Figs. 6-13 on a synthetic recording whose squeal sits at the model's onset frequency.
 
     The recording is made at the model's frequency, so finding that frequency in it checks the
@@ -145,7 +145,7 @@ def measurement_step(model: FrictionModel, figures: Path, data: Path, *, quick: 
     from ..plotting.measurement import measurement_figures
 
     with onset_said_in_words():
-        onset = critical_friction(model, 0.0, damped=True)
+        onset = flat_onset(model, context)
     f_model = onset.frequency_hz if math.isfinite(onset.frequency_hz) else F_PUBLISHED
     rec = synthetic_recording(duration=1.0 if quick else 2.0, fs=FS, rpm=RPM, radius=RADIUS, freq=f_model,
                               seed=seed)

@@ -10,6 +10,7 @@ the numbers.
 
 from __future__ import annotations
 
+import itertools
 import math
 import warnings
 from pathlib import Path
@@ -20,6 +21,7 @@ import xarray as xr
 from .._operating_point import CYCLE_HARMONICS, CYCLE_MU_RANGE
 from ..io import save_dataset
 from ..models import FrictionModel
+from .context import ReportContext, flat_onset
 from .document import FigureRef, Section, Table
 from .settings import ReportSettings
 
@@ -37,15 +39,74 @@ MU_RANGE, HARMONICS = CYCLE_MU_RANGE, CYCLE_HARMONICS
 DOF = "x1"
 
 
-def _at(ds: xr.Dataset, param: str, value: float, var: str = "amplitude") -> float:
-    """``var`` of ``DOF`` interpolated at ``param = value`` on the stable part beyond the onset."""
+def _segments(ds: xr.Dataset, param: str) -> list[np.ndarray]:
+    """The branch's points split into runs along which ``param`` goes one way, in continuation (arclength) order.
+
+    A run ends at each fold the continuation found (the ``fold`` flags of
+    :func:`~squealkit.nonlinear.limit_cycle_branch`; a branch saved without them: wherever ``param``
+    turns back), and the fold point belongs to both runs it joins."""
+    x = ds[param].values
+    if "fold" in ds:
+        cuts = [int(i) for i in np.flatnonzero(ds["fold"].values.astype(bool)) if 0 < i < x.size - 1]
+    else:
+        step = np.sign(np.diff(x))
+        moves = np.flatnonzero(step)  # a vertical stretch (the start of a piecewise-linear law's branch) has none
+        cuts = [int(j) for i, j in itertools.pairwise(moves) if step[i] != step[j]]
+    ends = [0, *cuts, x.size - 1]
+    return [np.arange(a, b + 1) for a, b in itertools.pairwise(ends) if b > a]
+
+
+def _cycles_at(ds: xr.Dataset, param: str, value: float, var: str = "amplitude") -> list[tuple[float, bool]]:
+    """Every cycle of the branch at ``param = value``: ``(var of DOF, stable)`` for each monotone run of the
+    branch (:func:`_segments`) that brackets ``value``, interpolated between the two points of that run
+    around it (in arclength order, never across a fold); stable when both points are. A fold sitting
+    exactly at ``value`` is one cycle, not two."""
     x = ds[param].values
     y = ds[var].sel(dof=DOF).values if var == "amplitude" else ds[var].values
-    keep = ds["stable"].values.astype(bool) & (x > float(ds.attrs["hopf_mu"]) + 1e-9)
-    if keep.sum() < 2 or not x[keep].min() <= value <= x[keep].max():
+    stable = ds["stable"].values.astype(bool)
+    found: dict[float, tuple[float, bool]] = {}
+    for run in _segments(ds, param):
+        for i, j in itertools.pairwise(run):
+            if x[i] == x[j] or not min(x[i], x[j]) <= value <= max(x[i], x[j]):
+                continue  # a vertical step (the onset of a piecewise-linear law) has no one cycle at value
+            w = (value - x[i]) / (x[j] - x[i])
+            found.setdefault(round(i + w, 9), (float(y[i] + w * (y[j] - y[i])), bool(stable[i] and stable[j])))
+            break  # the first crossing of the run: a run is monotone in param up to the branch's sampling
+    return list(found.values())
+
+
+def _at(ds: xr.Dataset, param: str, value: float, var: str = "amplitude") -> float:
+    """``var`` of ``DOF`` on the stable cycle at ``param = value`` (:func:`_cycles_at`): the first in arclength
+    order (the one joined to the onset) where several are stable, nan where none is."""
+    if value <= float(ds.attrs["hopf_mu"]) + 1e-9:  # the quiet state, not a cycle, up to the onset
         return math.nan
-    order = np.argsort(x[keep])
-    return float(np.interp(value, x[keep][order], y[keep][order]))
+    stable = [v for v, s in _cycles_at(ds, param, value, var) if s]
+    return stable[0] if stable else math.nan
+
+
+def _stable_along(ds: xr.Dataset, param: str, values: np.ndarray, var: str = "amplitude") -> np.ndarray:
+    """:func:`_at` at each of ``values`` (an array), nan where the branch has no stable cycle."""
+    return np.array([_at(ds, param, float(v), var) for v in values])
+
+
+def _fold_text(ds: xr.Dataset, param: str, mu_1: float) -> str:
+    """What a branch that folds, or that has several cycles at ``mu_1``, does: in words, or ``""``."""
+    text = ""
+    cycles = _cycles_at(ds, param, mu_1)
+    if len(cycles) > 1:
+        each = ", ".join(f"{_um(a)} ({'stable' if s else 'unstable'})" for a, s in cycles)
+        text += (f" At mu = {mu_1:g} this branch has {len(cycles)} limit cycles ({DOF}: {each}, in the order "
+                 "followed from the onset); the amplitude quoted is the first stable one.")
+    folds = [float(v) for v in ds["fold_mu"].values] if "fold_mu" in ds else []
+    if folds:
+        x = ds[param].values
+        detail = str(ds.attrs.get("stop_detail", "")) or str(ds.attrs.get("stop_reason", "")).replace("_", " ")
+        text += f" The branch folds at mu = {', '.join(f'{f:.4g}' for f in folds)}"
+        # the largest mu reached is a fold: no cycle of this branch beyond it (else the branch goes on past it)
+        text += (f": the cycles followed from the onset turn back there, so this branch has none beyond mu = "
+                 f"{max(folds):.4g}" if max(folds) >= float(x.max()) else ", turning back and forth in mu")
+        text += f"; the continuation went on to mu = {x[-1]:.4g} and stopped ({detail})."
+    return text
 
 
 def _um(x: float) -> str:
@@ -89,21 +150,21 @@ def _settle_text(low: tuple[float, float, float, float], high: tuple[float, floa
 
 
 def nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: bool = False,
-                   settings: ReportSettings | None = None) -> Section:
+                   settings: ReportSettings | None = None, context: ReportContext | None = None) -> Section:
     """The section "How loud": limit cycles over friction and run-out slope, beside the Fig. 4 transient."""
     from ..stability.critical import UnrealisticFrictionWarning
 
     with warnings.catch_warnings():  # the critical-friction section already says so
         warnings.simplefilter("ignore", UnrealisticFrictionWarning)
-        return _nonlinear_step(model, figures, data, quick=quick, settings=settings or ReportSettings.paper())
+        return _nonlinear_step(model, figures, data, quick=quick, settings=settings or ReportSettings.paper(),
+                               context=context)
 
 
 def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: bool,
-                    settings: ReportSettings) -> Section:
+                    settings: ReportSettings, context: ReportContext | None) -> Section:
     from .._validation import InputError
     from ..nonlinear import limit_cycle_branch, limit_cycle_branch_slope
     from ..plotting.limitcycle import how_loud_level_plot, how_loud_plot
-    from ..stability import critical_friction
     from ..transient import Contact, SineRunOut, TensileContactWarning, simulate
     from ..transient.simulate import response_envelope
     from .steps_stability import _save_fig
@@ -115,7 +176,7 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
     if DOF not in model.dof_names:
         return Section("how_loud", title, (f"This model has no DOF {DOF!r} (the pin's); the limit-cycle section is "
                                            "written for the pin-on-disc model.",))
-    crit = critical_friction(model, 0.0, damped=True, mu_max=2.0)
+    crit = flat_onset(model, context)  # up to mu = 2 (critical_friction's mu_max)
     if crit.status != "onset":
         why = {"stable_in_range": "stays stable for every mu up to 2",
                "unstable_at_start": "is already unstable without friction (mu = 0)",
@@ -126,7 +187,7 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
     mu_range = (min(MU_RANGE[0], 0.9 * crit.mu_critical), max(MU_RANGE[1], crit.mu_critical + 0.3))
     n = 11 if quick else 26
     try:
-        branch = limit_cycle_branch(model, mu_range, harmonics=HARMONICS, n_points=n, speed=speed)
+        branch = limit_cycle_branch(model, mu_range, harmonics=HARMONICS, n_points=n, speed=speed, onset=crit)
     except InputError as e:
         return Section("how_loud", title, (f"The limit cycles could not be followed for this model: {e}",))
     t_max = 2 * math.pi * q0 / wavelength  # the steepest slope of the Fig. 4 run-out (eq. 11)
@@ -143,13 +204,9 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
     # the limit-cycle amplitude at each instant's slope (0 where the quiet state is stable)
     inst = run["tan_theta"].values
     if slope is not None:
-        tt = slope["tan_theta"].values
-        amp = slope["amplitude"].sel(dof=DOF).values
-        ok = slope["stable"].values.astype(bool)
-        order = np.argsort(tt[ok])
         t_c = float(slope.attrs["hopf_mu"])
-        # beyond the last cycle followed the amplitude is not known: nan (np.interp would repeat the last one)
-        cyc = np.where(inst > t_c, np.interp(inst, tt[ok][order], amp[ok][order], right=np.nan), 0.0)
+        # along the branch, never across a fold; beyond the last cycle followed the amplitude is not known: nan
+        cyc = np.where(inst > t_c, _stable_along(slope, "tan_theta", inst), 0.0)
     else:
         t_c, cyc = math.nan, np.zeros_like(inst)
     cycle = xr.DataArray(cyc, coords={"time": run["time"].values}, dims="time", name=f"{DOF}_limit_cycle",
@@ -167,7 +224,9 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
 
     a = branch.attrs
     mu_c, f_c = float(a["hopf_mu"]), float(a["hopf_frequency_hz"])
+    # the largest mu the branch reaches: its end, or the fold where it turns back (said so by _fold_text)
     mu_hi = float(branch["mu"].values.max())
+    beyond = [float(f) for f in branch["fold_mu"].values if f > mu_c + 1e-9]
     mu_1 = settings.mu_cycle
     a_05, a_hi = _at(branch, "mu", mu_1), _at(branch, "mu", mu_hi)
     l_05, l_hi = (_at(branch, "mu", m, "velocity_level_db") for m in (mu_1, mu_hi))
@@ -187,6 +246,7 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
              "Lyapunov coefficient is 0)." if a["hopf_kind_from"] == "branch" and kind else
              "." if not kind else f" (first Lyapunov coefficient {float(a['lyapunov_coefficient']):.3g}).")
           + (" " + _settle_text((mu_1, a_05, loss_05, l_05), (mu_hi, a_hi, loss_hi, l_hi), f_hi)
+             + _fold_text(branch, "mu", mu_1)
              + f" (Harmonic balance with H = {HARMONICS}; doubling H changes the amplitudes by "
              f"{float(a['harmonics_change']):.1e}.)" if followed else
              f" The continuation stopped after {branch.sizes['point']} cycles next to the onset "
@@ -261,7 +321,8 @@ def _nonlinear_step(model: FrictionModel, figures: Path, data: Path, *, quick: b
                "contact_open_mu_max": loss_hi, "mu_cycle": mu_1,
                "onset_tan_theta": t_c, "amplitude_steepest_slope": a_steep, "amplitude_flat_same_mu_e": a_flat_same,
                "fig4_envelope_max": emax, "fig4_envelope_median_unstable": emed, "fig4_cycle_max": cmax,
-               "fig4_envelope_ratio": ratio}
+               "fig4_envelope_ratio": ratio, "fold_mu": beyond[0] if beyond else math.nan,
+               "cycles_at_mu_cycle": len(_cycles_at(branch, "mu", mu_1))}
     fig = FigureRef("how_loud", f"Top: limit-cycle amplitude of {DOF} over mu_e = mu + tan(theta), on a flat disc "
                     f"(over mu) and with run-out at mu = {mu4:g} (over tan(theta)); stable solid, unstable "
                     "dashed. Bottom: the Fig. 4 run with the nonlinear contact, its vibration envelope beside the "

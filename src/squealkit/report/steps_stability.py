@@ -27,6 +27,7 @@ from ..stability import (
     stability_map,
     stability_summary,
 )
+from .context import ReportContext, flat_onset
 from .document import Comparison, FigureRef, Section, Table
 from .settings import ReportSettings
 
@@ -167,7 +168,7 @@ def parameters_step(model: FrictionModel, rig: PinOnDiscRig | None, figures: Pat
 
 
 def fig2_step(model: FrictionModel, figures: Path, data: Path, *, n_mu: int = 161, n_theta: int = 161,
-              published: bool = True) -> Section:
+              published: bool = True, context: ReportContext | None = None) -> Section:
     """Fig. 2: eigenvalues over mu in [0, 0.8] and theta in [-8, 8] deg, undamped (eq. 7)."""
     from ..plotting.stability import fig2_plot, root_locus_plot, stability_map_plot
 
@@ -201,7 +202,7 @@ def fig2_step(model: FrictionModel, figures: Path, data: Path, *, n_mu: int = 16
         first += (f" Unstable modes appear between {band[0]:.0f} and {band[1]:.0f} rad/s "
                   f"({band[0] / (2 * math.pi):.0f}-{band[1] / (2 * math.pi):.0f} Hz).")
     if damping_names(model):  # the map leaves the dampers out: say so, and where they put the onset
-        cd = critical_friction(model, 0.0, damped=True)
+        cd = flat_onset(model, context)
         damp = f" ({damping_text(model)})" if damping_text(model) else ""
         first += (f" The map is undamped, as the paper's; with the model's damping{damp} "
                   + (f"a flat disc loses stability from mu_crit = {cd.mu_critical:.4f} ({cd.frequency_hz:.0f} Hz; §3)."
@@ -224,26 +225,27 @@ def fig2_step(model: FrictionModel, figures: Path, data: Path, *, n_mu: int = 16
 
 
 def critical_step(model: FrictionModel, figures: Path, data: Path, *,
-                  settings: ReportSettings | None = None) -> Section:
+                  settings: ReportSettings | None = None, context: ReportContext | None = None) -> Section:
     """Critical friction, mu_e = mu + tan(theta), the run-out tolerance and sensitivities.
 
     A model without an onset on a flat disc gets no sensitivities and no onset mode, and the
     text says so. Onset beyond brake friction materials is said in the text, and warned once
     when the model's damping does not bring it within them."""
     with onset_said_in_words():
-        section = _critical_step(model, figures, data, settings=settings or ReportSettings.paper())
+        section = _critical_step(model, figures, data, settings=settings or ReportSettings.paper(), context=context)
     if section.numbers.get("onset_unrealistic"):
         warnings.warn(UnrealisticFrictionWarning.for_onset(section.numbers["onset_unrealistic"],
                                                           "with or without the model's damping"), stacklevel=2)
     return section
 
 
-def _critical_step(model: FrictionModel, figures: Path, data: Path, *, settings: ReportSettings) -> Section:
+def _critical_step(model: FrictionModel, figures: Path, data: Path, *, settings: ReportSettings,
+                   context: ReportContext | None) -> Section:
     mu_design, wavelength = settings.mu_design, settings.sro_wavelength
     thetas = np.radians([-8.0, -4.0, 0.0, 4.0, 8.0])
     curve = critical_friction_curve(model, thetas, damped=False)
     c0 = critical_friction(model, 0.0, damped=False)
-    cd = critical_friction(model, 0.0, damped=True)
+    cd = flat_onset(model, context)
     mu_e = curve.mu_e_critical.values
     unrealistic, beyond = _unrealistic(curve.mu_critical.values, cd)
     tol = runout_tolerance(model, mu_design, wavelength=wavelength, damped=False)

@@ -35,7 +35,6 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import functools
-import importlib.util
 import os
 import threading
 import warnings
@@ -49,7 +48,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
 
-from .._optional import require
+from .._optional import available, require
 from .._threads import honour_thread_limit
 from .._validation import InputError
 
@@ -396,7 +395,8 @@ def _auto(P, perm: NDArray[np.intp] | None = None) -> Factor:
 
 
 def _available(name: str) -> bool:
-    return all(importlib.util.find_spec(m) is not None for m in LU_BACKENDS[name].requires)
+    """Whether every module the backend ``name`` requires imports (:func:`squealkit._optional.available`)."""
+    return all(available(m) for m in LU_BACKENDS[name].requires)
 
 
 def _superlu(P, perm: NDArray[np.intp] | None = None) -> PermutedLU:
@@ -484,10 +484,11 @@ def get_lu_backend(lu: str | Backend | None = None) -> Backend:
     entry = LU_BACKENDS.get(lu) if isinstance(lu, str) else None
     if entry is None:
         raise InputError(f"Unknown LU backend lu={lu!r}; known: {', '.join(LU_BACKENDS)}.")
-    missing = [m for m in entry.requires if importlib.util.find_spec(m) is None]
+    missing = [m for m in entry.requires if not available(m)]
     if missing:
         hint = f": {entry.install}" if entry.install else ""
-        raise InputError(f"LU backend {lu!r} is not available: it needs {', '.join(missing)}{hint}.")
+        raise InputError(f"LU backend {lu!r} is not available: it needs {', '.join(missing)} (not installed, or "
+                         f"it does not import){hint}.")
     return entry.backend
 
 

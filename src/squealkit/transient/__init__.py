@@ -9,7 +9,7 @@
 
 from .. import _accessor  # noqa: F401  (registers ds.squeal.plot() on the results)
 from .contact import Contact
-from .profiles import DiscRunOut, RandomRoughness, SampledProfile, SineRunOut, Smooth, SurfaceProfile
+from .profiles import ConstantIncline, DiscRunOut, RandomRoughness, SampledProfile, SineRunOut, Smooth, SurfaceProfile
 from .simulate import (
     AliasingWarning,
     TensileContactWarning,
@@ -23,6 +23,7 @@ from .simulate import (
 
 __all__ = [
     "AliasingWarning",
+    "ConstantIncline",
     "Contact",
     "DiscRunOut",
     "RandomRoughness",

@@ -5,6 +5,8 @@ positions ``x`` [m] along the sliding path to ``(q, tan_theta)``. The transient 
 samples it at ``x = x_start + v t`` (paper eqs. 9-11).
 
 - :class:`Smooth`: no run-out (paper Fig. 3).
+- :class:`ConstantIncline`: a slope tan(theta) held fixed on the mean surface, q = 0: the frozen
+  incline of the stability map and the limit cycles (eqs. 4-7 at one (mu, theta)).
 - :class:`SineRunOut`: ``q = q0 sin(2 pi x / lambda)`` (paper eq. 9, Fig. 4).
 - :class:`SampledProfile`: a measured or synthetic profile, q against position, from an
   array or a two-column text file; interpolated by a C2 cubic spline.
@@ -25,6 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import InputError, validate_array_finite, validate_finite, validate_positive
 
 __all__ = [
+    "ConstantIncline",
     "DiscRunOut",
     "RandomRoughness",
     "SampledProfile",
@@ -41,6 +44,9 @@ class SurfaceProfile:
 
     #: Short name stored in result attributes.
     kind: str = "abstract"
+    #: The slope is the derivative of q along the path (the integrator interpolates q in time with
+    #: dq/dt = v tan(theta)); False for a profile that holds the slope apart from q (:class:`ConstantIncline`).
+    slope_is_dq_dx: bool = True
 
     def evaluate(self, x: ArrayLike) -> tuple[Array, Array]:  # pragma: no cover - abstract
         """Run-out q [m] and slope tan(theta) [-] at positions ``x`` [m].
@@ -94,6 +100,62 @@ class Smooth(SurfaceProfile):
     def evaluate(self, x: ArrayLike) -> tuple[Array, Array]:
         z = np.zeros(np.shape(x))
         return z, z.copy()
+
+
+@dataclass(frozen=True)
+class ConstantIncline(SurfaceProfile):
+    """A run-out incline held fixed: tan(theta) constant on the mean surface q = 0.
+
+    The model's equations of motion (paper eq. 4) take q and tan(theta) as two inputs: tan(theta)
+    enters the stiffness through mu_e = mu + tan(theta) and the normal direction (eqs. 2-3, 5-6), q
+    only the contact's offset. This profile gives the frozen slope that the stability map
+    (:func:`~squealkit.stability.eigenvalues` at (mu, theta)) and the limit cycles
+    (:func:`~squealkit.nonlinear.limit_cycle_branch`, ``theta``) assume, for any length of run; its
+    slope is not dq/dx (a real plane at that slope would lift the pin by tan(theta) v t).
+
+    Parameters
+    ----------
+    tan_theta : float
+        The incline's slope tan(theta) [1] (``ConstantIncline.from_theta(theta)`` from the angle [rad]).
+
+    Examples
+    --------
+    >>> p = ConstantIncline(0.05)
+    >>> [float(a[0]) for a in p.evaluate([0.0, 1.0])]
+    [0.0, 0.05]
+    """
+
+    tan_theta: float
+    kind = "incline"
+    slope_is_dq_dx = False
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "tan_theta", validate_finite("tan_theta", self.tan_theta))
+
+    @classmethod
+    def from_theta(cls, theta: float) -> ConstantIncline:
+        """The incline at an angle.
+
+        Parameters
+        ----------
+        theta : float
+            Run-out incline [rad], strictly inside (-pi/2, pi/2).
+
+        Returns
+        -------
+        ConstantIncline
+        """
+        theta = validate_finite("theta", theta)
+        if not abs(theta) < math.pi / 2:
+            raise InputError(f"Parameter theta={theta!r} rad must lie strictly inside (-pi/2, pi/2).")
+        return cls(math.tan(theta))
+
+    def evaluate(self, x: ArrayLike) -> tuple[Array, Array]:
+        z = np.zeros(np.shape(x))
+        return z, np.full(np.shape(x), self.tan_theta)
+
+    def describe(self) -> str:
+        return f"incline tan(theta)={self.tan_theta:g} (theta={math.degrees(math.atan(self.tan_theta)):g} deg), q=0"
 
 
 @dataclass(frozen=True)

@@ -183,6 +183,8 @@ def read_recording(path: str | Path, channels: Sequence[str | int] | None = None
     attrs: dict[str, Any] = {"source": str(src.path)}
     if "time_jitter_rms" in src._extra:
         attrs |= {"fs_method": FS_METHOD, "time_jitter_rms": src._extra["time_jitter_rms"]}
+    if "fs_from_file" in src._extra:  # the file's rate rounded to the whole Hz its stated precision allows
+        attrs |= {"fs_from_file": src._extra["fs_from_file"], "fs_rounding": src._extra["fs_rounding"]}
     ds = recording_dataset(data, src.fs, {n: src.units.get(n, "") for n in names}, attrs)
     for n, unit in src._extra.get("file_units", {}).items():
         if n in ds:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+import re
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -66,6 +68,7 @@ def _uff_headers(path: Path, records: list[tuple[int, int]]) -> list[dict[str, A
                     "num_pts": int(head[8][10:20]),
                     "abscissa_spacing": int(head[8][20:30]),
                     "abscissa_inc": float(head[8][43:56]),
+                    "abscissa_inc_text": head[8][43:56].strip(),
                     "ordinate_axis_units_lab": head[10][46:67].strip(),
                 })
             except ValueError as e:
@@ -108,6 +111,35 @@ def _uff58_samples(path: Path, record: tuple[int, int], block: int) -> Iterator[
             yield v
 
 
+def _whole_rate(inc_text: str) -> tuple[float, float, float] | None:
+    """The whole number of Hz that a sample interval written as text may stand for, or None.
+
+    UFF 58 writes the abscissa increment in E13.5 (6 significant digits): the interval of a
+    48 kHz recording, 2.0833...e-05 s, is written 2.08333e-05, whose inverse is 48000.077 Hz. The
+    text stands for every interval within half a unit of its last digit; where the rates of that
+    interval hold a whole number of Hz, that is the rate (the one with most trailing zeros where
+    several do, a round rate such as 1 MHz). Returns ``(rate, low, high)`` [Hz], the rate and the
+    range of rates the text stands for, or None.
+    """
+    m = re.fullmatch(r"[+-]?\d*\.?(\d*)(?:[eEdD]([+-]?\d+))?", inc_text)
+    if m is None:
+        return None
+    inc = float(inc_text.replace("D", "E").replace("d", "e"))
+    half = 0.5 * 10.0 ** (int(m[2] or 0) - len(m[1]))
+    if not (math.isfinite(inc) and inc > half):
+        return None
+    low, high = 1.0 / (inc + half), 1.0 / (inc - half)
+    whole = range(math.ceil(low), math.floor(high) + 1)
+    if not whole:
+        return None
+
+    def zeros(k: int) -> int:
+        return len(str(k)) - len(str(k).rstrip("0"))
+
+    rate = min(whole, key=lambda k: (-zeros(k), abs(k - 1.0 / inc)))
+    return float(rate), low, high
+
+
 def _open_uff(p: Path, fs: float | None) -> RecordingSource:
     # headers only: the records are found chunk by chunk and only each one's 13 header lines are
     # read (pyuff reads the whole file to find its records, and a whole record to read a header:
@@ -119,7 +151,7 @@ def _open_uff(p: Path, fs: float | None) -> RecordingSource:
         raise _fail(p, "is truncated: it does not end with a dataset's closing '-1' line.")
     sets: dict[str, int] = {}
     units: dict[str, str] = {}
-    lengths, incs, synthetic = {}, {}, False
+    lengths, incs, texts, synthetic = {}, {}, {}, False
     for i, d in enumerate(_uff_headers(p, _uff_records(p))):
         if d is None:
             continue
@@ -133,6 +165,7 @@ def _open_uff(p: Path, fs: float | None) -> RecordingSource:
             raise _fail(p, "its abscissa is uneven (abscissa_spacing 0); squealkit reads equally sampled time "
                            "histories.", channel=name)
         incs[name] = d["abscissa_inc"]
+        texts[name] = d["abscissa_inc_text"]
         synthetic |= "SYNTHETIC" in d["id2"]
     if not sets:
         raise _fail(p, "has no dataset 58 (function at nodal DOF).")
@@ -145,9 +178,20 @@ def _open_uff(p: Path, fs: float | None) -> RecordingSource:
             raise _fail(p, "its channels have different sample intervals "
                            f"({', '.join(f'{n}: {incs[n]!r} s' for n in incs)}).")
         fs = next(iter(rates.values()))
+        rounded = _whole_rate(next(iter(texts.values())))
+        if rounded is not None and rounded[0] != fs:  # 6 significant digits: 48 kHz reads 48000.077 Hz
+            fs_file, (fs, low, high) = fs, rounded
+            extra = {"fs_from_file": fs_file,
+                     "fs_rounding": f"the file's abscissa_inc {next(iter(texts.values()))} s (UFF 58 writes 6 "
+                                    f"significant digits) gives 1/abscissa_inc = {fs_file:.10g} Hz; the rates it "
+                                    f"stands for, {low:.10g}-{high:.10g} Hz, hold the whole rate {fs:g} Hz, used"}
+        else:
+            extra = {}
+    else:
+        extra = {}
     first = next(iter(sets))
     return RecordingSource(p, "uff", float(fs), lengths[first], tuple(sets), units, {},
-                           {"sets": sets, "synthetic": synthetic})
+                           {"sets": sets, "synthetic": synthetic, **extra})
 
 
 def blocks(src: RecordingSource, names: list[str], block: int, with_time: bool):

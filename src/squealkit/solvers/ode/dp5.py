@@ -28,7 +28,7 @@ from .force import _bundle, _f, _f_call, _gap_and_slip
 
 @njit(cache=True, parallel=True)
 def integrate_adaptive(
-    X, V, H, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+    X, V, H, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, vq, opts,
     qg, tgr, tg0, hg, t_a, t_b, fs, o_first, o_last, o_base, A, Bw, Cn, E, P, rtol, atol, h_max,
     out_x, out_v, out_a, out_nc, out_me, limit, status, n_valid, counts, ev_t, ev_k, n_ev,
 ):
@@ -62,7 +62,7 @@ def integrate_adaptive(
         dzd1 = np.empty((1, m))  # the dense output's derivative (a row, as the stages')
         dzd = dzd1[0]
         acc = np.empty(n)
-        mu_r, v_r, kc_r, s_r, kin_r = mu[r], v[r], kc[r], s[r], kin[r]
+        mu_r, v_r, vq_r, kc_r, s_r, kin_r = mu[r], v[r], vq[r], kc[r], s[r], kin[r]
         b_r, fhat_r = b[r], fhat[r]
         mats, vecs = _bundle(C[r], K0[r], Kn[r], Kf[r], Knx[r], Kfx[r], bM[r], fM[r], F0[r], fn[r], ff[r], b_r,
                              fhat_r)
@@ -71,7 +71,7 @@ def integrate_adaptive(
         h = H[r]
         o = o_first
         # the first sample of the chunk may sit exactly at t_a
-        nc, me, q, tt_ = _f_call(t, z, K, 0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs,
+        nc, me, q, tt_ = _f_call(t, z, K, 0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, vq_r, kin_r, kc_r, s_r, mats, vecs,
                                  opts, acc)
         counts[r, 2] += 1
         if o <= o_last and o / fs <= t + 1e-12 / fs:
@@ -107,7 +107,7 @@ def integrate_adaptive(
                         znew[i] = z[i] + h * a
                         zt[i] = znew[i]
                     tk = t_new
-                nc, me, q, tt_ = _f(tk, zt, K, k, n, tg0, hg, qg_r, tg_r, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs,
+                nc, me, q, tt_ = _f(tk, zt, K, k, n, tg0, hg, qg_r, tg_r, mu_r, v_r, vq_r, kin_r, kc_r, s_r, mats, vecs,
                                     opts, acc)
             counts[r, 2] += S
             err = 0.0
@@ -129,7 +129,7 @@ def integrate_adaptive(
             # accepted: is there a contact event inside the step?
             g_new, w_new = _gap_and_slip(znew[:n], znew[n:], q, tt_, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
             if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0) and not retake:
-                hi = _locate(False, g_old > 0.0, 50, z, znew, K, P, h, False, t, tg0, hg, qg_r, tg_r, v_r,
+                hi = _locate(False, g_old > 0.0, 50, z, znew, K, P, h, False, t, tg0, hg, qg_r, tg_r, vq_r, v_r,
                              b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
                 if hi < 1.0 - 1e-9 and hi * h > h_min:
                     # retake the step to end just past the crossing: no step straddles the kink
@@ -145,18 +145,18 @@ def integrate_adaptive(
             if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0):
                 # the crossing on this step's dense output (the step was retaken to end near it, but its
                 # end can lie a whole step past where the retaken solution crosses)
-                hi = _locate(False, g_old > 0.0, 50, z, znew, K, P, h, False, t, tg0, hg, qg_r, tg_r, v_r,
+                hi = _locate(False, g_old > 0.0, 50, z, znew, K, P, h, False, t, tg0, hg, qg_r, tg_r, vq_r, v_r,
                              b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
                 _log_event(r, t + hi * h, EVENT_CONTACT_OPENS if g_new <= 0.0 else EVENT_CONTACT_CLOSES, ev_t, ev_k,
                            n_ev)
             if opts[2] != 0.0 and (w_old < opts[4]) != (w_new < opts[4]):
-                hi = _locate(True, w_old < opts[4], 40, z, znew, K, P, h, False, t, tg0, hg, qg_r, tg_r, v_r,
+                hi = _locate(True, w_old < opts[4], 40, z, znew, K, P, h, False, t, tg0, hg, qg_r, tg_r, vq_r, v_r,
                              b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
                 _log_event(r, t + hi * h, EVENT_STICK if w_new < opts[4] else EVENT_SLIP, ev_t, ev_k, n_ev)
             # output samples inside (t, t_new] by dense output
             while o <= o_last and o / fs <= t_new * (1.0 + 1e-15):
                 _dense(z, K, P, h, min((o / fs - t) / h, 1.0), zd)
-                ncs, mes, _q, _t = _f_call(o / fs, zd, dzd1, 0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, kin_r, kc_r,
+                ncs, mes, _q, _t = _f_call(o / fs, zd, dzd1, 0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, vq_r, kin_r, kc_r,
                                            s_r, mats, vecs, opts, acc)
                 if not _store(r, o, o_base, zd, dzd, ncs, mes, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
                     status[r] = 1

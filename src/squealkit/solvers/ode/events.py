@@ -51,7 +51,7 @@ def _interp(z, z1, St, Co, h, th, rosenbrock, out):
 
 
 @njit(cache=True, error_model="numpy")  # called at events only: compiled once, not inlined at each call
-def _locate(slip, side_old, n_iter, z, z1, St, Co, h, rosenbrock, t, tg0, hg, qg, tgr, v, b, fhat, kc, s, kin,
+def _locate(slip, side_old, n_iter, z, z1, St, Co, h, rosenbrock, t, tg0, hg, qg, tgr, vq, v, b, fhat, kc, s, kin,
             v_reg, zd):
     """Fraction of the step at which the contact force changes sign (``slip`` False) or the sliding
     speed crosses the stick band ``|w| < v_reg`` (``slip`` True), by bisection on the dense output."""
@@ -60,7 +60,7 @@ def _locate(slip, side_old, n_iter, z, z1, St, Co, h, rosenbrock, t, tg0, hg, qg
     for _ in range(n_iter):
         mid = 0.5 * (lo + hi)
         _interp(z, z1, St, Co, h, mid, rosenbrock, zd)
-        qm, tm = _forcing(t + mid * h, tg0, hg, qg, tgr, v)
+        qm, tm = _forcing(t + mid * h, tg0, hg, qg, tgr, vq)
         gm, wm = _gap_and_slip(zd[:n], zd[n:], qm, tm, v, b, fhat, kc, s, kin)
         side = (wm < v_reg) if slip else (gm > 0.0)
         if side == side_old:

@@ -104,7 +104,11 @@ def _rhs(x, ox, xd, od, n, q, t, mu, v, kin, kc, s, mats, vecs, opts, acc):
 
 @njit(cache=True, inline="always")
 def _forcing(tt, tg0, hg, qg, tgr, vel):
-    """q and tan(theta) at time tt: cubic Hermite in time through the samples of q and dq/dt = v tan(theta)."""
+    """q and tan(theta) at time tt: cubic Hermite in time through the samples of q and dq/dt = v tan(theta).
+
+    ``vel`` is the speed at which the profile passes (``vq`` of the kernels): 0 for a profile whose slope is
+    not dq/dx (a held incline, :class:`~squealkit.transient.profiles.ConstantIncline`), whose q and
+    tan(theta) are then each interpolated on their own (q with zero end slopes, tan(theta) linearly)."""
     G = qg.shape[0]
     u = (tt - tg0) / hg
     j = math.floor(u)
@@ -129,12 +133,12 @@ def _forcing(tt, tg0, hg, qg, tgr, vel):
 
 
 @njit(cache=True, inline="always")
-def _f(tt, z, dz, k, n, tg0, hg, qg, tgr, mu, v, kin, kc, s, mats, vecs, opts, acc):
+def _f(tt, z, dz, k, n, tg0, hg, qg, tgr, mu, v, vq, kin, kc, s, mats, vecs, opts, acc):
     """First-order right-hand side ``dz[k] = [x', x'']`` at (tt, z); returns (N cos theta, mu_eff, q, tan theta).
 
     Inlined where the integrators call it every stage (one call site in each one's step); elsewhere
     :func:`_f_call`: each inlined copy of the right-hand side costs seconds of compile time."""
-    q, tan_t = _forcing(tt, tg0, hg, qg, tgr, v)
+    q, tan_t = _forcing(tt, tg0, hg, qg, tgr, vq)
     nc, me = _rhs(z, 0, z, n, n, q, tan_t, mu, v, kin, kc, s, mats, vecs, opts, acc)
     for i in range(n):
         dz[k, i] = z[n + i]
@@ -143,9 +147,9 @@ def _f(tt, z, dz, k, n, tg0, hg, qg, tgr, mu, v, kin, kc, s, mats, vecs, opts, a
 
 
 @njit(cache=True, error_model="numpy")
-def _f_call(tt, z, dz, k, n, tg0, hg, qg, tgr, mu, v, kin, kc, s, mats, vecs, opts, acc):
+def _f_call(tt, z, dz, k, n, tg0, hg, qg, tgr, mu, v, vq, kin, kc, s, mats, vecs, opts, acc):
     """:func:`_f` compiled once, called: for the first sample of a chunk and the dense output."""
-    return _f(tt, z, dz, k, n, tg0, hg, qg, tgr, mu, v, kin, kc, s, mats, vecs, opts, acc)
+    return _f(tt, z, dz, k, n, tg0, hg, qg, tgr, mu, v, vq, kin, kc, s, mats, vecs, opts, acc)
 
 
 @njit(cache=True, inline="always")

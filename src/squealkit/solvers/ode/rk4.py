@@ -10,7 +10,7 @@ from .force import _bundle, _rhs
 
 @njit(cache=True, parallel=True)
 def integrate_chunk(
-    X, V, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+    X, V, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, vq, opts,
     qh, th, dt, n_steps, stride, out_x, out_v, out_a, out_nc, out_me, o_start, limit, status, n_valid,
     o_base,
 ):

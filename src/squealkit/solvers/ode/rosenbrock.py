@@ -81,7 +81,7 @@ def _lu_solve(A, piv, x):
 
 @njit(cache=True, parallel=True)
 def integrate_rosenbrock(
-    X, V, H, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts,
+    X, V, H, bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, vq, opts,
     qg, tgr, tg0, hg, t_a, t_b, fs, o_first, o_last, o_base, RA, RC, RAL, RD, RM, RDD, gam, rtol, atol, h_max,
     out_x, out_v, out_a, out_nc, out_me, limit, status, n_valid, counts, ev_t, ev_k, n_ev,
 ):
@@ -116,7 +116,7 @@ def integrate_rosenbrock(
         Jx = np.empty((n, n))
         Jv = np.empty((n, n))
         acc = np.empty(n)
-        mu_r, v_r, kc_r, s_r, kin_r = mu[r], v[r], kc[r], s[r], kin[r]
+        mu_r, v_r, vq_r, kc_r, s_r, kin_r = mu[r], v[r], vq[r], kc[r], s[r], kin[r]
         bM_r, fM_r, C_r, K0_r, Kn_r, Kf_r = bM[r], fM[r], C[r], K0[r], Kn[r], Kf[r]
         Knx_r, Kfx_r, b_r, fhat_r = Knx[r], Kfx[r], b[r], fhat[r]
         mats, vecs = _bundle(C_r, K0_r, Kn_r, Kf_r, Knx_r, Kfx_r, bM_r, fM_r, F0[r], fn[r], ff[r], b_r, fhat_r)
@@ -124,7 +124,7 @@ def integrate_rosenbrock(
         t = t_a
         h = H[r]
         o = o_first
-        nc, me, q, tt_ = _f_call(t, z, Fs, 0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs,
+        nc, me, q, tt_ = _f_call(t, z, Fs, 0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, vq_r, kin_r, kc_r, s_r, mats, vecs,
                                  opts, acc)
         counts[r, 2] += 1
         if o <= o_last and o / fs <= t + 1e-12 / fs:
@@ -146,8 +146,8 @@ def integrate_rosenbrock(
             # f(t, z) (f0), f_t and the Jacobian at the start of the step
             for c in range(3):  # one call site, so one inlined copy of _f
                 tc = t if c == 0 else (t + dtf if c == 1 else t - dtf)
-                ncc, mec, qc, ttc = _f(tc, z, Fs, c, n, tg0, hg, qg_r, tg_r, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs,
-                                       opts, acc)
+                ncc, mec, qc, ttc = _f(tc, z, Fs, c, n, tg0, hg, qg_r, tg_r, mu_r, v_r, vq_r, kin_r, kc_r, s_r, mats,
+                                       vecs, opts, acc)
                 if c == 0:
                     nc, me, q, tt_ = ncc, mec, qc, ttc
             for i in range(m):
@@ -183,7 +183,7 @@ def integrate_rosenbrock(
                         for j in range(k):
                             a += RA[k, j] * U[j, i]
                         zt[i] = z[i] + a
-                    _f(t + RAL[k] * h, zt, Fs, 3, n, tg0, hg, qg_r, tg_r, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs,
+                    _f(t + RAL[k] * h, zt, Fs, 3, n, tg0, hg, qg_r, tg_r, mu_r, v_r, vq_r, kin_r, kc_r, s_r, mats, vecs,
                        opts, acc)
                     counts[r, 2] += 1
                 for i in range(m):
@@ -211,10 +211,10 @@ def integrate_rosenbrock(
                 if h < h_min:
                     status[r] = 2
                 continue
-            qn, tn = _forcing(t_new, tg0, hg, qg_r, tg_r, v_r)
+            qn, tn = _forcing(t_new, tg0, hg, qg_r, tg_r, vq_r)
             g_new, w_new = _gap_and_slip(znew[:n], znew[n:], qn, tn, v_r, b_r, fhat_r, kc_r, s_r, kin_r)
             if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0) and not retake:
-                hi = _locate(False, g_old > 0.0, 50, z, znew, U, RDD, h, True, t, tg0, hg, qg_r, tg_r, v_r,
+                hi = _locate(False, g_old > 0.0, 50, z, znew, U, RDD, h, True, t, tg0, hg, qg_r, tg_r, vq_r, v_r,
                              b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
                 if hi < 1.0 - 1e-9 and hi * h > h_min:
                     h_saved = h
@@ -225,17 +225,17 @@ def integrate_rosenbrock(
             if h < counts[r, 3] or counts[r, 3] == 0.0:
                 counts[r, 3] = h
             if opts[1] != 0.0 and (g_old > 0.0) != (g_new > 0.0):
-                hi = _locate(False, g_old > 0.0, 50, z, znew, U, RDD, h, True, t, tg0, hg, qg_r, tg_r, v_r,
+                hi = _locate(False, g_old > 0.0, 50, z, znew, U, RDD, h, True, t, tg0, hg, qg_r, tg_r, vq_r, v_r,
                              b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
                 _log_event(r, t + hi * h, EVENT_CONTACT_OPENS if g_new <= 0.0 else EVENT_CONTACT_CLOSES, ev_t, ev_k,
                            n_ev)
             if opts[2] != 0.0 and (w_old < opts[4]) != (w_new < opts[4]):
-                hi = _locate(True, w_old < opts[4], 40, z, znew, U, RDD, h, True, t, tg0, hg, qg_r, tg_r, v_r,
+                hi = _locate(True, w_old < opts[4], 40, z, znew, U, RDD, h, True, t, tg0, hg, qg_r, tg_r, vq_r, v_r,
                              b_r, fhat_r, kc_r, s_r, kin_r, opts[4], zd)
                 _log_event(r, t + hi * h, EVENT_STICK if w_new < opts[4] else EVENT_SLIP, ev_t, ev_k, n_ev)
             while o <= o_last and o / fs <= t_new * (1.0 + 1e-15):
                 _dense_ros(z, znew, U, RDD, min((o / fs - t) / h, 1.0), zd)
-                ncs, mes, _q, _t = _f_call(o / fs, zd, dzd1, 0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, kin_r, kc_r,
+                ncs, mes, _q, _t = _f_call(o / fs, zd, dzd1, 0, n, tg0, hg, qg_r, tg_r, mu_r, v_r, vq_r, kin_r, kc_r,
                                            s_r, mats, vecs, opts, acc)
                 if not _store(r, o, o_base, zd, dzd, ncs, mes, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
                     status[r] = 1
