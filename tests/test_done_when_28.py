@@ -17,6 +17,11 @@ path added later is held to the same rule (each failed on main for the gaps it n
 
 from __future__ import annotations
 
+import functools
+import importlib
+import importlib.util
+import inspect
+import re
 from pathlib import Path
 
 import click
@@ -140,3 +145,349 @@ def test_the_flag_check_catches_a_breach():
 
     assert flag_problems([("a", a), ("b", b)]) == ["b --damped: off-switch () default False; a has "
                                                    "('--undamped',) default True"]
+
+
+# -- results: every public function returning a Dataset follows the one schema ------------------------
+
+
+def every_public_module():
+    """Every module a user may import: no part of its path private, not the CLI (documented from its
+    commands), not a moved module's shim; the modules inside packages too (``squealkit.transient.floquet``)."""
+    import pkgutil
+
+    import squealkit
+
+    yield squealkit
+    for info in pkgutil.walk_packages(squealkit.__path__, "squealkit."):
+        parts = info.name.split(".")[1:]
+        if any(p.startswith("_") for p in parts) or parts[0] == "cli":
+            continue
+        origin = importlib.util.find_spec(info.name).origin
+        if Path(origin).read_text(encoding="utf-8").startswith('"""Moved to '):
+            continue  # a moved module's shim (importing it warns by design)
+        yield importlib.import_module(info.name)
+
+
+@functools.cache
+def dataset_producers() -> set[str]:
+    """Names of the public functions (in any public module's ``__all__``) whose numpydoc Returns is
+    a Dataset or DataArray."""
+    docscrape = pytest.importorskip("numpydoc.docscrape")
+    out = set()
+    for mod in every_public_module():
+        for name in getattr(mod, "__all__", ()):
+            obj = getattr(mod, name)
+            if not inspect.isfunction(obj):
+                continue
+            doc = docscrape.NumpyDocString(inspect.getdoc(obj) or "")
+            returns = " ".join(p.type or p.name for p in doc["Returns"])
+            if "Dataset" in returns or "DataArray" in returns:
+                out.add(name)
+    return out
+
+
+#: Dataset-returning public functions that return no result of their own, and why.
+NOT_RESULTS = {
+    "load_dataset": "returns the result it loads (saved with its kind: tests/test_io.py)",
+    "upgrade_result": "gives an older file the current names and kind (tests/test_vocabulary.py)",
+    "lazy_template": "scale: the lazy frame of another function's result (simulate_batch's)",
+    "stream_to_zarr": "scale: streams another function's result (simulate_batch's) into zarr",
+    "read_recording": "a recording: measured channels, the analyses' input",
+    "recording_dataset": "a recording: measured channels, the analyses' input",
+    "synthetic_recording": "a SYNTHETIC recording: the analyses' input",
+    "campaign_conditions": "a campaign's test conditions read from its store: correlate's input",
+    "operating_points": "test conditions mapped to model inputs: predict_modes' input",
+    "spectrogram": "a signal-processing primitive (a DataArray over time and freq, as scipy.signal's)",
+    "response_envelope": "a DataArray of one signal's envelope (transient_summary's step)",
+}
+
+#: Results checked where a fixture already computes them (a campaign, an FE brake with its mesh:
+#: seconds each): the file and test that check them with the same schema_problems.
+CHECKED_ELSEWHERE = {
+    **{name: ("test_correlate.py", "test_correlation_results_follow_the_result_schema")
+       for name in ("correlate", "match_modes", "predict_modes", "measured_components")},
+    "mode_surface": ("test_fe_seeing.py", "test_energy_and_surface_results_follow_the_schema_and_draw_themselves"),
+}
+
+
+@pytest.fixture(scope="module")
+def small_fe():
+    """Three doublets, the first two coupled by friction (KR): a flutter onset near mu = 0.3."""
+    import numpy as np
+    import scipy.sparse as sp
+
+    from squealkit.fe import FEModel
+
+    w = 2 * np.pi * np.array([1000, 1000, 1200, 1200, 5000, 5000.0])
+    KR = sp.lil_matrix((6, 6))
+    KR[0, 2], KR[2, 0] = 3e7, -3e7
+    return FEModel.from_matrices(M=sp.eye(6), K1=sp.diags(w**2), KR=KR.tocsr(), D1=sp.diags(1e-4 * w))
+
+
+@pytest.fixture(scope="module")
+def recording():
+    from squealkit.measurement import analyze_recording, synthetic_recording
+
+    rec = synthetic_recording(duration=0.5, seed=1)
+    return rec, analyze_recording(rec, mic="mic", displacement="displacement", rpm=900.0, radius=0.05)
+
+
+def _lv():
+    from squealkit.models import get_preset
+
+    return get_preset("lv2013")
+
+
+def _result_cases(small_fe, recording):
+    """Producer name -> a call on small inputs (each well under a second once compiled)."""
+    import numpy as np
+
+    from squealkit import design, fe, nonlinear, solvers, stability, transient, uncertainty
+    from squealkit.measurement.analysis import views
+    from squealkit.transient.floquet import floquet_map
+
+    lv, rec, res = _lv(), *recording
+    fe_modes = stability.fe_modes(small_fe, 100.0, 0.5)
+
+    def reduced():
+        V = solvers.pod_basis(small_fe, [10.0], [0.0, 0.5], band=(500.0, 6000.0))
+        return solvers.reduced_sweep(solvers.reduce(small_fe, V), [10.0, 20.0], [0.0, 0.5], band=(500.0, 6000.0))
+
+    def branch():
+        return nonlinear.limit_cycle_branch(lv, (0.3, 0.5), harmonics=3, n_points=4, check_harmonics=False)
+
+    def branch_slope():
+        # the paper's rig squeals from tan(theta) = mu_c - mu: at mu = 0.3 below the flat-disc onset
+        mu_c = stability.critical_friction(lv, 0.0, damped=False).mu_critical
+        return nonlinear.limit_cycle_branch_slope(lv, (0.0, 0.2), mu=mu_c - 0.05, harmonics=3, n_points=4,
+                                                  check_harmonics=False)
+
+    P = {"friction": "KR", "pad": "K1"}
+    return {
+        "stability_map": lambda: stability.stability_map(lv, [0.2, 0.6], np.radians([0.0, 2.0]), damped=False),
+        "modes": lambda: stability.modes(lv, 0.5, 0.0, damped=False),
+        "onset_modes": lambda: stability.onset_modes(lv, damped=False),
+        "eigenvalue_sensitivity": lambda: stability.eigenvalue_sensitivity(lv, 0.5, 0.0, "k3", damped=False),
+        "critical_friction_curve": lambda: stability.critical_friction_curve(lv, np.radians([0.0, 2.0]),
+                                                                             damped=False),
+        "fe_stability_map": lambda: stability.fe_stability_map(small_fe, [100.0, 200.0], [0.0, 0.5]),
+        "fe_modes": lambda: fe_modes,
+        "fe_critical_friction": lambda: stability.fe_critical_friction(small_fe, [100.0], mu_max=1.0),
+        "reduced_sweep": reduced,
+        "mode_energy": lambda: fe.mode_energy(small_fe, fe_modes),
+        "eigen_derivatives": lambda: design.eigen_derivatives(small_fe, P, 100.0, 0.5),
+        "countermeasures": lambda: design.countermeasures(small_fe, P, 100.0, 0.5),
+        "doe_sweep": lambda: design.doe_sweep(small_fe, P, {"friction": [0.9, 1.1]}, 100.0, 0.5,
+                                              band=(500.0, 6000.0)),
+        "robust_margins": lambda: design.robust_margins(lv, mu=0.1, scatter={"k3": 0.05}, samples=8,
+                                                        method="montecarlo", damped=False),
+        "simulate": lambda: transient.simulate(lv, mu=0.4, profile=transient.SineRunOut(0.08e-3, 1e-3),
+                                               duration=0.002),
+        "simulate_batch": lambda: transient.simulate_batch(lv, mu=[0.3, 0.4], duration=0.002),
+        "floquet_map": lambda: floquet_map(lv, mu=[0.2], amplitude=[1e-5], wavelength=1e-3, speed=0.02),
+        "limit_cycle_branch": branch,
+        "limit_cycle_branch_slope": branch_slope,
+        "sound_level": lambda: nonlinear.sound_level(branch(), radiation_factor=400.0, dof="y2"),
+        "squeal_propensity": lambda: uncertainty.squeal_propensity(
+            lv, {"k1": {"dist": "normal", "mean": 1.0e5, "std": 1.0e3}}, [0.0, 2.0], samples=4, damped=False,
+            sensitivity=False),
+        "measurement_signals": lambda: views.measurement_signals(rec, res),
+        "figure_signals": lambda: views.figure_signals(rec, rpm=900.0),
+    }
+
+
+def test_every_dataset_producer_is_registered():
+    """A new public function returning a Dataset is checked below, or says why it returns no result."""
+    registered = set(RESULT_CASES) | set(NOT_RESULTS) | set(CHECKED_ELSEWHERE)
+    assert dataset_producers() - registered == set(), "register it in RESULT_CASES (or NOT_RESULTS, with why)"
+    assert registered - dataset_producers() == set(), "no longer a public Dataset producer"
+    for file, test in CHECKED_ELSEWHERE.values():
+        text = (ROOT / "tests" / file).read_text(encoding="utf-8")
+        body = text.partition(f"def {test}(")[2].partition("\ndef ")[0]
+        assert "schema_problems(" in body, (file, test)
+
+
+RESULT_CASES = ("stability_map", "modes", "onset_modes", "eigenvalue_sensitivity", "critical_friction_curve",
+                "fe_stability_map", "fe_modes", "fe_critical_friction", "reduced_sweep", "mode_energy",
+                "eigen_derivatives", "countermeasures", "doe_sweep", "robust_margins", "simulate", "simulate_batch",
+                "floquet_map", "limit_cycle_branch", "limit_cycle_branch_slope", "sound_level",
+                "squeal_propensity", "measurement_signals", "figure_signals")
+
+
+@pytest.fixture(scope="module")
+def result_cases(small_fe, recording):
+    return _result_cases(small_fe, recording)
+
+
+@pytest.mark.parametrize("producer", RESULT_CASES)
+def test_every_result_follows_the_schema_and_says_its_kind(result_cases, producer):
+    from squealkit.io import RESULT_KINDS, result_kind
+    from test_vocabulary import schema_problems
+
+    ds = result_cases[producer]()
+    assert schema_problems(ds) == [], producer
+    assert ds.attrs["kind"] in RESULT_KINDS and result_kind(ds) == ds.attrs["kind"]
+
+
+# -- docs: every public name on a task page; what the README and the guide teach is public and there --
+
+
+@functools.cache
+def task_page_entries() -> dict[int, str]:
+    """id(object) -> its public path, for every name the task pages (docs/api/*.md) list in an
+    autosummary table (each gets its own page under docs/api/generated)."""
+    out: dict[int, str] = {}
+    for page in sorted((ROOT / "docs" / "api").glob("*.md")):
+        module, listing = None, False
+        for raw in page.read_text(encoding="utf-8").splitlines():
+            line = raw.strip()
+            if m := re.match(r"\.\. currentmodule:: ([\w.]+)$", line):
+                module, listing = m.group(1), False
+            elif line.startswith(".. autosummary::"):
+                listing = True
+            elif listing and raw.startswith("   ") and line and not line.startswith(":"):
+                path = f"{module}.{line}" if module else line
+                mod, _, name = path.rpartition(".")
+                out[id(getattr(importlib.import_module(mod), name))] = path
+            elif listing and line and not raw.startswith("   "):
+                listing = False
+    return out
+
+
+def test_every_package_name_is_on_a_task_page():
+    """The fast twin of tests/test_docs.py's check on the built site: every name in the ``__all__``
+    of squealkit and of its public packages (and top-level and plotting modules) is listed on a task
+    page, and every public function returning a result too, wherever its module is."""
+    from test_api_docs import _public_modules
+
+    listed = task_page_entries()
+    missing = [f"{m.__name__}.{n}" for m in _public_modules() for n in getattr(m, "__all__", ())
+               if not n.startswith("__") and id(getattr(m, n)) not in listed]
+    missing += [f"{m.__name__}.{n}" for m in every_public_module() for n in getattr(m, "__all__", ())
+                if n in dataset_producers() and id(getattr(m, n)) not in listed]
+    assert not missing, f"on no task page (docs/api/*.md): {', '.join(sorted(set(missing)))}"
+    assert len(listed) > 300
+
+
+@functools.cache
+def _public_paths() -> dict[int, str]:
+    out: dict[int, str] = {}
+    for mod in every_public_module():
+        for name in getattr(mod, "__all__", ()):
+            out.setdefault(id(getattr(mod, name)), f"{mod.__name__}.{name}")
+    return out
+
+
+def _public_path(obj) -> str | None:
+    """A public path of ``obj``: ``module.name`` with ``name`` in the ``__all__`` of a public module."""
+    return _public_paths().get(id(obj))
+
+
+def taught_references(text: str) -> set[str]:
+    """What a Markdown page teaches to call: ``name(`` and ``squealkit.a.b.name(`` in its prose
+    (in backticks) and the calls and ``from squealkit... import`` lines of its Python blocks."""
+    code = "\n".join(re.findall(r"```python\n(.*?)```", text, flags=re.S))
+    prose = re.sub(r"```.*?```", "", text, flags=re.S)
+    refs = set(re.findall(r"`((?:squealkit\.)?[\w.]*?\w+)\(", prose))
+    refs |= set(re.findall(r"`(squealkit\.[\w.]+)`", prose))
+    refs |= set(re.findall(r"(?<![\w.])([A-Za-z_]\w+)\(", code))
+    for module, wrapped, names in re.findall(r"^from (squealkit[\w.]*) import (?:\(([^)]*)\)|([\w, ]+))", code,
+                                             flags=re.M):
+        refs |= {f"{module}.{n.strip()}" for n in (wrapped or names).split(",") if n.strip()}
+    return refs
+
+
+@functools.cache
+def _squealkit_objects() -> dict[str, list[object]]:
+    """Bare name -> the functions and classes of that name defined anywhere in squealkit."""
+    import pkgutil
+
+    import squealkit
+
+    out: dict[str, list[object]] = {}
+    for info in pkgutil.walk_packages(squealkit.__path__, "squealkit."):
+        origin = importlib.util.find_spec(info.name).origin
+        if info.name.startswith("squealkit.cli") or Path(origin).read_text(encoding="utf-8").startswith('"""Moved to '):
+            continue
+        for n, o in vars(importlib.import_module(info.name)).items():
+            if (inspect.isfunction(o) or inspect.isclass(o)) and getattr(o, "__module__", "").startswith("squealkit"):
+                if not any(o is x for x in out.setdefault(n, [])):
+                    out[n].append(o)
+    return out
+
+
+def _resolve(path: str):
+    """The object a dotted path names (attribute by attribute, importing modules as needed), or None."""
+    first, *rest = path.split(".")
+    obj, sofar = importlib.import_module(first), first
+    for part in rest:
+        sofar = f"{sofar}.{part}"
+        if hasattr(obj, part):
+            obj = getattr(obj, part)
+            continue
+        try:
+            obj = importlib.import_module(sofar)
+        except ImportError:
+            return None
+    return obj
+
+
+def taught_problems(pages: dict[str, str]) -> list[str]:
+    """Squealkit functions and classes the pages (name -> Markdown) teach that are taught by a
+    private path, are in no public ``__all__`` or are on no task page."""
+    listed = task_page_entries()
+    by_name = _squealkit_objects()
+    problems = []
+    for page, text in pages.items():
+        for ref in sorted(taught_references(text)):
+            where = f"{page}: {ref}"
+            if ref.startswith("squealkit."):
+                obj = _resolve(ref)
+                if obj is None or inspect.ismodule(obj) or not callable(obj):
+                    continue
+                if any(p.startswith("_") for p in ref.split(".")[1:]):
+                    problems.append(f"{where} is a private path (public: {_public_path(obj)})")
+                    continue
+            elif ref in by_name and not ref.startswith("_"):
+                if any(id(o) in listed for o in by_name[ref]):
+                    continue
+                obj = by_name[ref][0]
+            else:
+                continue  # not squealkit's (Python's, NumPy's) or a method
+            if _public_path(obj) is None:
+                problems.append(f"{where} is in no public __all__")
+            elif id(obj) not in listed:
+                problems.append(f"{where} is on no task page (docs/api/*.md)")
+    return problems
+
+
+def test_every_function_the_readme_and_guide_teach_is_public_and_on_a_task_page():
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")), *sorted((ROOT / "docs" / "guide").glob("*.md"))]
+    problems = taught_problems({str(p.relative_to(ROOT)): p.read_text(encoding="utf-8") for p in pages})
+    assert not problems, "\n".join(problems)
+
+
+def test_the_taught_check_catches_a_private_or_unlisted_function():
+    text = ("Read old files with `squealkit._accessor.upgrade_result`; "
+            "`squealkit.transient.reference.first_order_rhs(f)` and `recognise(path)` too.\n\n"
+            "```python\nfrom squealkit.stability import stability_map\nds = stability_map(m, mu, theta)\n```\n")
+    assert {"squealkit._accessor.upgrade_result", "squealkit.transient.reference.first_order_rhs", "recognise",
+            "stability_map", "squealkit.stability.stability_map"} <= taught_references(text)
+    assert taught_problems({"page": text}) == [
+        "page: recognise is on no task page (docs/api/*.md)",
+        "page: squealkit._accessor.upgrade_result is a private path (public: squealkit.io.upgrade_result)",
+        "page: squealkit.transient.reference.first_order_rhs is on no task page (docs/api/*.md)"]
+
+
+def test_every_function_on_a_task_page_documents_its_parameters():
+    """tests/test_api_docs.py checks the names of the packages' ``__all__``; the task pages also list
+    names of public modules (``squealkit.fe.demo.write_fe_demo``): their pages need the same sections."""
+    from test_api_docs import docstring_problems
+
+    problems = []
+    for path in task_page_entries().values():
+        module, _, name = path.rpartition(".")
+        obj = getattr(importlib.import_module(module), name)
+        if callable(obj) and not (inspect.isclass(obj) and issubclass(obj, BaseException)):
+            problems += [f"{path}: {p}" for p in docstring_problems(obj)]
+    assert not problems, "\n".join(problems)
