@@ -491,3 +491,102 @@ def test_every_function_on_a_task_page_documents_its_parameters():
         if callable(obj) and not (inspect.isclass(obj) and issubclass(obj, BaseException)):
             problems += [f"{path}: {p}" for p in docstring_problems(obj)]
     assert not problems, "\n".join(problems)
+
+
+# -- the gallery runs every example ---------------------------------------------------------------
+
+
+def test_the_gallery_runs_every_example():
+    """conf.py's sphinx-gallery settings pick up every examples/NN_*.py (tests/test_examples.py runs
+    each and checks its printed output and figures; tests/test_docs.py checks them on the built pages)."""
+    import runpy
+
+    conf = runpy.run_path(str(ROOT / "docs" / "conf.py"))["sphinx_gallery_conf"]
+    assert (ROOT / "docs" / conf["examples_dirs"]).resolve() == ROOT / "examples"
+    scripts = sorted((ROOT / "examples").glob("*.py"))
+    assert [s.name for s in scripts if not re.search(conf["filename_pattern"], str(s))] == []
+    assert "05_campaign.py" in {s.name for s in scripts}
+    for script in scripts:  # each writes its figures where the gallery's scraper looks: argv[1]
+        assert "out = Path(sys.argv[1]" in script.read_text(encoding="utf-8"), script.name
+
+
+# -- the developer guide describes the tree as it is ------------------------------------------------
+
+
+PKG = ROOT / "src" / "squealkit"
+
+
+def _layout_rows() -> list[tuple[list[str], list[str]]]:
+    """docs/dev/layout.md's table of packages: (names in the first column, names in the second)."""
+    rows = []
+    for line in (ROOT / "docs" / "dev" / "layout.md").read_text(encoding="utf-8").splitlines():
+        cells = line.split("|")
+        if len(cells) >= 4 and "`" in cells[1]:
+            rows.append((re.findall(r"`([^`]+)`", cells[1]), re.findall(r"`([^`]+)`", cells[2])))
+    return rows
+
+
+def layout_problems(rows, root: Path = PKG) -> list[str]:
+    """Packages and top-level modules of ``root`` missing from the table, and module paths the table
+    names that do not exist under the row's packages."""
+    problems = []
+    named = {n.rstrip("/") for first, _ in rows for n in first}
+    for p in sorted(root.iterdir()):
+        name = p.stem if p.suffix == ".py" else p.name
+        if ((p.is_dir() and (p / "__init__.py").is_file()) or (p.suffix == ".py" and p.stem != "__init__")) \
+                and name not in named:
+            problems.append(f"{name}: a {'package' if p.is_dir() else 'module'} the table does not name")
+    for first, second in rows:
+        bases = [root / n.rstrip("/") for n in first if (root / n.rstrip("/")).is_dir()] + [root]
+        for ref in second:
+            if not re.fullmatch(r"[\w*]+(/[\w*]+)*(\.py|/)", ref):
+                continue  # a name, not a module path
+            pattern = ref.rstrip("/")
+            if not any(any(b.rglob(pattern)) or (b / pattern).exists() for b in bases):
+                problems.append(f"{'/'.join(first)}: {ref} does not exist")
+    return problems
+
+
+def test_the_developer_layout_names_every_package_and_only_modules_that_exist():
+    problems = layout_problems(_layout_rows())
+    assert not problems, "\n".join(problems)
+
+
+def test_the_layout_check_catches_a_stale_table(tmp_path):
+    for path in ("a/__init__.py", "a/kept.py", "b/__init__.py", "c.py"):
+        (tmp_path / path).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / path).write_text("")
+    rows = [(["a/"], ["kept.py", "gone.py", "sub/"]), (["c"], [])]
+    assert layout_problems(rows, tmp_path) == ["b: a package the table does not name", "a/: gone.py does not exist",
+                                               "a/: sub/ does not exist"]
+
+
+def test_every_path_the_developer_guide_names_exists():
+    """Backticked paths in docs/dev/*.md and the tree in docs/guide/layout.md: repository paths
+    (``tests/test_docs.py``, ``examples/NN_*.py`` as a glob), paths inside the package
+    (``solvers/lu.py``) and dotted module names (``squealkit.fe.readers``)."""
+    missing = []
+    pages = sorted((ROOT / "docs" / "dev").glob("*.md"))
+    refs = {(p.name, r) for p in pages for r in re.findall(r"`([^`\s]+)`", p.read_text(encoding="utf-8"))}
+    guide = (ROOT / "docs" / "guide" / "layout.md").read_text(encoding="utf-8")
+    refs |= {("guide/layout.md", r) for r in re.findall(r"^(src/squealkit/[\w/.]+)", guide, flags=re.M)}
+    for page, ref in sorted(refs):
+        ref = re.sub(r"NN|<\w+>", "*", ref)
+        if re.fullmatch(r"squealkit(\.\w+)+", ref):
+            if _resolve(ref) is None:
+                missing.append(f"{page}: {ref}")
+        elif re.fullmatch(r"[\w*.-]+(/[\w*.-]+)*/?", ref) and ("/" in ref or ref.endswith(".py")):
+            top = ref.split("/")[0]
+            if top in ("src", "tests", "docs", "benchmarks", "examples"):
+                found = any(ROOT.glob(ref.rstrip("/")))
+            else:  # a path inside the package (at any depth: the table's rows name paths below their
+                # package) or a file of the tests, docs, benchmarks or examples named alone
+                found = any(any((ROOT / d).rglob(ref.rstrip("/"))) for d in ("src", "tests", "docs", "benchmarks",
+                                                                              "examples"))
+            if not found:
+                missing.append(f"{page}: {ref}")
+    assert not missing, "\n".join(missing)
+    # the packages the guide's tree shows are the package's
+    shown = set(re.findall(r"^src/squealkit/(\w+)/", guide, flags=re.M))
+    packages = {p.name for p in PKG.iterdir() if (p / "__init__.py").is_file()}
+    assert packages - shown == set(), "docs/guide/layout.md does not show these packages"
