@@ -590,3 +590,40 @@ def test_every_path_the_developer_guide_names_exists():
     shown = set(re.findall(r"^src/squealkit/(\w+)/", guide, flags=re.M))
     packages = {p.name for p in PKG.iterdir() if (p / "__init__.py").is_file()}
     assert packages - shown == set(), "docs/guide/layout.md does not show these packages"
+
+
+# -- property tests draw through hypothesis (shrinkable), not through a seeded loop --------------------
+
+
+def seeded_random_loops(source: str) -> list[str]:
+    """Test functions that loop ``for _ in range(N)`` (N >= 10) drawing from a random generator:
+    a property checked on inputs hypothesis cannot shrink (docs/dev/tests.md)."""
+    import ast
+
+    found = []
+    for fn in ast.walk(ast.parse(source)):
+        if not isinstance(fn, ast.FunctionDef) or not fn.name.startswith("test_"):
+            continue
+        for node in ast.walk(fn):
+            if not (isinstance(node, ast.For) and isinstance(node.iter, ast.Call)
+                    and getattr(node.iter.func, "id", "") == "range" and len(node.iter.args) == 1
+                    and isinstance(node.iter.args[0], ast.Constant) and node.iter.args[0].value >= 10):
+                continue
+            calls = [c for c in ast.walk(node) if isinstance(c, ast.Call)]
+            if any((isinstance(c.func, ast.Attribute) and "rng" in ast.unparse(c.func.value))
+                   or "random" in ast.unparse(c.func) for c in calls):
+                found.append(f"{fn.name} (line {node.lineno})")
+    return found
+
+
+def test_property_tests_draw_their_inputs_with_hypothesis():
+    found = {p.name: f for p in sorted((ROOT / "tests").glob("test_*.py"))
+             if (f := seeded_random_loops(p.read_text(encoding="utf-8")))}
+    assert not found, f"seeded random loops (draw the inputs with hypothesis instead): {found}"
+
+
+def test_the_loop_check_catches_a_seeded_loop():
+    src = ("def test_a():\n    rng = np.random.default_rng(1)\n    for trial in range(50):\n"
+           "        x = rng.standard_normal(3)\n        assert f(x)\n"
+           "def test_b():\n    for _ in range(40):\n        lo, hi = bisect(lo, hi)\n")
+    assert seeded_random_loops(src) == ["test_a (line 3)"]
