@@ -627,3 +627,35 @@ def test_the_loop_check_catches_a_seeded_loop():
            "        x = rng.standard_normal(3)\n        assert f(x)\n"
            "def test_b():\n    for _ in range(40):\n        lo, hi = bisect(lo, hi)\n")
     assert seeded_random_loops(src) == ["test_a (line 3)"]
+
+
+def test_no_public_function_anywhere_takes_tan_theta_by_position():
+    """tests/test_vocabulary.py checks the packages' names; the public modules' ``__all__`` too
+    (``squealkit.fe.energy.friction_parts(model, disc_speed, mu, tan_theta)`` took it fourth)."""
+    from test_vocabulary import SWEEPS_OVER_SLOPE
+
+    offenders = []
+    for mod in every_public_module():
+        for name in getattr(mod, "__all__", ()):
+            obj = getattr(mod, name)
+            if not inspect.isfunction(obj) or f"{obj.__module__}.{obj.__name__}" in SWEEPS_OVER_SLOPE:
+                continue
+            p = inspect.signature(obj).parameters.get("tan_theta")
+            if p is not None and p.kind is not p.KEYWORD_ONLY:
+                offenders.append(f"{mod.__name__}.{name}")
+    assert not offenders, offenders
+
+
+def test_friction_parts_by_position_warns_for_one_release():
+    import numpy as np
+    import pytest
+
+    from squealkit.fe import FEModel
+    from squealkit.fe.energy import friction_parts
+
+    m = FEModel.from_matrices(M=np.eye(2), K1=np.eye(2), KR=[[0.0, 1.0], [-1.0, 0.0]])
+    new = friction_parts(m, 10.0, 0.3, tan_theta=0.1)
+    np.testing.assert_allclose(new[0].toarray(), 0.4 * np.array([[0.0, 1.0], [-1.0, 0.0]]), rtol=1e-15)
+    with pytest.warns(DeprecationWarning, match=r"friction_parts\(\.\.\., tan_theta\) by position is deprecated"):
+        old = friction_parts(m, 10.0, 0.3, 0.1)
+    assert (old[0] != new[0]).nnz == 0
