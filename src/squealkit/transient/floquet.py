@@ -63,7 +63,7 @@ class FloquetResult:
     period : float
         T = lambda / v [s].
     floquet_exponent : float
-        ln |Lambda_max| / T [1/s]: the exact growth rate of the periodic linear system.
+        ``ln |Lambda_max| / T`` [1/s]: the exact growth rate of the periodic linear system.
     frozen_mean : float
         Period average of max Re(lambda) of the frozen-time system [1/s] (paper §4).
     frozen_max : float
@@ -89,7 +89,7 @@ class FloquetResult:
 
     @property
     def relative_difference(self) -> float:
-        """(rho - mean sigma) / |mean sigma|."""
+        """``(rho - mean sigma) / |mean sigma|``: the Floquet exponent against the frozen-time average."""
         return (self.floquet_exponent - self.frozen_mean) / abs(self.frozen_mean) if self.frozen_mean else math.nan
 
     def to_dict(self) -> dict[str, object]:
