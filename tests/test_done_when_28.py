@@ -659,3 +659,56 @@ def test_friction_parts_by_position_warns_for_one_release():
     with pytest.warns(DeprecationWarning, match=r"friction_parts\(\.\.\., tan_theta\) by position is deprecated"):
         old = friction_parts(m, 10.0, 0.3, 0.1)
     assert (old[0] != new[0]).nnz == 0
+
+
+# -- no module over ~800 lines unless it is one algorithm ---------------------------------------------
+
+#: Modules allowed over the limit, each with the one algorithm it holds (none: keep it so).
+ONE_ALGORITHM: dict[str, str] = {}
+
+
+def test_no_module_anywhere_over_800_lines():
+    """tests/test_splits_layout.py and tests/test_layout_fe.py check some folders; this the whole package
+    (nonlinear/continuation.py had grown to 878 lines: the continuation algorithm and the squealkit-model
+    branches on it)."""
+    long = {p.relative_to(PKG).as_posix(): n for p in sorted(PKG.rglob("*.py"))
+            if (n := len(p.read_text(encoding="utf-8").splitlines())) > 800}
+    assert set(long) <= set(ONE_ALGORITHM), long
+
+
+# -- kernels compiled once per test run ---------------------------------------------------------------
+
+
+def uncached_kernels(source: str) -> list[str]:
+    """Functions compiled by numba (``@njit``/``@jit``/``@vectorize``/``@guvectorize``) without
+    ``cache=True``: compiled again by every process (the suite's workers, the CLI's children)."""
+    import ast
+
+    found = []
+    for fn in ast.walk(ast.parse(source)):
+        if not isinstance(fn, ast.FunctionDef):
+            continue
+        for dec in fn.decorator_list:
+            call = dec if isinstance(dec, ast.Call) else None
+            name = ast.unparse(call.func if call else dec).rpartition(".")[2]
+            if name not in ("njit", "jit", "vectorize", "guvectorize"):
+                continue
+            cached = call is not None and any(k.arg == "cache" and getattr(k.value, "value", False) is True
+                                              for k in call.keywords)
+            if not cached:
+                found.append(fn.name)
+    return found
+
+
+def test_every_compiled_kernel_is_cached_on_disk():
+    """numba's on-disk cache (``cache=True``) is what makes a kernel compile once per test run (and
+    once per checkout: tests/test_kernel_cache.py shows a second process loading it)."""
+    found = {p.relative_to(PKG).as_posix(): f for p in sorted(PKG.rglob("*.py"))
+             if (f := uncached_kernels(p.read_text(encoding="utf-8")))}
+    assert not found, found
+
+
+def test_the_cache_check_catches_an_uncached_kernel():
+    src = ("@njit(cache=True)\ndef a(x):\n    return x\n@numba.njit\ndef b(x):\n    return x\n"
+           "@njit(parallel=True)\ndef c(x):\n    return x\n")
+    assert uncached_kernels(src) == ["b", "c"]
