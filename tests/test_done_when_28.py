@@ -716,3 +716,35 @@ def test_the_cache_check_catches_an_uncached_kernel():
     src = ("@njit(cache=True)\ndef a(x):\n    return x\n@numba.njit\ndef b(x):\n    return x\n"
            "@njit(parallel=True)\ndef c(x):\n    return x\n")
     assert uncached_kernels(src) == ["b", "c"]
+
+
+# -- the thread limit holds for a BLAS library loaded after the first limited call -----------------------
+
+_LATE_BLAS = """
+import json, sys
+import numpy as np
+assert "scipy.linalg" not in sys.modules
+from squealkit._threads import honour_thread_limit
+honour_thread_limit(lambda: np.ones(2) @ np.ones(2))()   # the first limited call: numpy's BLAS only
+import scipy.linalg                                      # scipy's own OpenBLAS loads now
+from threadpoolctl import threadpool_info, threadpool_limits
+seen = []
+with threadpool_limits(2, user_api="blas"):
+    honour_thread_limit(lambda: seen.extend(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"))()
+print(json.dumps(seen))
+"""
+
+
+def test_the_thread_limit_holds_for_a_blas_loaded_after_the_first_limited_call():
+    # found by the whole suite: a worker whose first limited call needed numpy only kept a BLAS
+    # controller without scipy's library, so scipy's LAPACK ran on 2 threads under SQUEALKIT_THREADS=1
+    # (tests/test_smaller_27.py failed depending on the order the files ran in)
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "SQUEALKIT_THREADS": "1"}
+    out = subprocess.run([sys.executable, "-c", _LATE_BLAS], capture_output=True, text=True, env=env, check=True)
+    seen = json.loads(out.stdout.strip().splitlines()[-1])
+    assert len(seen) >= 2 and set(seen) == {1}, seen  # numpy's and scipy's libraries, each on 1 thread

@@ -43,6 +43,7 @@ import contextvars
 import functools
 import numbers
 import os
+import sys
 from collections.abc import Callable, Iterator
 from typing import Any, TypeVar
 
@@ -195,18 +196,21 @@ def limit_threads(n: int) -> Iterator[int]:
         numba.set_num_threads(before)
 
 
-#: threadpoolctl's controller of the BLAS libraries loaded (made at first use: by then numpy's
-#: and scipy's are loaded; reused, as a new one costs ~3 ms of library scanning per call).
-_BLAS_CONTROLLER: Any = None
+#: threadpoolctl's controller of the BLAS libraries loaded, and the number of imported modules when
+#: it was made. Reused (a new one costs ~1-3 ms of library scanning per call) until a module is
+#: imported: a BLAS library only arrives with an extension module (scipy.linalg loads its own
+#: OpenBLAS beside numpy's), and a controller made before it would leave that library unbounded.
+_BLAS_CONTROLLER: tuple[int, Any] | None = None
 
 
 def _blas_controller() -> Any:
     global _BLAS_CONTROLLER
-    if _BLAS_CONTROLLER is None:
+    n_modules = len(sys.modules)
+    if _BLAS_CONTROLLER is None or _BLAS_CONTROLLER[0] != n_modules:
         from threadpoolctl import ThreadpoolController
 
-        _BLAS_CONTROLLER = ThreadpoolController().select(user_api="blas")
-    return _BLAS_CONTROLLER
+        _BLAS_CONTROLLER = (n_modules, ThreadpoolController().select(user_api="blas"))
+    return _BLAS_CONTROLLER[1]
 
 
 @contextlib.contextmanager
