@@ -736,9 +736,10 @@ print(json.dumps(seen))
 
 
 def test_the_thread_limit_holds_for_a_blas_loaded_after_the_first_limited_call():
-    # found by the whole suite: a worker whose first limited call needed numpy only kept a BLAS
-    # controller without scipy's library, so scipy's LAPACK ran on 2 threads under SQUEALKIT_THREADS=1
-    # (tests/test_smaller_27.py failed depending on the order the files ran in)
+    # found by the whole suite: the BLAS controller was made once, at the first bounded call, so a
+    # BLAS library loaded later was never bounded: pypardiso's MKL (tests/test_leftovers_lu.py before
+    # tests/test_smaller_27.py in one worker: its LAPACK calls on 2 threads under SQUEALKIT_THREADS=1).
+    # Here the late library is scipy's OpenBLAS (no optional package needed), loaded after a call on numpy's.
     import json
     import os
     import subprocess
