@@ -196,21 +196,23 @@ def limit_threads(n: int) -> Iterator[int]:
         numba.set_num_threads(before)
 
 
-#: threadpoolctl's controller of the BLAS libraries loaded, and the number of imported modules when
-#: it was made. Reused (a new one costs ~1-3 ms of library scanning per call) until a module is
-#: imported: a BLAS library only arrives with an extension module (scipy.linalg loads its own
-#: OpenBLAS beside numpy's), and a controller made before it would leave that library unbounded.
-_BLAS_CONTROLLER: tuple[int, Any] | None = None
+#: threadpoolctl's controller of the BLAS libraries loaded, and ``len(sys.modules)`` when it was made.
+#: A new controller costs ~3 ms of library scanning, so it is reused while no module has been imported
+#: since; a BLAS library comes with an import (scipy.linalg's own OpenBLAS, MKL with PARDISO), and one
+#: loaded after the controller was made would otherwise keep its own thread count.
+_BLAS_CONTROLLER: Any = None
+_BLAS_SCANNED_AT = -1
 
 
 def _blas_controller() -> Any:
-    global _BLAS_CONTROLLER
-    n_modules = len(sys.modules)
-    if _BLAS_CONTROLLER is None or _BLAS_CONTROLLER[0] != n_modules:
+    global _BLAS_CONTROLLER, _BLAS_SCANNED_AT
+    if _BLAS_CONTROLLER is None or len(sys.modules) != _BLAS_SCANNED_AT:
         from threadpoolctl import ThreadpoolController
 
-        _BLAS_CONTROLLER = (n_modules, ThreadpoolController().select(user_api="blas"))
-    return _BLAS_CONTROLLER[1]
+        _BLAS_SCANNED_AT = len(sys.modules)  # before: the import itself may add modules
+        _BLAS_CONTROLLER = ThreadpoolController().select(user_api="blas")
+        _BLAS_SCANNED_AT = len(sys.modules)
+    return _BLAS_CONTROLLER
 
 
 @contextlib.contextmanager
