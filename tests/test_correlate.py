@@ -69,10 +69,30 @@ def test_outcomes_recovered_exactly(camp):
     assert ds["frequency_hz"].attrs["units"] == "Hz" and ds["growth_rate"].attrs["units"] == "1/s"
     assert set(ds["frequency_hz"].dims) == {"application", "mode"}
     # occurrence matrices: measured and predicted in the 2.5 kHz band agree where the outcome does
-    b = int(np.argmin(np.abs(ds["band"].values - 2512)))
+    b = int(np.argmin(np.abs(ds["band_center_hz"].values - 2512)))
     assert np.nansum(ds["measured_by_temperature"].values) > 0 and ds["band_predicted"].values[b] == \
         counts["hit"] + counts["over_prediction"] + sum(
             1 for t in truth["by_application"].values() if t["outcome"] == "miss" and t["predicted_hz"] is not None)
+
+
+def test_correlation_results_follow_the_result_schema(camp):
+    """correlate and its public steps return results in the shared schema (tests/test_vocabulary.py):
+    a kind of RESULT_KINDS and every frequency in Hz named *_hz (the band edges were band_lo/band_hi)."""
+    from squealkit.correlate import match_modes, measured_components
+    from squealkit.io import RESULT_KINDS
+    from test_vocabulary import schema_problems
+
+    d, _ = camp
+    apps, events = campaign_conditions(d / "out")
+    points = operating_points(apps, ConditionMap(mu_offset=HIDDEN_OFFSET))
+    measured = measured_components(apps["application"].values, events)
+    predicted = predict_modes(get_preset("lv2013"), points)
+    results = {"correlation": correlate(d / "out", get_preset("lv2013"), ConditionMap(mu_offset=HIDDEN_OFFSET)),
+               "measured_components": measured, "predicted_modes": predicted,
+               "mode_match": match_modes(predicted, measured, points)}
+    for kind, ds in results.items():
+        assert schema_problems(ds) == [], kind
+        assert ds.attrs["kind"] == kind and kind in RESULT_KINDS
 
 
 def test_calibration_recovers_the_hidden_offset(camp):

@@ -309,6 +309,7 @@ def _check_fe_derivatives(model, setup):
         np.testing.assert_allclose(der["second"][k], fd2[k], rtol=0, atol=1e-3 * np.abs(fd2[k]).max())
 
 
+@pytest.mark.slow
 def test_fe_montecarlo_and_perturbation_agree_where_the_estimate_holds(brake):
     model, setup = brake
     V = setup["reduced"].V

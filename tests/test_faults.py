@@ -177,6 +177,7 @@ def test_scheduler_that_is_not_dask_times_out_in_one_line(run, tmp_path, monkeyp
     server.close()
 
 
+@pytest.mark.slow
 def test_a_failed_connection_leaves_no_half_made_client(monkeypatch):
     """A Client that failed to connect was left half made; garbage collection later closed it from
     whatever thread it ran in, taking distributed's class-wide loop-runner lock, and when that thread

@@ -207,6 +207,7 @@ def test_tracking_follows_modes_through_a_crossing():
     np.testing.assert_allclose(w[:, 0] ** 2 + 0.005**2, 1 + 2 * np.linspace(0, 1, 11), rtol=1e-9)  # mode 0: x1
 
 
+@pytest.mark.slow
 def test_sparse_sweep_with_an_empty_band(run, brake_toml):
     # disk_brake100's scaled frequencies are all below 1 Hz: nothing in the default 1-16 kHz band
     r = run("stability", "--config", str(brake_toml), "--rpm", "60", "--method", "sparse", "--json")

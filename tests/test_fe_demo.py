@@ -88,6 +88,7 @@ def test_geometric_stiffness_is_signed():
     assert (V[:, 0] @ (disc["KGeo"] @ V[:, 0])) > 0
 
 
+@pytest.mark.slow
 def test_friction_makes_mode_coupling_squeal_in_band(brake):
     # the band solver itself is checked against scipy's shift-invert in test_reduction.py
     from squealkit.solvers.band import band_eigs
@@ -140,6 +141,7 @@ def test_cli_fe_demo_writes_a_model_folder(run, tmp_path):
     assert r.exit_code == 2
 
 
+@pytest.mark.slow
 def test_reduced_maps_of_the_built_in_brake_agree_with_the_band_solve_or_say_they_cannot(brake):
     # the POD basis (built for the squeal band) gives the band solve's numbers; a modal basis
     # too small for the coupled modes fails the residual check, and those points are

@@ -195,6 +195,7 @@ def test_hand_model_in_each_format_has_the_matrix_market_spectrum(hand, tmp_path
     _assert_same_spectrum(_companion_eigs(model), _companion_eigs(ref_model))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fmt", ["abaqus", "dmig", "hb"])
 def test_demo_brake_in_each_format_has_the_matrix_market_spectrum(demo, demo_mm, tmp_path, fmt):
     ref_model = demo_mm[0]

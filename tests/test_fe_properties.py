@@ -152,6 +152,7 @@ def test_band_walks_meet_whatever_their_pace(monkeypatch, slow):
         assert np.all(gaps > 1e-9 * np.abs(in_band).max())
 
 
+@pytest.mark.slow
 def test_walks_do_not_solve_the_same_stretch_twice(monkeypatch):
     # built-in brake, 8 802 DOFs, 32 eigenvalues per shift: the walk from the top used to place
     # a last shift 89 Hz from the one the walk from the bottom was solving (10 616 against
@@ -218,6 +219,7 @@ def test_shift_invert_finds_the_nearest_eigenvalues(seed, n, k, block):
     assert np.all(band_solver.pencil_backward_errors(M, C, K, lam, X) < 10 * op.tol)
 
 
+@pytest.mark.slow
 @settings(max_examples=12, deadline=None)
 @given(seed=st.integers(0, 10**6), friction=st.floats(1e4, 1e6), keep=st.floats(0.3, 1.0),
        omega=st.floats(1.0, 10.0), mu=st.floats(0.1, 0.9))

@@ -200,6 +200,7 @@ def brake_toml(demo, tmp_path_factory):
     return write_fe_demo(demo, tmp_path_factory.mktemp("seeing") / "brake")
 
 
+@pytest.mark.slow
 def test_cli_modes_lists_every_unstable_mode_with_its_component(run, brake_toml, modes):
     args = ("modes", "--config", str(brake_toml), "--rpm", str(RPM), "--mu", str(MU), "--method", "pod",
             "--eigen-band", "9000:20000")
@@ -221,6 +222,7 @@ def test_cli_modes_lists_every_unstable_mode_with_its_component(run, brake_toml,
 # ----------------------------------------------------------------------------- the report
 
 
+@pytest.mark.slow
 def test_report_of_an_fe_model_shows_every_unstable_mode_offline(run, brake_toml, tmp_path):
     pytest.importorskip("plotly")
     toml = brake_toml.parent / "report.toml"

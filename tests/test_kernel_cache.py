@@ -7,6 +7,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 CALL = """
 import json
 import numpy as np
@@ -18,6 +20,7 @@ print(json.dumps({"hits": sum(d.stats.cache_hits.values()), "misses": sum(d.stat
 """
 
 
+@pytest.mark.slow
 def test_sampled_monodromy_is_loaded_from_the_cache_by_a_second_process(tmp_path):
     # reference: numba's dispatcher statistics; A = 0 gives Phi = I exactly (closed form)
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path), "SQUEALKIT_THREADS": "1"}

@@ -54,6 +54,7 @@ def campaign(tmp_path_factory):
     return out, mu_meas, unstable
 
 
+@pytest.mark.slow
 def test_two_quantities_are_recovered_with_intervals_that_hold_the_truth(campaign, monkeypatch):
     import squealkit.correlate.correlation as correlation
 

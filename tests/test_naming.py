@@ -61,6 +61,9 @@ def naming_problems(name: str, obj) -> list[str]:
         for pattern, unit in UNIT_OF:
             if pattern.search(p) and p in docs and unit not in docs[p]:
                 problems.append(f"{name}({p}=): the description must state {unit!r}: {docs[p][:80]!r}")
+        # omega is an eigen (circular) frequency; the disc's speed is disc_speed [rad/s] or rpm
+        if p.startswith("omega") and "disc speed" in docs.get(p, "").lower():
+            problems.append(f"{name}({p}=): the disc speed is disc_speed [rad/s] (or rpm), never omega")
     return problems
 
 

@@ -85,6 +85,7 @@ def _comment_of(lines: list[str], node) -> str:
     return comment if comment[:1].isdigit() or comment[:1] in "[({'-+" else ""
 
 
+@pytest.mark.slow
 def test_readme_python_blocks_run_and_show_their_values(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "examples").symlink_to(README.parent / "examples")
@@ -148,6 +149,7 @@ CLI_EXAMPLES = _console_examples()
 FILES = re.findall(r"```toml\n# ([\w./-]+\.toml)\n(.*?)```", TEXT, flags=re.S)
 
 
+@pytest.mark.slow
 def test_readme_cli_examples_print_what_readme_shows(tmp_path, monkeypatch):
     from click.testing import CliRunner
 

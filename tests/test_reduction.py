@@ -48,6 +48,7 @@ def nearest_rel_error(lam, ref):
     return np.array([np.min(np.abs(ref - x)) / abs(x) for x in lam])
 
 
+@pytest.mark.slow
 def test_band_solver_agrees_with_scipy_shift_invert(brake):
     # independent reference: scipy's own shift-invert on the companion pencil (A - s B)
     omega, mu = 50.0, 0.45
@@ -104,6 +105,7 @@ def test_modal_basis_counts_its_modes_before_solving(brake):
         assert count_below(brake["K1"], brake["M"], w2, fill_reducing_order(brake["K1"])) == np.sum(w < w2)
 
 
+@pytest.mark.slow
 def test_pod_reduction_agrees_with_full_solve_where_trusted(brake, pod):
     # between the samples (mu = 0.3, 0.6) and away from their speed
     for omega, mu in ((50.0, 0.45), (20.0, 0.52)):
@@ -117,6 +119,7 @@ def test_pod_reduction_agrees_with_full_solve_where_trusted(brake, pod):
         assert np.any(red["growth_rate"] > 0) == np.any(lam.real > 0)
 
 
+@pytest.mark.slow
 def test_left_corrections_make_the_reduced_eigenvalues_more_accurate(brake):
     # friction (KR) makes left and right eigenvectors differ; a basis of right eigenvectors
     # only gives eigenvalue errors first order in the left vectors' error. Measured: 4.7e-7

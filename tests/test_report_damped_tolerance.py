@@ -81,6 +81,7 @@ def test_undamped_model_keeps_one_tolerance(tmp_path):
     assert "With the model's damping" not in " ".join(crit.paragraphs[1:2])
 
 
+@pytest.mark.slow
 def test_unrealistic_undamped_onset_is_said_once_in_words_not_warned_when_damping_makes_it_realistic(tmp_path):
     """The rig's undamped onset (mu 1.565) is beyond friction materials, its damped one (0.229) is not: the
     report warned three times (once per undamped analysis) that mode coupling "needs mu_crit = 1.383 or

@@ -120,6 +120,7 @@ def test_sobol_matches_linearised_variance_shares():
 # -- reproducibility and distribution ------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_same_seed_same_result_whatever_the_batching(hoff):
     again = squeal_propensity(Hoffmann2002(), HOFF_UNC, HOFF_MU, samples=2048, seed=7, batch_size=333)
     xr.testing.assert_identical(again, hoff)

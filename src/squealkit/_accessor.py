@@ -100,6 +100,12 @@ _UNPLOTTED: dict[str, str] = {
     "eigen_derivatives": "squealkit.design.eigen_derivatives",
     "reduced_sweep": "squealkit.solvers.reduced_sweep",
     "simulation_batch": "squealkit.transient.simulate_batch",
+    "measurement_signals": "squealkit.measurement.analysis.views.measurement_signals and figure_signals "
+                           "(what the figures of squealkit.plotting.measurement draw)",
+    "correlation": "squealkit.correlate.correlate (its figures: squealkit.plotting.correlate)",
+    "predicted_modes": "squealkit.correlate.predict_modes",
+    "measured_components": "squealkit.correlate.measured_components",
+    "mode_match": "squealkit.correlate.match_modes",
 }
 
 #: Every value of a result's ``kind`` attribute.

@@ -64,7 +64,8 @@ def measured_components(applications: Any, events: Any, tolerance: float = 0.03)
     -------
     xarray.Dataset
         Over ``(application, component)``: ``measured_hz`` [Hz] (the loudest event's frequency
-        of the component; NaN where an application has fewer) and ``measured_dba`` [dB(A)].
+        of the component; NaN where an application has fewer) and ``measured_dba`` [dB(A)];
+        ``kind`` ``"measured_components"``.
     """
     tol = validate_tolerance(tolerance)
     apps = [str(a) for a in np.asarray(applications)]
@@ -90,7 +91,8 @@ def measured_components(applications: Any, events: Any, tolerance: float = 0.03)
             hz[i, j], dba[i, j] = f, lvl
     return xr.Dataset({"measured_hz": (("application", "component"), hz, {"units": "Hz"}),
                        "measured_dba": (("application", "component"), dba, {"units": "dB(A)"})},
-                      coords={"application": apps, "component": np.arange(width)})
+                      coords={"application": apps, "component": np.arange(width)},
+                      attrs={"kind": "measured_components"})
 
 
 def _bin_labels(edges: tuple[float, ...], unit: str) -> list[str]:
@@ -178,11 +180,13 @@ def match_modes(predicted: xr.Dataset, measured: xr.Dataset, conditions: xr.Data
     -------
     xarray.Dataset
         Over ``application``: ``outcome`` (one of :data:`OUTCOMES`), ``predicted_hz`` and
-        ``component_matched`` / ``mode_matched`` flags; rates over ``mode`` and ``band``;
-        noise matrices ``measured_by_temperature``, ``predicted_by_temperature``,
-        ``measured_by_pressure``, ``predicted_by_pressure`` [% of applications] over
+        ``component_matched`` / ``mode_matched`` flags; rates over ``mode`` and ``band`` (the
+        1/3-octave bands: ``band_center_hz``, ``band_lo_hz``, ``band_hi_hz`` [Hz]); noise matrices
+        ``measured_by_temperature``, ``predicted_by_temperature``, ``measured_by_pressure``,
+        ``predicted_by_pressure`` [% of applications] over
         ``(band, temperature_bin)`` and ``(band, pressure_bin)``. Attributes: the counts
-        ``hits``, ``misses``, ``over_predictions``, ``quiet``, ``applications`` and ``tolerance``.
+        ``hits``, ``misses``, ``over_predictions``, ``quiet``, ``applications`` and ``tolerance``;
+        ``kind`` ``"mode_match"``.
     """
     from ..campaign.summary import third_octave_bands
 
@@ -255,9 +259,11 @@ def match_modes(predicted: xr.Dataset, measured: xr.Dataset, conditions: xr.Data
         },
         coords={"application": apps, "mode": predicted["mode"].values,
                 "component": meas["component"].values,
-                "band": ("band", centres, {"units": "Hz", "long_name": "1/3-octave band centre"}),
-                "band_lo": ("band", lo_edges, {"units": "Hz"}), "band_hi": ("band", hi_edges, {"units": "Hz"})},
-        attrs={"tolerance": tol, "tolerance_percent": 100 * tol, "applications": int(A),
+                # the campaign's names (its store's events): frequencies in Hz end in _hz
+                "band_center_hz": ("band", centres, {"units": "Hz", "long_name": "1/3-octave band centre"}),
+                "band_lo_hz": ("band", lo_edges, {"units": "Hz", "long_name": "1/3-octave band lower edge"}),
+                "band_hi_hz": ("band", hi_edges, {"units": "Hz", "long_name": "1/3-octave band upper edge"})},
+        attrs={"kind": "mode_match", "tolerance": tol, "tolerance_percent": 100 * tol, "applications": int(A),
                **_counts(outcome), "frequency_misfit": misfit,
                "matching": f"a measured squeal component matches an unstable mode within {100 * tol:g} % "
                            "of its frequency"},

@@ -283,7 +283,8 @@ def predict_modes(model: Any, points: xr.Dataset, *, damped: bool = True, client
         ``damping_ratio`` [1], ``unstable`` (bool), ``residual`` (FE: backward error in the
         full model); over ``application``: ``mu``, ``disc_speed`` [rad/s], ``n_unstable``,
         ``verdict`` (``stable``, ``flutter``, ``divergence``, ``indeterminate``). Modes are
-        ordered by frequency at each point. Attributes: ``distinct_points`` (solved), ``model``.
+        ordered by frequency at each point. Attributes: ``distinct_points`` (solved), ``model``,
+        ``kind`` ``"predicted_modes"``.
 
     Raises
     ------
@@ -306,7 +307,8 @@ def predict_modes(model: Any, points: xr.Dataset, *, damped: bool = True, client
     inv = r["inverse"]
     freq = r["omega"][inv] / (2 * math.pi)
     unstable = r["unstable"][inv]
-    attrs = {"model": model.to_json(), "model_kind": model.kind, "damped": int(damped or isinstance(model, FEModel)),
+    attrs = {"kind": "predicted_modes", "model": model.to_json(), "model_kind": model.kind,
+             "damped": int(damped or isinstance(model, FEModel)),
              "distinct_points": int(r["keys"].shape[0]), "distinct_models": int(r["n_models"]),
              "unstable_rtol": r["unstable_rtol"], "theta": theta, "squealkit_version": __version__}
     for k in ("method", "basis_size", "band_hz"):

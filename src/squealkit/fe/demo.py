@@ -503,6 +503,18 @@ def demo_mesh(demo: Any) -> FEMesh:
     Every scalar node of the quadratic elements is a point (``node_points``), labelled ``k + 1``
     for the demo's node k, so a DOF ``node<k>.<x|y|z>`` is ``(k + 1, 1|2|3)`` in the DOF map
     (:func:`demo_dof_map`); the elements are the 8-vertex hexahedra.
+
+    Parameters
+    ----------
+    demo : dict
+        The built-in brake, as :func:`build_fe_demo` returns it.
+
+    Returns
+    -------
+    squealkit.fe.mesh.FEMesh
+        Points [m], node labels ``1..N`` and the hexahedra; write it with
+        :func:`squealkit.fe.mesh.write_abaqus_inp` or give it to
+        :meth:`squealkit.fe.FEModel.from_matrices` (``mesh=``).
     """
     pts = np.asarray(demo["node_points"], dtype=np.float64)
     hexes = np.asarray(demo["mesh"]["cells"]["hexahedron"], dtype=np.int64)
@@ -510,7 +522,18 @@ def demo_mesh(demo: Any) -> FEMesh:
 
 
 def demo_dof_map(demo: Any) -> DofMap:
-    """The DOF map of the built-in FE brake: unknown i is ``(dof_node[i] + 1, dof_component[i] + 1)``."""
+    """The DOF map of the built-in FE brake: unknown i is ``(dof_node[i] + 1, dof_component[i] + 1)``.
+
+    Parameters
+    ----------
+    demo : dict
+        The built-in brake, as :func:`build_fe_demo` returns it.
+
+    Returns
+    -------
+    squealkit.fe.dofmap.DofMap
+        Node label (as in :func:`demo_mesh`) and component (1, 2, 3: x, y, z) of each unknown.
+    """
     return DofMap(np.asarray(demo["dof_node"]) + 1, np.asarray(demo["dof_component"]) + 1)
 
 
@@ -523,6 +546,13 @@ def write_fe_demo(model: Mapping[str, Any], out_dir: str | Path) -> Path:
     ``mesh = "mesh.vtu"``, the element vertices for viewing mode shapes (``modes --vtk``). The
     mesh is also written as an Abaqus input deck ``brake.inp`` (:func:`demo_mesh`: every node a
     point, labelled ``k + 1``), for FE codes and for ``mesh = "brake.inp"``.
+
+    Parameters
+    ----------
+    model : dict
+        The built-in brake, as :func:`build_fe_demo` returns it.
+    out_dir : str or Path
+        The folder to write (created; refused if it exists and holds other files).
 
     Returns
     -------

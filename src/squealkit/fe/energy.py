@@ -43,6 +43,7 @@ import numpy as np
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
+from .._deprecation import TAN_THETA_WHY, keyword_only
 from .._validation import InputError, validate_model
 from .surface import bodies, dof_places, mesh_of
 
@@ -57,7 +58,8 @@ _COINCIDENT_RTOL = 1e-7
 _TIE = 0.02
 
 
-def friction_parts(model: Any, disc_speed: float, mu: float, tan_theta: float = 0.0
+@keyword_only("tan_theta", why=TAN_THETA_WHY)
+def friction_parts(model: Any, disc_speed: float, mu: float, *, tan_theta: float = 0.0
                    ) -> tuple[sp.csr_matrix, sp.csr_matrix]:
     """The friction parts ``(K_f, D_f)`` of the stiffness and damping at one operating point.
 
@@ -72,7 +74,7 @@ def friction_parts(model: Any, disc_speed: float, mu: float, tan_theta: float = 
     mu : float
         Friction coefficient.
     tan_theta : float, default 0.0
-        Run-out slope [1].
+        Run-out slope [1] (keyword-only; by position it warns, for one release).
 
     Returns
     -------
@@ -142,7 +144,7 @@ def mode_energy(model: Any, ds: xr.Dataset) -> xr.Dataset:
     if X.shape[0] != model.n_dof:
         raise InputError(f"The modes have {X.shape[0]} DOFs, the model {model.n_dof}: not this model's modes.")
     v, mu, t = float(ds.attrs["disc_speed"]), float(ds.attrs["mu"]), float(ds.attrs["tan_theta"])
-    Kf, Df = friction_parts(model, v, mu, t)
+    Kf, Df = friction_parts(model, v, mu, tan_theta=t)
     C, K = model.damping_matrix(v, mu, t), model.stiffness_matrix(v, mu, t)
     sigma = ds["growth_rate"].values
     omega = 2.0 * math.pi * ds["frequency_hz"].values

@@ -307,7 +307,18 @@ _INP_TYPES = {"hexahedron": "C3D8", "hexahedron20": "C3D20", "tetra": "C3D4", "t
 
 
 def abaqus_inp_text(mesh: FEMesh) -> str:
-    """A mesh as the text of an Abaqus input deck (``*NODE``, one ``*ELEMENT`` block per cell type)."""
+    """A mesh as the text of an Abaqus input deck (``*NODE``, one ``*ELEMENT`` block per cell type).
+
+    Parameters
+    ----------
+    mesh : FEMesh
+        Points [m] with their node labels, and the cells.
+
+    Returns
+    -------
+    str
+        The deck: one ``*NODE`` line per point (its label and coordinates), elements numbered from 1.
+    """
     rows = ["** nodes and elements written by squealkit", "*NODE"]
     rows += [f"{n}, {x!r}, {y!r}, {z!r}" for n, (x, y, z) in zip(mesh.node_labels.tolist(), mesh.points.tolist(),
                                                                strict=True)]
@@ -323,7 +334,20 @@ def abaqus_inp_text(mesh: FEMesh) -> str:
 
 
 def write_abaqus_inp(mesh: FEMesh, path: str | Path) -> Path:
-    """Write a mesh as an Abaqus input deck (:func:`abaqus_inp_text`), atomically; returns the path."""
+    """Write a mesh as an Abaqus input deck (:func:`abaqus_inp_text`), atomically.
+
+    Parameters
+    ----------
+    mesh : FEMesh
+        Points [m] with their node labels, and the cells.
+    path : str or Path
+        The ``.inp`` file to write (replaced only once complete: :func:`squealkit.io.atomic_path`).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     from ..io import atomic_path
 
     out = Path(path)

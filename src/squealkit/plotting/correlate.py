@@ -53,7 +53,7 @@ def noise_matrices_plot(ds, *, by: str = "temperature", synthetic: bool = False,
         ax.set_xticks(range(int(keep.sum())), labels, fontsize=7, rotation=35, ha="right")
         ax.set_title(f"{which} occurrence [%]", fontsize=10)
         ax.set_xlabel(f"brake {by}")
-    axes[0].set_yticks(range(ds.sizes["band"]), [f"{c / 1000:.3g}" for c in ds["band"].values])
+    axes[0].set_yticks(range(ds.sizes["band"]), [f"{c / 1000:.3g}" for c in ds["band_center_hz"].values])
     axes[0].set_ylabel("1/3-octave band centre [kHz]")
     fig.colorbar(im, ax=list(axes), label="% of applications in the bin", shrink=0.9)
     fig.suptitle(f"Noise matrix by {by}: measured vs predicted (tolerance {ds.attrs['tolerance_percent']:g} %)"

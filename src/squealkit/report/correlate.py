@@ -66,7 +66,7 @@ def correlation_section(ds: Any, figures: tuple[FigureRef, ...] = ()) -> Section
               Table("Per 1/3-octave band", ("band [Hz]", "predicted", "hit rate [%]", "over-prediction rate [%]",
                                             "measured", "detection rate [%]"),
                     tuple((f"{lo:.0f}-{hi:.0f}", int(p), h, o, int(m), d) for lo, hi, p, h, o, m, d in zip(
-                        ds["band_lo"].values, ds["band_hi"].values, ds["band_predicted"].values,
+                        ds["band_lo_hz"].values, ds["band_hi_hz"].values, ds["band_predicted"].values,
                         ds["band_hit_rate"].values, ds["band_over_prediction_rate"].values,
                         ds["band_measured"].values, ds["band_detection_rate"].values, strict=True)
                         if p or m))]

@@ -2,22 +2,24 @@
 
 An FE brake model is given in the exported matrix form (Abaqus/ANSYS/Nastran names)::
 
-    (lambda^2 M + lambda C(omega, mu) + K(omega, mu)) x = 0
-    C(omega, mu) = D1 + (mu/mu_ref) DR (v_ref/omega) + (omega/v_ref) DG + D4/f_ref
-    K(omega, mu) = K1 + (mu/mu_ref) KR + (omega/v_ref)**2 KGeo
+    (lambda^2 M + lambda C(v, mu) + K(v, mu)) x = 0
+    C(v, mu) = D1 + (mu/mu_ref) DR (v_ref/v) + (v/v_ref) DG + D4/f_ref
+    K(v, mu) = K1 + (mu/mu_ref) KR + (v/v_ref)**2 KGeo
 
-with omega the disc speed [rad/s] and ``lambda = sigma + i 2 pi f`` (``sigma`` the growth rate
-[1/s], ``f`` the frequency [Hz]). The functions here take the matrices as a mapping (or any
-object with those attributes, e.g. an ``FEModel``): ``M`` and ``K1`` required, the others
-optional (``None``), plus ``disc_speed_ref`` (``v_ref``; formerly ``omega_ref``), ``mu_ref``, ``f_ref``
-(default 1). Here ``omega`` is the disc speed, as in the functions' arguments.
+with ``v`` the disc speed [rad/s] (the arguments ``disc_speed``, ``disc_speeds``) and
+``lambda = sigma + i 2 pi f`` (``sigma`` the growth rate [1/s], ``f`` the frequency [Hz]).
+The functions here take the matrices as a mapping (or any object with those attributes, e.g. an
+``FEModel``): ``M`` and ``K1`` required, the others optional (``None``), plus ``disc_speed_ref``
+(``v_ref``; formerly ``omega_ref``), ``mu_ref``, ``f_ref`` (default 1). ``omega`` is never the disc
+speed here (an eigenfrequency elsewhere); the former keywords ``omega=``/``omegas=`` still work for
+one release, with a DeprecationWarning.
 
 Three steps, as industry does it (Graebner, Tiedemann, Schroeder & Mehrmann, ZAMM 96 (2016)):
 
 1. :func:`modal_basis`: the real modes of ``(M, K1)`` up to a cut-off frequency (subspace
    projection; shift-invert Lanczos around 0).
 2. :func:`pod_basis`: a parametric basis for sweeps: complex eigenvectors of the full
-   quadratic problem at sampled ``(omega, mu)``, real and imaginary parts, optionally with
+   quadratic problem at sampled ``(disc_speed, mu)``, real and imaginary parts, optionally with
    the modal basis, compressed by a proper orthogonal decomposition (SVD, relative tolerance).
 3. :func:`reduce` then :func:`reduced_eigs` / :func:`reduced_sweep`: ``V^T A V`` for every
    matrix, a dense state-space eigen solve of the small problem, and for EACH eigenvalue its
@@ -27,7 +29,7 @@ Three steps, as industry does it (Graebner, Tiedemann, Schroeder & Mehrmann, ZAM
 
    computed without the full matrices at each point (an R factor of ``[A_i V]`` is kept),
    so a reduced answer that cannot be trusted says so (``trusted = eta <= eta_max``).
-   Norms are Frobenius norms of the assembled ``C(omega, mu)`` and ``K(omega, mu)``, as in the
+   Norms are Frobenius norms of the assembled ``C(v, mu)`` and ``K(v, mu)``, as in the
    sparse and dense solvers (from a table of the matrices' Frobenius inner products).
 """
 
@@ -47,6 +49,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .._deprecation import renamed_kwargs
 from .._threads import honour_thread_limit, thread_limit
 from .._validation import InputError
 from ..fe.model import FEModel
@@ -111,10 +114,10 @@ def as_fe_model(matrices: Any, disc_speed_ref: float | None = None, mu_ref: floa
     return FEModel.from_matrices(**mats, **refs)
 
 
-def _coefficients(model: FEModel, omega: float, mu: float) -> dict[str, tuple[int, float]]:
-    """name -> (power of lambda, scalar factor) of each present matrix at (omega, mu)
+def _coefficients(model: FEModel, disc_speed: float, mu: float) -> dict[str, tuple[int, float]]:
+    """name -> (power of lambda, scalar factor) of each present matrix at (disc_speed, mu)
     (:meth:`~squealkit.fe.model.FEModel.factors`, with M's power 2)."""
-    f = model.factors(omega, mu)
+    f = model.factors(disc_speed, mu)
     return {name: (2, 1.0) if name == "M" else (1 if name in _DAMPING else 0, f[name]) for name in model.present}
 
 
@@ -248,22 +251,23 @@ def _dense(A: Any) -> np.ndarray:
 SNAPSHOT_TOL = 1e-9
 
 
-def _snapshot(fe, omega: float, mu: float, band: tuple[float, float], parts: DenseParts | None,
+def _snapshot(fe, disc_speed: float, mu: float, band: tuple[float, float], parts: DenseParts | None,
               workers: int | None = None) -> np.ndarray:
     """Right eigenvectors with frequency in ``band`` [Hz]: all modes by LAPACK with the model's
     prepared dense ``parts`` (up to :data:`~squealkit.solvers.band.DENSE_MAX_DOF` DOFs),
     else the sparse band solve (``workers`` walks)."""
     if parts is None:
-        return band_eigs(fe, omega, mu, band=band, workers=workers, tol=SNAPSHOT_TOL).vectors
-    sol = dense_eigs(fe, omega, mu, parts=parts)
+        return band_eigs(fe, disc_speed, mu, band=band, workers=workers, tol=SNAPSHOT_TOL).vectors
+    sol = dense_eigs(fe, disc_speed, mu, parts=parts)
     f = sol.frequency_hz
     return sol.vectors[:, (f >= band[0]) & (f <= band[1])]
 
 
 @honour_thread_limit
+@renamed_kwargs(omegas="disc_speeds")
 def pod_basis(
     matrices: Any,
-    omegas: Sequence[float],
+    disc_speeds: Sequence[float],
     mus: Sequence[float],
     *,
     band: tuple[float, float] = (1e3, 16e3),
@@ -276,7 +280,7 @@ def pod_basis(
 ):
     """Parametric reduction basis from eigenvectors at sampled speeds and friction (POD).
 
-    At every sample ``(omega, mu)`` (the grid ``omegas x mus``) the full model's
+    At every sample ``(disc_speed, mu)`` (the grid ``disc_speeds x mus``) the full model's
     eigenvectors with frequency in ``band`` widened by ``band_margin`` are computed; their
     real and imaginary parts (each scaled to unit norm), together with ``extra`` (e.g.
     :func:`modal_basis`) and the left corrections, are compressed by an SVD keeping the
@@ -295,8 +299,9 @@ def pod_basis(
     Parameters
     ----------
     matrices : mapping or FEModel
-    omegas, mus : sequences of float
-        Sample disc speeds [rad/s] and friction coefficients.
+    disc_speeds, mus : sequences of float
+        Sample disc speeds [rad/s] and friction coefficients (``omegas=`` is the deprecated
+        keyword of ``disc_speeds``).
     band : (float, float)
         Frequency band [Hz] of interest.
     tol : float
@@ -309,7 +314,7 @@ def pod_basis(
         Relative widening of the band for the snapshots (modes just outside the band couple
         into it).
     eig_solver : callable, optional
-        ``eig_solver(matrices, omega, mu, band) -> (lam, X)``; default LAPACK (all modes) up to
+        ``eig_solver(matrices, disc_speed, mu, band) -> (lam, X)``; default LAPACK (all modes) up to
         :data:`~squealkit.solvers.band.DENSE_MAX_DOF` DOFs, the sparse shift-invert band
         solve :func:`~squealkit.solvers.band.band_eigs` above (to :data:`SNAPSHOT_TOL`;
         samples solved at once, one walk each, up to the thread limit of
@@ -325,17 +330,17 @@ def pod_basis(
         Only with ``return_singular_values``.
     """
     model = as_fe_model(matrices)
-    omegas, mus = np.atleast_1d(np.asarray(omegas, dtype=float)), np.atleast_1d(np.asarray(mus, dtype=float))
-    if omegas.size == 0 or mus.size == 0:
+    speeds, mus = np.atleast_1d(np.asarray(disc_speeds, dtype=float)), np.atleast_1d(np.asarray(mus, dtype=float))
+    if speeds.size == 0 or mus.size == 0:
         raise InputError("pod_basis: give at least one sample speed and friction.")
     if not (0 < tol < 1):
         raise InputError(f"pod_basis: tol={tol!r} must be in (0, 1).")
     lo, hi = _validate_band(band)
     wide = (max(lo * (1 - band_margin), 1.0), hi * (1 + band_margin))
     cols = [] if extra is None else [np.asarray(extra, dtype=float)]
-    samples = [(float(omega), float(mu)) for omega in omegas for mu in mus]
+    samples = [(float(speed), float(mu)) for speed in speeds for mu in mus]
     if eig_solver is not None:
-        snaps = [eig_solver(matrices, omega, mu, wide)[1] for omega, mu in samples]
+        snaps = [eig_solver(matrices, speed, mu, wide)[1] for speed, mu in samples]
     else:
         # the dense matrices (and M's Cholesky factor) once for every sample
         parts = dense_parts(model) if model.n_dof <= DENSE_MAX_DOF else None
@@ -344,7 +349,7 @@ def pod_basis(
             with _one_blas_thread(), ThreadPoolExecutor(max_workers=workers) as pool:
                 snaps = list(pool.map(lambda p: _snapshot(model, *p, wide, None, workers=1), samples))
         else:
-            snaps = [_snapshot(model, omega, mu, wide, parts) for omega, mu in samples]
+            snaps = [_snapshot(model, speed, mu, wide, parts) for speed, mu in samples]
     for X in snaps:
         cols += [X.real, X.imag]
     if left:
@@ -485,9 +490,10 @@ def _gram(model: FEModel, order: Sequence[str]) -> np.ndarray:
 
 
 @honour_thread_limit
+@renamed_kwargs(omega="disc_speed")
 def reduced_eigs(
     reduced: ReducedModel,
-    omega: float,
+    disc_speed: float,
     mu: float,
     *,
     band: tuple[float, float] = (1e3, 16e3),
@@ -499,8 +505,8 @@ def reduced_eigs(
     Parameters
     ----------
     reduced : ReducedModel
-    omega : float
-        Disc speed [rad/s].
+    disc_speed : float
+        Disc speed [rad/s] (keyword ``omega=`` deprecated).
     mu : float
         Friction coefficient.
     band : (float, float)
@@ -517,7 +523,7 @@ def reduced_eigs(
         ``residual`` (backward error), ``trusted`` (bool), and ``vector`` on request.
     """
     lo, hi = _validate_band(band)
-    lam, Y, eta = reduced_solve(reduced, omega, mu, lo, hi)
+    lam, Y, eta = reduced_solve(reduced, disc_speed, mu, lo, hi)
     out = {
         "eigenvalue": lam,
         "growth_rate": lam.real,
@@ -530,14 +536,15 @@ def reduced_eigs(
     return out
 
 
-def reduced_solve(reduced: ReducedModel, omega: float, mu: float, lo: float, hi: float):
+@renamed_kwargs(omega="disc_speed")
+def reduced_solve(reduced: ReducedModel, disc_speed: float, mu: float, lo: float, hi: float):
     """Eigenvalues in ``[lo, hi]`` Hz, their unit coordinates ``Y`` in the basis and full-model residuals.
 
     Parameters
     ----------
     reduced : ReducedModel
-    omega : float
-        Disc speed [rad/s].
+    disc_speed : float
+        Disc speed [rad/s] (keyword ``omega=`` deprecated).
     mu : float
         Friction coefficient (with the run-out slope added, if any).
     lo, hi : float
@@ -548,7 +555,7 @@ def reduced_solve(reduced: ReducedModel, omega: float, mu: float, lo: float, hi:
     (ndarray, ndarray, ndarray)
         Eigenvalues (k,), their coordinates ``Y`` (r, k) (unit columns) and backward errors (k,).
     """
-    coef = _coefficients(reduced.projected, omega, mu)
+    coef = _coefficients(reduced.projected, disc_speed, mu)
     r = reduced.n_reduced
     Mr = reduced.mats["M"]
     Cr = np.zeros((r, r))
@@ -592,9 +599,10 @@ def _reduced_backward_error(reduced: ReducedModel, coef, lam: np.ndarray, Y: np.
 
 
 @honour_thread_limit
+@renamed_kwargs(omegas="disc_speeds")
 def reduced_sweep(
     reduced: ReducedModel,
-    omegas: Sequence[float],
+    disc_speeds: Sequence[float],
     mus: Sequence[float],
     *,
     band: tuple[float, float] = (1e3, 16e3),
@@ -607,15 +615,16 @@ def reduced_sweep(
     ----------
     reduced : ReducedModel
         From :func:`reduce`.
-    omegas, mus : sequences of float
-        Disc speeds [rad/s] and friction coefficients of the grid.
+    disc_speeds, mus : sequences of float
+        Disc speeds [rad/s] and friction coefficients of the grid (``omegas=`` is the deprecated
+        keyword of ``disc_speeds``).
     band : (float, float)
         Frequencies [Hz] kept.
     eta_max : float
         Backward error up to which an eigenvalue is ``trusted``.
     track : bool
         Follow each mode across the grid by MAC on its eigenvector, as
-        :func:`~squealkit.stability.fe_stability_map` does (the first column along omega,
+        :func:`~squealkit.stability.fe_stability_map` does (the first column along the disc speed,
         then each row along mu; computed in the basis's coordinates, where the MAC is the
         full model's because the basis is orthonormal). Otherwise modes are numbered by
         frequency at each point.
@@ -633,16 +642,16 @@ def reduced_sweep(
     import xarray as xr
 
     lo, hi = _validate_band(band)
-    omegas = np.atleast_1d(np.asarray(omegas, dtype=float))
+    speeds = np.atleast_1d(np.asarray(disc_speeds, dtype=float))
     mus = np.atleast_1d(np.asarray(mus, dtype=float))
     tracker = MacTracker()
     results = {}
     with _one_blas_thread():  # many small dense solves: serial BLAS measured 5x faster on 2 shared cores
         column = None
-        for i, om in enumerate(omegas):
+        for i, speed in enumerate(speeds):
             prev = column
             for j, mu in enumerate(mus):
-                lam, Y, eta = reduced_solve(reduced, om, mu, lo, hi)
+                lam, Y, eta = reduced_solve(reduced, speed, mu, lo, hi)
                 if not track:
                     slots = np.arange(lam.size)
                     tracker.n_slots = max(tracker.n_slots, lam.size)
@@ -655,7 +664,7 @@ def reduced_sweep(
                     column = prev
                 results[i, j] = (slots, lam, eta)
     m = tracker.n_slots
-    shape = (len(omegas), len(mus), m)
+    shape = (len(speeds), len(mus), m)
     lam_a = np.full(shape, np.nan + 1j * np.nan)
     res = np.full(shape, np.nan)
     for (i, j), (slots, lam, eta) in results.items():
@@ -676,8 +685,8 @@ def reduced_sweep(
             "all_trusted": (dims[:2], np.all(trusted | ~valid, axis=2)),
         },
         coords={
-            "rpm": ("rpm", omegas * 60 / (2 * math.pi), {"units": "1/min", "long_name": "disc speed"}),
-            "disc_speed": ("rpm", omegas, {"units": "rad/s", "long_name": "disc speed 2 pi rpm/60"}),
+            "rpm": ("rpm", speeds * 60 / (2 * math.pi), {"units": "1/min", "long_name": "disc speed"}),
+            "disc_speed": ("rpm", speeds, {"units": "rad/s", "long_name": "disc speed 2 pi rpm/60"}),
             "mu": ("mu", mus),
             "mode": ("mode", np.arange(m),
                      {"long_name": "mode index (tracked by MAC)" if track else "mode index (by frequency)"}),

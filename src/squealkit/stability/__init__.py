@@ -22,7 +22,7 @@ from .eigen import (
     unstable_threshold,
 )
 from .ensemble import ModelEnsemble, ensemble_onset, ensemble_unstable
-from .fe_sweep import fe_critical_friction, fe_modes, fe_stability_map
+from .fe_sweep import fe_critical_friction, fe_modes, fe_stability_map, modes_to_vtk
 from .maps import stability_map
 from .modes import eigenvalue_sensitivity, mode_shapes, modes, modes_summary, onset_modes
 from .sensitivity import critical_friction_sensitivity
@@ -52,6 +52,7 @@ __all__ = [
     "mode_shapes",
     "modes",
     "modes_summary",
+    "modes_to_vtk",
     "onset_modes",
     "runout_tolerance",
     "stability_map",

@@ -57,7 +57,8 @@ from ..solvers.subspace import FREQ_MAX_FACTOR, SubspaceBasis, subspace_basis, s
 from ._schema import UNSTABLE_RTOL, derived_variables, eigen_variables
 from ._solve import VERDICTS
 
-__all__ = ["DENSE_MAX_DOF", "METHODS", "FESolver", "fe_critical_friction", "fe_modes", "fe_stability_map"]
+__all__ = ["DENSE_MAX_DOF", "METHODS", "FESolver", "fe_critical_friction", "fe_modes", "fe_stability_map",
+           "modes_to_vtk"]
 
 #: Solvers for FE models.
 METHODS = ("auto", "dense", "sparse", "modal", "pod", "subspace")
@@ -701,6 +702,25 @@ def modes_to_vtk(ds: xr.Dataset, model: FEModel, path: Any, *, energy: xr.Datase
     collection whose time is the phase [deg], over ``n_frames`` files in the folder
     ``<stem>_frames`` beside it, each with the displacement ``mode{k}`` = Re(phi e^{j phase})
     of every mode (and its friction work): open the ``.pvd``, Warp By Vector, press play.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Mode shapes: :func:`fe_modes` (``shape_real``, ``shape_imag`` over ``(dof, mode)``), or a
+        selection of its modes.
+    model : FEModel
+        The model the modes are of, with a mesh (``model.mesh``).
+    path : str or Path
+        A ``.vtu`` (or any VTK file meshio writes), or a ``.pvd`` for the phase animation.
+    energy : xarray.Dataset, optional
+        :func:`~squealkit.fe.energy.mode_energy` of the same modes: adds the friction work per node.
+    n_frames : int, default 16
+        Frames per cycle of a ``.pvd`` animation.
+
+    Returns
+    -------
+    None
+        The file (and for ``.pvd`` its frames' folder) is written atomically.
     """
     from ..io import atomic_path
 

@@ -63,7 +63,7 @@ class FloquetResult:
     period : float
         T = lambda / v [s].
     floquet_exponent : float
-        ln |Lambda_max| / T [1/s]: the exact growth rate of the periodic linear system.
+        ``ln |Lambda_max| / T`` [1/s]: the exact growth rate of the periodic linear system.
     frozen_mean : float
         Period average of max Re(lambda) of the frozen-time system [1/s] (paper §4).
     frozen_max : float
@@ -89,7 +89,7 @@ class FloquetResult:
 
     @property
     def relative_difference(self) -> float:
-        """(rho - mean sigma) / |mean sigma|."""
+        """``(rho - mean sigma) / |mean sigma|``: the Floquet exponent against the frozen-time average."""
         return (self.floquet_exponent - self.frozen_mean) / abs(self.frozen_mean) if self.frozen_mean else math.nan
 
     def to_dict(self) -> dict[str, object]:
@@ -203,9 +203,32 @@ def floquet_map(model: FrictionModel, *, mu: ArrayLike, amplitude: ArrayLike, wa
                 damped: bool = True, steps_per_period: int | None = None) -> xr.Dataset:
     """Floquet exponent and frozen-time average over a grid of friction and run-out amplitude.
 
-    Returns an ``xarray.Dataset`` over ``(mu, amplitude)`` with ``floquet_exponent``,
-    ``frozen_mean`` and ``frozen_max`` [1/s] and ``difference`` (exponent minus mean) [1/s];
-    coordinate ``max_slope`` = 2 pi q0 / lambda. The cases run in parallel (numba ``prange``).
+    :func:`floquet` at every ``(mu, amplitude)`` of the grid; the cases run in parallel (numba
+    ``prange``).
+
+    Parameters
+    ----------
+    model : FrictionModel
+    mu : array_like, 1-D
+        Friction coefficients.
+    amplitude : array_like, 1-D
+        Run-out amplitudes q0 [m] (>= 0).
+    wavelength : float
+        Run-out wavelength lambda [m].
+    speed : float
+        Sliding speed v [m/s] (> 0): the period is lambda / v.
+    damped : bool
+        Include the damping matrix (the paper's transient runs are damped).
+    steps_per_period : int, optional
+        RK4 steps over one period (default from the fastest mode: 0.05 / omega_max each).
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``(mu, amplitude)``: ``floquet_exponent``, ``frozen_mean`` and ``frozen_max``
+        [1/s] and ``difference`` (exponent minus mean) [1/s]; coordinate ``max_slope`` =
+        2 pi q0 / lambda; ``kind`` ``"floquet_map"`` (drawn by
+        :func:`~squealkit.plotting.transient.floquet_plot`).
 
     Examples
     --------
