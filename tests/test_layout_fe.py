@@ -303,7 +303,8 @@ def test_unknown_or_unavailable_lu_backend_is_named():
                            install="pip install pypardiso")
     try:
         with pytest.raises(InputError, match=r"LU backend 'missing' is not available: it needs "
-                                             r"pypardiso_not_installed_here: pip install pypardiso"):
+                                             r"pypardiso_not_installed_here \(not installed, or it does not import\): "
+                                             r"pip install pypardiso"):
             lu.set_lu_backend("missing")
         assert lu.lu_backend() == before
     finally:
