@@ -22,7 +22,7 @@ def write_campaign_report(store, summary: dict[str, Any], out: Path, *, threshol
     out : Path
         The (staging) output folder; ``figures/`` is made in it.
     threshold_dba : float, default 70.0
-        Squeal threshold [dB(A)] drawn on the figures and named in the tables.
+        Squeal threshold [dB(A)] the figures draw (the criteria's, as run_campaign passes it).
 
     Returns
     -------
