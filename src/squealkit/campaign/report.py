@@ -11,7 +11,24 @@ __all__ = ["write_campaign_report"]
 
 
 def write_campaign_report(store, summary: dict[str, Any], out: Path, *, threshold_dba: float = 70.0) -> Path:
-    """Write ``out/report.html`` (figures embedded) and ``out/figures/*.png``."""
+    """Write ``out/report.html`` (figures embedded) and ``out/figures/*.png``.
+
+    Parameters
+    ----------
+    store : CampaignStore
+        The campaign's store (its applications and squeal events).
+    summary : dict
+        :func:`squealkit.campaign.run_campaign`'s summary of the same campaign.
+    out : Path
+        The (staging) output folder; ``figures/`` is made in it.
+    threshold_dba : float, default 70.0
+        Squeal threshold [dB(A)] the figures draw (the criteria's, as run_campaign passes it).
+
+    Returns
+    -------
+    Path
+        The report.
+    """
     import matplotlib.pyplot as plt
 
     from ..io import atomic_path, save_figure

@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from .._validation import InputError
 
-__all__ = ["SYMMETRIC_MATRICES", "DofMap", "LabelledMatrix", "assemble_labelled"]
+__all__ = ["DofMap", "LabelledMatrix"]
 
 #: FE matrices symmetric by definition: a file giving one triangle of these is mirrored.
 SYMMETRIC_MATRICES: tuple[str, ...] = ("M", "D1", "D4", "K1", "KGeo")

@@ -25,7 +25,7 @@ from .._validation import InputError, check_budget, check_memory, validate_fs, v
 from .formats import DEFAULT_BLOCK, RecordingSource, recording_dataset
 from .squeal.criteria import P_REF, a_weighting_db, exponential_average
 
-__all__ = ["SyntheticSource", "synthetic_attrs", "synthetic_recording"]
+__all__ = ["SyntheticSource", "synthetic_recording"]
 
 _N_ANGLE = 8192  # envelope samples per revolution
 _TRUTH_BLOCK = 1 << 18  # points of the truth's level grid per block

@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._validation import InputError, validate_positive
 
-__all__ = ["PointContact", "Stribeck", "point_contact", "require_point_contact", "validate_friction"]
+__all__ = ["Stribeck"]
 
 
 @dataclass(frozen=True)

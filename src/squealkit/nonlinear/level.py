@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from .._validation import InputError, validate_dataset, validate_positive
 
-__all__ = ["P_REF", "read_transfer_csv", "sound_level"]
+__all__ = ["read_transfer_csv", "sound_level"]
 
 #: Reference sound pressure [Pa] of dB SPL.
 P_REF = 20e-6

@@ -16,7 +16,7 @@ if TYPE_CHECKING:
     from ..models import FrictionModel
     from ..stability import CriticalFriction
 
-__all__ = ["ReportContext", "flat_onset"]
+__all__ = []
 
 
 class ReportContext:

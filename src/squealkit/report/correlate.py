@@ -11,7 +11,7 @@ import numpy as np
 
 from .document import FigureRef, Section, Table
 
-__all__ = ["correlation_section", "write_correlation_report"]
+__all__ = ["write_correlation_report"]
 
 
 def _pct(k: int, n: int) -> str:

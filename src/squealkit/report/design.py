@@ -10,7 +10,7 @@ import numpy as np
 
 from .document import FigureRef, Section, Table
 
-__all__ = ["countermeasure_table", "design_section", "design_sentences", "write_design_report"]
+__all__ = ["write_design_report"]
 
 
 def _g(x: float) -> str:

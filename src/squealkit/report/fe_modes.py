@@ -45,7 +45,7 @@ from ..io import check_output, save_dataset
 from .document import FigureRef, Section, Table
 from .settings import check_report_keys, report_key, report_table_values, settings_from_file
 
-__all__ = ["FEReportSettings", "fe_report", "load_fe_report_settings"]
+__all__ = ["FEReportSettings", "fe_report"]
 
 #: Coordinates per 3D view [bytes] (before base64): frames are dropped (down to 6 a cycle) to stay near it.
 _VIEW_BYTES = 1_500_000

@@ -12,7 +12,7 @@ from pathlib import Path
 from .. import __version__
 from .document import Comparison, FigureRef, Section, Table
 
-__all__ = ["render_html"]
+__all__ = []
 
 _CSS = """
 body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; max-width: 1100px; margin: 2em auto;

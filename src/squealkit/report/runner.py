@@ -26,7 +26,7 @@ from pathlib import Path
 
 from .document import Section
 
-__all__ = ["REPORT_FILES", "ReportStep", "ReproduceResult", "run_report"]
+__all__ = ["ReproduceResult"]
 
 #: What a report writes in its folder: with ``force``, a file of the user's among them is refused up front.
 REPORT_FILES = ("report.html", "figures", "data")

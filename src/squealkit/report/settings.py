@@ -35,7 +35,7 @@ from .._validation import InputError, validate_finite, validate_int, validate_po
 from ..models import FrictionModel
 from .context import ReportContext
 
-__all__ = ["ReportSettings", "load_report_settings"]
+__all__ = ["ReportSettings"]
 
 # ----------------------------------------------------------------------------- the [report] table's keys
 

@@ -22,7 +22,7 @@ from .document import FigureRef, Section, Table
 from .settings import ReportSettings
 from .steps_stability import onset_said_in_words
 
-__all__ = ["beyond_step"]
+__all__ = []
 
 #: Incline grid of the comparison [deg]: the paper's range (§3).
 THETA_DEG = np.linspace(-8.0, 8.0, 17)

@@ -25,7 +25,7 @@ from .context import ReportContext, flat_onset
 from .document import FigureRef, Section, Table
 from .settings import ReportSettings
 
-__all__ = ["nonlinear_step"]
+__all__ = []
 
 # The operating point (paper §4: v = 0.02 m/s; Fig. 4: mu = 0.4, sine SRO q0 = 0.08 mm, lambda = 1 mm,
 # max slope 0.503) comes from ReportSettings.

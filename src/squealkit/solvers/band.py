@@ -42,8 +42,6 @@ from .lu import Backend, factorize, fill_reducing_order
 __all__ = [
     "BAND_HZ",
     "DENSE_MAX_DOF",
-    "RESIDUAL_TOL",
-    "DenseParts",
     "EigenSolution",
     "ShiftInvert",
     "backward_errors",
@@ -51,8 +49,6 @@ __all__ = [
     "dense_eigs",
     "dense_parts",
     "pencil_backward_errors",
-    "real_times",
-    "validate_band",
 ]
 
 #: The squeal band [Hz] searched by default (SAE J2521 and the paper: 1-16 kHz).

@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 
-__all__ = ["MacTracker", "mac"]
+__all__ = ["mac"]
 
 
 def mac(A: NDArray, B: NDArray) -> NDArray:

@@ -24,15 +24,7 @@ import os
 
 from .._validation import InputError, available_memory
 
-__all__ = [
-    "ENV_VAR",
-    "band_memory",
-    "check_fits",
-    "factor_entries",
-    "memory_limit",
-    "parse_bytes",
-    "subspace_memory",
-]
+__all__ = []
 
 #: The environment variable capping the memory of a run.
 ENV_VAR = "SQUEALKIT_MEMORY"

@@ -58,11 +58,9 @@ from .lu import Backend, PermutedLU, factorize, fill_reducing_order
 from .mac import MacTracker
 
 __all__ = [
-    "MATRIX_NAMES",
     "SNAPSHOT_TOL",
     "ReducedModel",
     "as_fe_model",
-    "count_below",
     "modal_basis",
     "pod_basis",
     "reduce",

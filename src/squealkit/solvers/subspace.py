@@ -46,7 +46,7 @@ from . import lu as _lu
 from .band import BAND_HZ, EigenSolution, pencil_backward_errors, validate_band
 from .memory import check_fits, memory_limit, subspace_memory
 
-__all__ = ["FREQ_MAX_FACTOR", "SubspaceBasis", "subspace_basis", "subspace_eigs"]
+__all__ = ["SubspaceBasis", "subspace_basis", "subspace_eigs"]
 
 #: The real modes reach this many times the band's top by default (Abaqus practice: 1.5-2x).
 FREQ_MAX_FACTOR = 1.5

@@ -26,7 +26,7 @@ from ..models.friction import Stribeck
 from .eigen import _TILE_POINTS, _stability_map_small
 from .fe_sweep import fe_stability_map
 
-__all__ = ["FE_ONLY_OPTIONS", "SMALL_ONLY_OPTIONS", "stability_map"]
+__all__ = ["stability_map"]
 
 #: Options of :func:`stability_map` for FE models only.
 FE_ONLY_OPTIONS = ("rpm", "method", "band", "n_modes")

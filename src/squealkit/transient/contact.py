@@ -24,7 +24,7 @@ import numpy as np
 from .._validation import InputError, validate_positive
 from ..models.friction import Stribeck, point_contact
 
-__all__ = ["Contact", "contact_geometry"]
+__all__ = ["Contact"]
 
 
 @dataclass(frozen=True)

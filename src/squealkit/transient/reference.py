@@ -19,7 +19,29 @@ __all__ = ["first_order_rhs"]
 def first_order_rhs(
     model: FrictionModel, *, mu: float, profile: SurfaceProfile, speed: float, x_start: float = 0.0
 ) -> Callable[[float, np.ndarray], np.ndarray]:
-    """``f(t, z)`` with ``z = [x, x']`` for ``M x'' + C x' + K(mu, t(t)) x = F(mu, t(t), q(t))`` (eq. 4)."""
+    """``f(t, z)`` with ``z = [x, x']`` for ``M x'' + C x' + K(mu, t(t)) x = F(mu, t(t), q(t))`` (eq. 4).
+
+    The linear contact of the paper only (no loss of contact, constant friction): a reference for
+    :func:`~squealkit.transient.simulate` to be checked against with SciPy's ``solve_ivp``.
+
+    Parameters
+    ----------
+    model : FrictionModel
+        The model: its ``mass_matrix``, ``damping_matrix``, ``stiffness_matrix`` and ``load_vector``.
+    mu : float
+        Friction coefficient.
+    profile : SurfaceProfile
+        Disc surface: ``q`` and ``tan(theta)`` at ``x = x_start + speed * t``.
+    speed : float
+        Sliding speed v [m/s].
+    x_start : float, default 0.0
+        Position on the profile at t = 0 [m].
+
+    Returns
+    -------
+    callable
+        ``rhs(t, z)`` -> ``dz/dt`` (an array of ``2 n`` for ``n`` DOFs), for ``scipy.integrate.solve_ivp``.
+    """
     n = model.n_dof
     Minv = np.linalg.inv(model.mass_matrix())
     C = model.damping_matrix()

@@ -25,7 +25,7 @@ import numpy as np
 from ..._validation import InputError
 from ..dofmap import LabelledMatrix
 
-__all__ = ["read_abaqus_matrix", "sniff_abaqus"]
+__all__ = ["read_abaqus_matrix"]
 
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][-+]?\d+)?"
 _INT = r"[-+]?\d+"

@@ -25,7 +25,7 @@ from ..._optional import require
 from ..._validation import InputError
 from ..dofmap import LabelledMatrix
 
-__all__ = ["ANSYS_DOFS", "read_full", "read_hb", "sniff_full", "sniff_hb"]
+__all__ = ["read_full", "read_hb"]
 
 #: ANSYS DOF labels and their numbers (ANSYS's own numbering: UX..ROTZ are 1..6 as in Abaqus and Nastran).
 ANSYS_DOFS = {"UX": 1, "UY": 2, "UZ": 3, "ROTX": 4, "ROTY": 5, "ROTZ": 6, "AX": 7, "AY": 8, "AZ": 9,
@@ -170,6 +170,16 @@ def read_full(path: str | Path) -> dict[str, LabelledMatrix]:
     Needs the optional ``ansys-mapdl-reader`` package (``pip install "squealkit[ansys]"``). Only the
     upper triangle of a symmetric matrix is stored; it is mirrored when the model is assembled.
     Constrained DOFs (rows and columns of zeros in the file) are left out of the DOF map.
+
+    Parameters
+    ----------
+    path : path
+        The ``.full`` file.
+
+    Returns
+    -------
+    dict of str to LabelledMatrix
+        ``{"K": stiffness, "M": mass}``, each one triangle of a symmetric matrix.
     """
     import scipy.sparse as sp
 

@@ -15,7 +15,7 @@ from ..._validation import InputError
 from ..dofmap import DofMap, LabelledMatrix, assemble_labelled
 from ..mesh import FEMesh
 
-__all__ = ["LABELLED_FORMATS", "place_labelled", "read_labelled", "recognise"]
+__all__ = []
 
 #: The formats recognised here, as named in messages.
 LABELLED_FORMATS = ("Abaqus MATRIX INPUT", "Abaqus COORDINATE", "Nastran DMIG", "ANSYS Harwell-Boeing",

@@ -27,7 +27,7 @@ from ..._validation import InputError
 from .._bulk import bulk_cards, field_int, field_real
 from ..dofmap import LabelledMatrix
 
-__all__ = ["read_dmig", "sniff_dmig"]
+__all__ = ["read_dmig"]
 
 _DMIG_LINE = re.compile(r"^DMIG\*?\s*[,\s]", re.IGNORECASE | re.MULTILINE)
 

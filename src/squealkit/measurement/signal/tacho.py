@@ -50,6 +50,11 @@ def pulse_times(x: ArrayLike, fs: float, *, level: float | None = None, t0: floa
     t0 : float
         Time [s] of ``x[0]`` (for blocks of a longer recording).
 
+    Returns
+    -------
+    ndarray, shape (k,)
+        Time [s] of each rising edge, where the signal crosses ``level`` (linear interpolation).
+
     Examples
     --------
     >>> x = np.r_[np.zeros(10), np.ones(5), np.zeros(10), np.ones(5)]
@@ -387,6 +392,30 @@ def read_tacho(source, channel: str | int, *, kind: str = "pulses", pulses_per_r
     ``source`` has the block interface of :class:`~squealkit.measurement.formats.readers.RecordingSource`.
     A pulse train's trigger level defaults to halfway between the first block's extremes. The
     channel is read ``_BLOCKS_PER_READ`` blocks at a time and taken block by block.
+
+    Parameters
+    ----------
+    source : RecordingSource
+        An open recording (:func:`~squealkit.measurement.open_recording`).
+    channel : str or int
+        The tacho channel, by name or position.
+    kind : {"pulses", "angle"}
+        ``"pulses"``: a pulse train, ``pulses_per_rev`` rising edges per revolution (1: a
+        once-per-revolution mark, whose first edge is angle 0). ``"angle"``: an angle channel,
+        wrapping or not, in ``angle_unit``.
+    pulses_per_rev : int
+        Pulses per revolution of a pulse train (encoder teeth).
+    level : float, optional
+        Trigger level of a pulse train (default: halfway between the first block's extremes).
+    angle_unit : {"deg", "rad", "rev"}
+        Unit of an angle channel.
+    block : int
+        Samples per block read.
+
+    Returns
+    -------
+    DiscAngle
+        The disc angle over time, as :func:`tacho_angle` returns it.
     """
     name = source.resolve(channel)
     fs = float(source.fs)

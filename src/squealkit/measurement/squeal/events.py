@@ -136,6 +136,12 @@ def tonal_components(
         A-weighted power per bin [Pa^2] of the same bins.
     lo : int
         Index of the first band bin in the full spectrum.
+    fs : float
+        Sample rate [Hz] of the framed signal.
+    nperseg : int
+        Samples per frame (the spectra's length: bin width ``fs / nperseg``).
+    threshold_dba : float
+        Level [dB(A)] a component must reach.
     scale : ndarray, shape (n_frames,), optional
         Factor from each frame's spectrum power to the component's level: the frame's
         time-weighted band mean square over its A-weighted band power (so a component's level
@@ -209,6 +215,11 @@ def critical_bandwidth(freq: ArrayLike) -> NDArray[np.float64]:
     ----------
     freq : array_like
         Tone frequency [Hz].
+
+    Returns
+    -------
+    ndarray
+        Critical bandwidth [Hz], of the shape of ``freq``.
 
     Examples
     --------
@@ -353,6 +364,36 @@ def link_components(
     A component joins the open track nearest in frequency within ``freq_tol`` [Hz]; a track
     closes after ``max_gap`` frames without a component. Returns the events (sorted by
     start) and, for each, the frames it covers (ascending) and its power in each of them.
+
+    Parameters
+    ----------
+    frame : ndarray of int, shape (n,)
+        Frame index of each component (as :func:`tonal_components` returns them).
+    freq : ndarray, shape (n,)
+        Frequency [Hz] of each component.
+    level : ndarray, shape (n,)
+        Level [dB(A)] of each component; an event's peak level is the highest of its track.
+    power : ndarray, shape (n,)
+        Power of each component (the weight of its frequency in the event's mean frequency).
+    frame_start_s : ndarray, shape (n_frames,)
+        Start time [s] of each frame.
+    frame_len_s : float
+        Length of a frame [s].
+    freq_tol : float, default 100.0
+        Largest frequency step [Hz] from a track to a component that joins it.
+    max_gap : int, default 1
+        Frames without a component after which a track closes.
+    min_duration : float, default 0.0
+        Events shorter than this [s] are dropped.
+
+    Returns
+    -------
+    events : list of SquealEvent
+        One per track, sorted by start time, then frequency.
+    frames : list of ndarray of int
+        The frames each event covers (ascending).
+    weights : list of ndarray
+        Each event's component power in each of its frames.
     """
     order = np.lexsort((freq, frame))
     fr_s = np.ascontiguousarray(frame[order], dtype=np.int64)
