@@ -12,6 +12,7 @@ import numpy as np
 
 from .._threads import thread_limit
 from .._validation import InputError, check_budget, validate_finite, validate_fs, validate_positive
+from ..solvers.ode.bundles import Model
 from ._runs import _Run, _validate_method
 from ._step import _check_sampling, _step_size
 from .contact import Contact, contact_geometry
@@ -143,7 +144,7 @@ def _prepare(
         X[i], V[i] = _initial_state(run, contact, x0, v0, perturbation, noise[i], x_start)
     status = np.zeros(R, dtype=np.int64)
     n_valid = np.zeros(R, dtype=np.int64)
-    arrays = (bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, opts)
+    arrays = Model(bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, fhat, kc, s, mu, v, opts)
     return dict(runs=runs, X=X, V=V, arrays=arrays, n=n, n_out=n_out, n_steps=n_steps, status=status,
                 n_valid=n_valid, dt=dt, dt_user=dt_user, stride=stride, x_start=x_start, limit=limit, contact=contact,
                 rtol=rtol, atol_user=atol, bounds=bounds, method=method, fs=fs)
