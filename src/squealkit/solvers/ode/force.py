@@ -54,9 +54,10 @@ def _bundle(C, K0, Kn, Kf, Knx, Kfx, bM, fM, F0, fn, ff, b, fhat):
 
 
 @njit(cache=True, inline="always")
-def _rhs(x, ox, xd, od, n, q, t, mu, v, kin, kc, s, mats, vecs, opts, acc):
-    """Accelerations ``acc`` at the displacements ``x[ox:ox + n]`` and velocities ``xd[od:od + n]``;
+def _rhs(x, ox, xd, od, q, t, mu, v, kin, kc, s, mats, vecs, opts, acc):
+    """Accelerations ``acc`` (n,) at the displacements ``x[ox:ox + n]`` and velocities ``xd[od:od + n]``;
     returns (N cos theta, effective mu). ``mats``, ``vecs``: the run's arrays (:func:`_bundle`)."""
+    n = acc.shape[0]
     for i in range(n):
         ri = vecs[_F0, i]
         for j in range(n):
@@ -149,7 +150,7 @@ def _f(tt, z, dz, k, rhs):
     tg0, hg, qg, tgr, mu, v, kin, kc, s, mats, vecs, opts, acc = rhs
     n = acc.shape[0]
     q, tan_t = _forcing(tt, tg0, hg, qg, tgr, v)
-    nc, me = _rhs(z, 0, z, n, n, q, tan_t, mu, v, kin, kc, s, mats, vecs, opts, acc)
+    nc, me = _rhs(z, 0, z, n, q, tan_t, mu, v, kin, kc, s, mats, vecs, opts, acc)
     for i in range(n):
         dz[k, i] = z[n + i]
         dz[k, n + i] = acc[i]
@@ -191,14 +192,16 @@ def _contact_at(tt, z, rhs):
 
 
 @njit(cache=True, inline="always")
-def _jacobian(x, xd, q, t, mu, v, C, K0, Kn, Kf, Knx, Kfx, kin, bM, fM, b, fhat, kc, s, opts, Jx, Jv):
-    """Analytic d(acc)/dx into Jx and d(acc)/dx' into Jv (the force law of :func:`_rhs`).
+def _jacobian(x, xd, q, t, mu, v, kin, kc, s, mats, vecs, opts, Jx, Jv):
+    """Analytic d(acc)/dx into Jx and d(acc)/dx' into Jv (the force law of :func:`_rhs`, the same arguments).
 
     Linear law: -K0 - g (Kn + kin s t Knx) - e (Kf + kin s t Kfx), and -C. Structured law with
     Nc = -kc (b_t.x - q) (0 and flat when the contact is open), mu_e(w) = mu(w) tanh(w / v_reg),
     w = v - s fhat.x': d/dx adds (g bM + e fM) dNc/dx, d/dx' adds Nc (s fM - t bM) mu_e'(w) (-s fhat).
     """
     n = x.shape[0]
+    C, K0, Kn, Kf, Knx, Kfx = mats[_C], mats[_K0], mats[_KN], mats[_KF], mats[_KNX], mats[_KFX]
+    bM, fM, b, fhat = vecs[_BM], vecs[_FM], vecs[_B], vecs[_FHAT]
     for i in range(n):
         for j in range(n):
             Jx[i, j] = -K0[i, j]

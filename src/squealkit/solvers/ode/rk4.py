@@ -44,7 +44,7 @@ def _rk4_run(r, state, model, forcing, steps, limit, out, log):
     for k in range(n_steps + 1):
         i0 = 2 * k
         if k % stride == 0 and (k < n_steps or n_steps == 0):
-            nc, me = _rhs(x, 0, xd, 0, n, qh[r, i0], th[r, i0], mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k1v)
+            nc, me = _rhs(x, 0, xd, 0, qh[r, i0], th[r, i0], mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k1v)
             bad = False
             for i in range(n):
                 if not (abs(x[i]) <= limit):
@@ -66,22 +66,22 @@ def _rk4_run(r, state, model, forcing, steps, limit, out, log):
         q0, t0 = qh[r, i0], th[r, i0]
         q1, t1 = qh[r, i0 + 1], th[r, i0 + 1]
         q2, t2 = qh[r, i0 + 2], th[r, i0 + 2]
-        _rhs(x, 0, xd, 0, n, q0, t0, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k1v)
+        _rhs(x, 0, xd, 0, q0, t0, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k1v)
         for i in range(n):
             k1x[i] = xd[i]
             xt[i] = x[i] + 0.5 * dt * k1x[i]
             vt[i] = xd[i] + 0.5 * dt * k1v[i]
-        _rhs(xt, 0, vt, 0, n, q1, t1, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k2v)
+        _rhs(xt, 0, vt, 0, q1, t1, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k2v)
         for i in range(n):
             k2x[i] = vt[i]
             xt[i] = x[i] + 0.5 * dt * k2x[i]
             vt[i] = xd[i] + 0.5 * dt * k2v[i]
-        _rhs(xt, 0, vt, 0, n, q1, t1, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k3v)
+        _rhs(xt, 0, vt, 0, q1, t1, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k3v)
         for i in range(n):
             k3x[i] = vt[i]
             xt[i] = x[i] + dt * k3x[i]
             vt[i] = xd[i] + dt * k3v[i]
-        _rhs(xt, 0, vt, 0, n, q2, t2, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k4v)
+        _rhs(xt, 0, vt, 0, q2, t2, mu_r, v_r, kin_r, kc_r, s_r, mats, vecs, opts, k4v)
         for i in range(n):
             x[i] += dt / 6.0 * (k1x[i] + 2.0 * k2x[i] + 2.0 * k3x[i] + vt[i])
             xd[i] += dt / 6.0 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i])

@@ -8,7 +8,7 @@ import numpy as np
 from numba import njit, prange
 
 from .adaptive import _adaptive_for
-from .force import _B, _BM, _C, _FHAT, _FM, _K0, _KF, _KFX, _KN, _KNX, _f, _forcing, _jacobian
+from .force import _f, _forcing, _jacobian
 
 # -- stiff integration: Rodas4 (linearly implicit Rosenbrock 4(3)) with the analytic Jacobian -----
 #
@@ -104,8 +104,7 @@ def _rodas4_step(t, h, t_new, z, znew, work, tab, rhs, atol, rtol):
             q, tt_ = qc, ttc
     for i in range(m):
         ft[i] = (ft[i] - fa[i]) / (2.0 * dtf)
-    _jacobian(z[:n], z[n:], q, tt_, mu, v, mats[_C], mats[_K0], mats[_KN], mats[_KF], mats[_KNX], mats[_KFX], kin,
-              vecs[_BM], vecs[_FM], vecs[_B], vecs[_FHAT], kc, s, opts, Jx, Jv)
+    _jacobian(z[:n], z[n:], q, tt_, mu, v, kin, kc, s, mats, vecs, opts, Jx, Jv)
     ihg = 1.0 / (h * gam)
     for i in range(m):
         for j in range(m):
