@@ -1,6 +1,6 @@
 """DP5 and Rodas4 share one driver loop and every ODE kernel takes a handful of named bundles (issue #28, item 3).
 
-Reference: ``tests/golden/ode_loop.npz``, written by ``tests/golden/make_golden_ode_loop.py`` from commit
+Reference: ``tests/golden/ode_loop/ode_loop.npz``, written by ``tests/golden/make_golden_ode_loop.py`` from commit
 f778029, before the two adaptive kernels (53 and 55 positional arguments, each with its own copy of the
 loop) became one loop around each method's step. Each case is recomputed here and compared with
 ``np.array_equal`` (NaN equal to NaN): the same bits, not a tolerance. The structural tests read the
@@ -36,7 +36,7 @@ def _maker():
 
 @pytest.fixture(scope="module")
 def recorded() -> np.lib.npyio.NpzFile:
-    return np.load(GOLDEN / "ode_loop.npz")
+    return np.load(GOLDEN / "ode_loop" / "ode_loop.npz")
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +45,7 @@ def computed() -> dict[str, np.ndarray]:
 
 
 def _case_names() -> list[str]:
-    return sorted({k.split("/")[0] for k in np.load(GOLDEN / "ode_loop.npz").files})
+    return sorted({k.split("/")[0] for k in np.load(GOLDEN / "ode_loop" / "ode_loop.npz").files})
 
 
 def test_the_cases_cover_both_methods_and_their_events(recorded):

@@ -5,14 +5,15 @@ bundled arguments), with ``SQUEALKIT_THREADS=1``, by running from the repository
 
     SQUEALKIT_THREADS=1 python tests/golden/make_golden_ode_loop.py
 
-It writes ``tests/golden/ode_loop.npz`` (one file: ``<case>/<key>`` entries); :mod:`tests.test_ode_one_loop`
+It writes ``tests/golden/ode_loop/ode_loop.npz`` (one file: ``<case>/<key>`` entries); :mod:`tests.test_ode_one_loop`
 recomputes every case and asserts ``np.array_equal``. The cases aim at the parts of the loop the two methods
 share: contact opening and closing (events located on each method's dense output, the step retaken to end at
 the crossing), stick/slip events of the regularised sign law with a Stribeck drop, Rodas4 on a friction law
 far too stiff for an explicit method (v_reg = 1e-6 m/s), the state and step size carried from chunk to chunk
 (small chunks), a batch of runs in parallel, and RK4 (whose kernel takes the same bundles).
 
-Kept apart from ``make_golden_kernels.py`` (whose files ``test_golden_kernels`` requires to be its own cases).
+Kept apart from ``make_golden_kernels.py``, in a folder of its own: ``test_golden_kernels`` requires every
+``tests/golden/*.npz`` to be one of its cases.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-FILE = HERE / "ode_loop.npz"
+FILE = HERE / "ode_loop" / "ode_loop.npz"  # apart from the cases of test_golden_kernels, which owns *.npz here
 
 
 @contextlib.contextmanager

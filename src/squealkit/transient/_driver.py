@@ -4,7 +4,10 @@ Each chunk is one call of a kernel (RK4, Dormand-Prince 5(4) or Rodas4) over at 
 ``_CHUNK_STEPS`` steps or ``_CHUNK_SAMPLES`` output samples, with the surface profile sampled for
 it (q and tan(theta), cubic Hermite in time between ``_FORCING_PER_SAMPLE`` samples per output
 sample); the state carries over from chunk to chunk inside the kernels, so the chunks do not
-change the numbers. :func:`_integrate` gathers them into one in-memory run.
+change the numbers. :func:`_integrate` gathers them into one in-memory run. A kernel takes the
+named bundles of :mod:`squealkit.solvers.ode.bundles`, built here: the state, the model (``_prepare``'s
+``arrays``), the chunk's forcing, its span (or RK4's steps), the tableau, the control, the outputs
+and the log.
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ import numpy as np
 from numba import njit, prange
 
 from .adaptive import _adaptive_for
-from .force import _f
+from .force import _contact, _f
 
 # -- error-controlled integration: Dormand-Prince 5(4) with dense output and events ---------------
 #
@@ -26,10 +26,11 @@ def _dp5_work(m, tab):
     return K, K, np.empty(m)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _dp5_step(t, h, t_new, z, znew, work, tab, rhs, atol, rtol):
-    """One Dormand-Prince step of ``h`` from (t, z) to ``znew``; returns ``(True, err, rhs calls, q, tan
-    theta at t_new)``, err the RMS of the error estimate over ``atol + rtol max(|z|, |znew|)``."""
+    """One Dormand-Prince step of ``h`` from (t, z) to ``znew``; returns ``(True, err, rhs calls, contact
+    force and sliding speed at t_new)`` (:func:`.force._contact`), err the RMS of the error estimate over
+    ``atol + rtol max(|z|, |znew|)``. Compiled without reference counts (see :mod:`.adaptive`)."""
     K, _stages, zt = work
     A, Bw, Cn, E = tab.A, tab.B, tab.C, tab.E
     S = A.shape[0]  # stages before the FSAL stage
@@ -62,10 +63,11 @@ def _dp5_step(t, h, t_new, z, znew, work, tab, rhs, atol, rtol):
         sc = atol[i] + rtol * max(abs(z[i]), abs(znew[i]))
         e = h * e / sc
         err += e * e
-    return True, math.sqrt(err / m), S, q, tt_
+    g_new, w_new = _contact(znew, q, tt_, rhs)
+    return True, math.sqrt(err / m), S, g_new, w_new
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False)
 def _dp5_advance(work):
     """FSAL: the accepted step's last stage is the next step's first."""
     K = work[0]
@@ -87,6 +89,8 @@ def integrate_adaptive(state, model, forcing, span, tableau, control, out, log):
     ``log.counts[r] = [accepted, rejected, rhs calls, smallest step]``.
     """
     status = log.status
+    # the run's index as int64: prange's own is unsigned in the parallel loop, and a second integer type
+    # would compile the run's loop twice
     for r in prange(state.X.shape[0]):
         if status[r] == 0:
-            _dp5_run(r, state, model, forcing, span, tableau, control, out, log)
+            _dp5_run(np.int64(r), state, model, forcing, span, tableau, control, out, log)

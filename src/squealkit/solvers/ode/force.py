@@ -2,7 +2,8 @@
 
 All matrices and load vectors arrive premultiplied by M^-1 (``K0 = M^-1 K0`` and so on; ``bM``
 and ``fM`` are M^-1 b and M^-1 f), so the right-hand side is the acceleration directly; a run's
-13 arrays travel bundled in two (:func:`_bundle`).
+13 arrays travel bundled in two (:func:`_bundle`), and with its forcing and scalars in one tuple
+(:func:`_run_rhs`) to the integrators' right-hand side :func:`_f`.
 
 Contact force (the part of eq. 4 carried by the contact), for each run::
 

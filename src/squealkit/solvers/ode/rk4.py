@@ -101,6 +101,8 @@ def integrate_chunk(state, model, forcing, steps, limit, out, log):
     stops. The bundles are those of :mod:`.bundles`; the runs in parallel (``prange``).
     """
     status = log.status
+    # the run's index as int64: prange's own is unsigned in the parallel loop, and a second integer type
+    # would compile the run's loop twice
     for r in prange(state.X.shape[0]):
         if status[r] == 0:
-            _rk4_run(r, state, model, forcing, steps, limit, out, log)
+            _rk4_run(np.int64(r), state, model, forcing, steps, limit, out, log)

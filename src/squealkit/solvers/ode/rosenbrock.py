@@ -8,7 +8,7 @@ import numpy as np
 from numba import njit, prange
 
 from .adaptive import _adaptive_for
-from .force import _f, _forcing, _jacobian
+from .force import _contact, _f, _forcing, _jacobian
 
 # -- stiff integration: Rodas4 (linearly implicit Rosenbrock 4(3)) with the analytic Jacobian -----
 #
@@ -80,12 +80,13 @@ def _rodas4_work(m, tab):
             np.empty(m, dtype=np.int64), np.empty((n, n)), np.empty((n, n)))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def _rodas4_step(t, h, t_new, z, znew, work, tab, rhs, atol, rtol):
-    """One Rodas4 step of ``h`` from (t, z) to ``znew``; returns ``(ok, err, rhs calls, q, tan theta at
-    t_new)``, ``ok`` False when I / (h gamma) - J is singular, err the RMS of the embedded error u_6 over
-    ``atol + rtol max(|z|, |znew|)``. The Jacobian is analytic (:func:`_jacobian`) and evaluated every
-    step, f_t by a central difference in time of the forcing."""
+    """One Rodas4 step of ``h`` from (t, z) to ``znew``; returns ``(ok, err, rhs calls, contact force and
+    sliding speed at t_new)`` (:func:`.force._contact`), ``ok`` False when I / (h gamma) - J is singular,
+    err the RMS of the embedded error u_6 over ``atol + rtol max(|z|, |znew|)``. The Jacobian is analytic
+    (:func:`_jacobian`) and evaluated every step, f_t by a central difference in time of the forcing.
+    Compiled without reference counts (see :mod:`.adaptive`)."""
     Fs, U, zt, W, piv, Jx, Jv = work
     f0, ft, fa, F = Fs[0], Fs[1], Fs[2], Fs[3]
     RA, RC, RAL, RD, RM, gam = tab.A, tab.C, tab.alpha, tab.d, tab.m, tab.gamma
@@ -117,7 +118,7 @@ def _rodas4_step(t, h, t_new, z, znew, work, tab, rhs, atol, rtol):
             W[n + i, n + j] = -Jv[i, j]
         W[n + i, n + i] += ihg
     if not _lu(W, piv):
-        return False, 0.0, 3, q, tt_
+        return False, 0.0, 3, 0.0, 0.0
     # stages
     for k in range(S):
         if k == 0:
@@ -147,10 +148,11 @@ def _rodas4_step(t, h, t_new, z, znew, work, tab, rhs, atol, rtol):
         e = U[S - 1, i] / sc
         err += e * e
     qn, tn = _forcing(t_new, tg0, hg, qg, tgr, v)
-    return True, math.sqrt(err / m), 3 + S - 1, qn, tn
+    g_new, w_new = _contact(znew, qn, tn, rhs)
+    return True, math.sqrt(err / m), 3 + S - 1, g_new, w_new
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False)
 def _rodas4_advance(work):
     """Nothing: Rodas4 evaluates f(t, z) at the start of every step."""
 
@@ -166,6 +168,8 @@ def integrate_rosenbrock(state, model, forcing, span, tableau, control, out, log
     :class:`.bundles.Rodas4Tableau`): the same loop (:mod:`.adaptive`) around Rodas4's step.
     """
     status = log.status
+    # the run's index as int64: prange's own is unsigned in the parallel loop, and a second integer type
+    # would compile the run's loop twice
     for r in prange(state.X.shape[0]):
         if status[r] == 0:
-            _rodas4_run(r, state, model, forcing, span, tableau, control, out, log)
+            _rodas4_run(np.int64(r), state, model, forcing, span, tableau, control, out, log)
