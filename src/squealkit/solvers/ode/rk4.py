@@ -20,27 +20,33 @@ from .force import _bundle, _rhs
 def _rk4_run(r, state, model, forcing, steps, limit, out, log):
     """Advance run r by ``steps.n_steps`` RK4 steps of ``state.H[r]`` (see :func:`integrate_chunk`)."""
     X, V, H = state
+    n = X.shape[1]
+    x = X[r].copy()
+    xd = V[r].copy()
+    work = (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+            np.empty(n))
+    par = (model.mu[r], model.v[r], model.kin[r], model.kc[r], model.s[r], H[r])
+    mats, vecs = _bundle(model.C[r], model.K0[r], model.Kn[r], model.Kf[r], model.Knx[r], model.Kfx[r],
+                         model.bM[r], model.fM[r], model.F0[r], model.fn[r], model.ff[r], model.b[r], model.fhat[r])
+    _rk4_steps(r, x, xd, work, par, mats, vecs, model.opts, forcing, steps, limit, out, log)
+    for i in range(n):
+        X[r, i] = x[i]
+        V[r, i] = xd[i]
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _rk4_steps(r, x, xd, work, par, mats, vecs, opts, forcing, steps, limit, out, log):
+    """The steps of :func:`_rk4_run` from ``x``, ``xd`` (updated in place), with the scratch ``work`` and the
+    run's ``par = (mu, v, kin, kc, s, dt)``. Compiled without reference counts (it allocates nothing): called
+    with them, RK4 ran at half the speed (measured 0.025-0.028 s against 0.014-0.015 s for 0.2 s of the
+    paper's case), each array an inlined right-hand side takes costing a count up and down."""
+    xt, vt, k1x, k1v, k2x, k2v, k3x, k3v, k4v = work
+    mu_r, v_r, kin_r, kc_r, s_r, dt = par
     qh, th = forcing.q, forcing.tan_theta
     n_steps, stride, o_base = steps.n_steps, steps.stride, steps.o_base
     status, n_valid = log.status, log.n_valid
-    n = X.shape[1]
-    dt = H[r]
-    x = X[r].copy()
-    xd = V[r].copy()
-    xt = np.empty(n)
-    vt = np.empty(n)
-    k1x = np.empty(n)
-    k1v = np.empty(n)
-    k2x = np.empty(n)
-    k2v = np.empty(n)
-    k3x = np.empty(n)
-    k3v = np.empty(n)
-    k4v = np.empty(n)
+    n = x.shape[0]
     o = steps.o_start
-    mu_r, v_r, kc_r, s_r = model.mu[r], model.v[r], model.kc[r], model.s[r]
-    kin_r, opts = model.kin[r], model.opts
-    mats, vecs = _bundle(model.C[r], model.K0[r], model.Kn[r], model.Kf[r], model.Knx[r], model.Kfx[r],
-                         model.bM[r], model.fM[r], model.F0[r], model.fn[r], model.ff[r], model.b[r], model.fhat[r])
     for k in range(n_steps + 1):
         i0 = 2 * k
         if k % stride == 0 and (k < n_steps or n_steps == 0):
@@ -85,9 +91,6 @@ def _rk4_run(r, state, model, forcing, steps, limit, out, log):
         for i in range(n):
             x[i] += dt / 6.0 * (k1x[i] + 2.0 * k2x[i] + 2.0 * k3x[i] + vt[i])
             xd[i] += dt / 6.0 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i])
-    for i in range(n):
-        X[r, i] = x[i]
-        V[r, i] = xd[i]
 
 
 @njit(cache=True, parallel=True)
