@@ -144,10 +144,7 @@ def _prepare(
         X[i], V[i] = _initial_state(run, contact, x0, v0, perturbation, noise[i], x_start)
     status = np.zeros(R, dtype=np.int64)
     n_valid = np.zeros(R, dtype=np.int64)
-    # the speed at which each run's profile passes the forcing's interpolation: 0 where the slope is not dq/dx
-    # (a profile's slope_is_dq_dx: main's ConstantIncline holds tan(theta) apart from q; every other profile, v)
-    vq = np.array([r.speed if getattr(r.profile, "slope_is_dq_dx", True) else 0.0 for r in runs])
-    arrays = Model(bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, fhat, kc, s, mu, v, vq, opts)
+    arrays = Model(bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, fhat, kc, s, mu, v, opts)
     return dict(runs=runs, X=X, V=V, arrays=arrays, n=n, n_out=n_out, n_steps=n_steps, status=status,
                 n_valid=n_valid, dt=dt, dt_user=dt_user, stride=stride, x_start=x_start, limit=limit, contact=contact,
                 rtol=rtol, atol_user=atol, bounds=bounds, method=method, fs=fs)

@@ -41,7 +41,6 @@ class Model(NamedTuple):
     s: np.ndarray     #: (R,) sliding direction, +-1
     mu: np.ndarray    #: (R,) friction coefficient
     v: np.ndarray     #: (R,) sliding speed [m/s]
-    vq: np.ndarray    #: (R,) speed at which the profile passes (its forcing's interpolation): 0 for a held slope
     opts: np.ndarray  #: (7,) the contact law's flags (:meth:`squealkit.transient.Contact.options`)
 
 

@@ -55,7 +55,7 @@ def _locate(slip, side_old, n_iter, z, z1, St, Co, h, rosenbrock, t, rhs, zd):
     """Fraction of the step at which the contact force changes sign (``slip`` False) or the sliding
     speed crosses the stick band ``|w| < v_reg`` (``slip`` True), by bisection on the dense output
     (:func:`_interp`); ``rhs``: the run's bundle (:func:`.force._run_rhs`)."""
-    v_reg = rhs[12][4]
+    v_reg = rhs[11][4]
     lo, hi = 0.0, 1.0
     for _ in range(n_iter):
         mid = 0.5 * (lo + hi)

@@ -106,11 +106,7 @@ def _rhs(x, ox, xd, od, q, t, mu, v, kin, kc, s, mats, vecs, opts, acc):
 
 @njit(cache=True, inline="always")
 def _forcing(tt, tg0, hg, qg, tgr, vel):
-    """q and tan(theta) at time tt: cubic Hermite in time through the samples of q and dq/dt = v tan(theta).
-
-    ``vel`` is the speed at which the profile passes (``vq`` of the kernels): 0 for a profile whose slope is
-    not dq/dx (a held incline), whose q and tan(theta) are then each interpolated on their own (q with zero
-    end slopes, tan(theta) linearly)."""
+    """q and tan(theta) at time tt: cubic Hermite in time through the samples of q and dq/dt = v tan(theta)."""
     G = qg.shape[0]
     u = (tt - tg0) / hg
     j = math.floor(u)
@@ -137,12 +133,12 @@ def _forcing(tt, tg0, hg, qg, tgr, vel):
 @njit(cache=True, inline="always")
 def _run_rhs(r, model, forcing, acc):
     """Run ``r``'s right-hand side, bundled (the argument ``rhs`` of :func:`_f`): ``(t0, h, q, tan_theta,
-    mu, v, vq, kin, kc, s, mats, vecs, opts, acc)``, the forcing grid's row r (:class:`.bundles.Forcing`),
-    the run's scalars, its arrays in two (:func:`_bundle`), the contact law's flags and ``acc``, a scratch (n,)."""
+    mu, v, kin, kc, s, mats, vecs, opts, acc)``, the forcing grid's row r (:class:`.bundles.Forcing`), the
+    run's scalars, its arrays in two (:func:`_bundle`), the contact law's flags and ``acc``, a scratch (n,)."""
     mats, vecs = _bundle(model.C[r], model.K0[r], model.Kn[r], model.Kf[r], model.Knx[r], model.Kfx[r],
                          model.bM[r], model.fM[r], model.F0[r], model.fn[r], model.ff[r], model.b[r], model.fhat[r])
-    return (forcing.t0, forcing.h, forcing.q[r], forcing.tan_theta[r], model.mu[r], model.v[r], model.vq[r],
-            model.kin[r], model.kc[r], model.s[r], mats, vecs, model.opts, acc)
+    return (forcing.t0, forcing.h, forcing.q[r], forcing.tan_theta[r], model.mu[r], model.v[r], model.kin[r],
+            model.kc[r], model.s[r], mats, vecs, model.opts, acc)
 
 
 @njit(cache=True, inline="always")
@@ -152,9 +148,9 @@ def _f(tt, z, dz, k, rhs):
     ``rhs``: the run's bundle (:func:`_run_rhs`). Inlined where the integrators call it every stage (one
     call site in each one's step); elsewhere :func:`_f_call`: each inlined copy of the right-hand side
     costs seconds of compile time."""
-    tg0, hg, qg, tgr, mu, v, vq, kin, kc, s, mats, vecs, opts, acc = rhs
+    tg0, hg, qg, tgr, mu, v, kin, kc, s, mats, vecs, opts, acc = rhs
     n = acc.shape[0]
-    q, tan_t = _forcing(tt, tg0, hg, qg, tgr, vq)
+    q, tan_t = _forcing(tt, tg0, hg, qg, tgr, v)
     nc, me = _rhs(z, 0, z, n, q, tan_t, mu, v, kin, kc, s, mats, vecs, opts, acc)
     for i in range(n):
         dz[k, i] = z[n + i]
@@ -184,7 +180,7 @@ def _gap_and_slip(x, xd, q, tan_t, v, b, fhat, kc, s, kin):
 def _contact(z, q, tan_t, rhs):
     """:func:`_gap_and_slip` of the state ``z = [x, x']`` under the forcing ``q``, ``tan_t``; ``rhs``: the
     run's bundle (:func:`_run_rhs`)."""
-    _tg0, _hg, _qg, _tgr, _mu, v, _vq, kin, kc, s, _mats, vecs, _opts, _acc = rhs
+    _tg0, _hg, _qg, _tgr, _mu, v, kin, kc, s, _mats, vecs, _opts, _acc = rhs
     n = z.shape[0] // 2
     return _gap_and_slip(z[:n], z[n:], q, tan_t, v, vecs[_B], vecs[_FHAT], kc, s, kin)
 
@@ -192,7 +188,7 @@ def _contact(z, q, tan_t, rhs):
 @njit(cache=True, inline="always")
 def _contact_at(tt, z, rhs):
     """:func:`_contact` at time ``tt`` (the forcing evaluated there)."""
-    q, tan_t = _forcing(tt, rhs[0], rhs[1], rhs[2], rhs[3], rhs[6])
+    q, tan_t = _forcing(tt, rhs[0], rhs[1], rhs[2], rhs[3], rhs[5])
     return _contact(z, q, tan_t, rhs)
 
 

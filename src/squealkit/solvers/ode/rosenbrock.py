@@ -90,7 +90,7 @@ def _rodas4_step(t, h, t_new, z, znew, work, tab, rhs, atol, rtol):
     Fs, U, zt, W, piv, Jx, Jv = work
     f0, ft, fa, F = Fs[0], Fs[1], Fs[2], Fs[3]
     RA, RC, RAL, RD, RM, gam = tab.A, tab.C, tab.alpha, tab.d, tab.m, tab.gamma
-    tg0, hg, qg, tgr, mu, v, vq, kin, kc, s, mats, vecs, opts, _acc = rhs
+    tg0, hg, qg, tgr, mu, v, kin, kc, s, mats, vecs, opts, _acc = rhs
     S = RA.shape[0]
     m = z.shape[0]
     n = m // 2
@@ -147,7 +147,7 @@ def _rodas4_step(t, h, t_new, z, znew, work, tab, rhs, atol, rtol):
         sc = atol[i] + rtol * max(abs(z[i]), abs(znew[i]))
         e = U[S - 1, i] / sc
         err += e * e
-    qn, tn = _forcing(t_new, tg0, hg, qg, tgr, vq)
+    qn, tn = _forcing(t_new, tg0, hg, qg, tgr, v)
     g_new, w_new = _contact(znew, qn, tn, rhs)
     return True, math.sqrt(err / m), 3 + S - 1, g_new, w_new
 
