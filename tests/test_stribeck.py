@@ -91,7 +91,7 @@ def test_linearised_friction_is_the_derivative_of_the_transient_force(kinematics
 
     def acc(x, xd):
         out = np.empty(3)
-        transient_kernels._rhs(x, 0, xd, 0, 3, 0.0, t, mu, V, float(model.slope_coupled), pc.kc, s, mats, vecs, opts,
+        transient_kernels._rhs(x, 0, xd, 0, 0.0, t, mu, V, float(model.slope_coupled), pc.kc, s, mats, vecs, opts,
                                out)
         return out
 

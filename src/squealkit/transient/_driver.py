@@ -4,7 +4,10 @@ Each chunk is one call of a kernel (RK4, Dormand-Prince 5(4) or Rodas4) over at 
 ``_CHUNK_STEPS`` steps or ``_CHUNK_SAMPLES`` output samples, with the surface profile sampled for
 it (q and tan(theta), cubic Hermite in time between ``_FORCING_PER_SAMPLE`` samples per output
 sample); the state carries over from chunk to chunk inside the kernels, so the chunks do not
-change the numbers. :func:`_integrate` gathers them into one in-memory run.
+change the numbers. :func:`_integrate` gathers them into one in-memory run. A kernel takes the
+named bundles of :mod:`squealkit.solvers.ode.bundles`, built here: the state, the model (``_prepare``'s
+``arrays``), the chunk's forcing, its span (or RK4's steps), the tableau, the control, the outputs
+and the log.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ import numpy as np
 from .._threads import limit_threads, threads_for
 from .._validation import check_memory
 from ..solvers import ode
+from ..solvers.ode.bundles import Control, DP5Tableau, Forcing, Log, Outputs, Rodas4Tableau, Span, State, Steps
 from ._runs import Progress, _Run
 from ._setup import _prepare
 from ._step import _step_size
@@ -36,8 +40,8 @@ def _dopri_tableau():
 
     A = np.zeros((RK45.n_stages, RK45.n_stages))
     A[:, : RK45.A.shape[1]] = RK45.A
-    return (np.ascontiguousarray(A), np.ascontiguousarray(RK45.B), np.ascontiguousarray(RK45.C),
-            np.ascontiguousarray(RK45.E), np.ascontiguousarray(RK45.P))
+    return DP5Tableau(np.ascontiguousarray(A), np.ascontiguousarray(RK45.B), np.ascontiguousarray(RK45.C),
+                      np.ascontiguousarray(RK45.E), np.ascontiguousarray(RK45.P))
 
 
 def _rodas4_tableau():
@@ -62,7 +66,7 @@ def _rodas4_tableau():
     dense = np.zeros((2, 6))
     dense[0, :5] = [10.12623508344586, -7.487995877610167, -34.80091861555747, -7.992771707568823, 1.025137723295662]
     dense[1, :5] = [-0.6762803392801253, 6.087714651680015, 16.43084320892478, 24.76722511418386, -6.594389125716872]
-    return A, Cm, alpha, d, m, dense, 0.25
+    return Rodas4Tableau(A, Cm, alpha, d, m, dense, 0.25)
 
 
 def _chunks(setup: dict[str, Any], progress: Progress | None) -> Iterator[tuple[int, tuple[np.ndarray, ...]]]:
@@ -81,9 +85,21 @@ def _chunks(setup: dict[str, Any], progress: Progress | None) -> Iterator[tuple[
         yield from _run_dopri5(setup, progress)
 
 
-def _buffers(R: int, m: int, n: int) -> tuple[np.ndarray, ...]:
-    return (np.full((R, m, n), np.nan), np.full((R, m, n), np.nan), np.full((R, m, n), np.nan),
-            np.full((R, m), np.nan), np.full((R, m), np.nan))
+def _buffers(R: int, m: int, n: int) -> Outputs:
+    return Outputs(np.full((R, m, n), np.nan), np.full((R, m, n), np.nan), np.full((R, m, n), np.nan),
+                   np.full((R, m), np.nan), np.full((R, m), np.nan))
+
+
+def _log(setup: dict[str, Any], adaptive: bool) -> Log:
+    """The per-run status, counters and events of a run; an adaptive run's counters and events are
+    also kept in ``setup`` (the result reports them); RK4 writes ``status`` and ``n_valid`` only."""
+    R = setup["X"].shape[0]
+    E = _MAX_EVENTS if adaptive else 0
+    log = Log(setup["status"], setup["n_valid"], np.zeros((R, 4)), np.full((R, E), np.nan),
+              np.zeros((R, E), dtype=np.int64), np.zeros(R, dtype=np.int64))
+    if adaptive:
+        setup.update(counts=log.counts, ev_t=log.ev_t, ev_k=log.ev_k, n_ev=log.n_ev)
+    return log
 
 
 #: Bytes per output sample and DOF, and per sample, of an in-memory run (the kernel's outputs,
@@ -125,9 +141,10 @@ def _profile_samples(runs: Sequence[_Run], x_start: float, times: np.ndarray) ->
 
 def _run_rk4(setup: dict[str, Any], progress: Progress | None) -> Iterator[tuple[int, tuple[np.ndarray, ...]]]:
     """Fixed-step classical RK4, chunk by chunk (q and slope at the half steps)."""
-    runs, X, V, arrays = setup["runs"], setup["X"], setup["V"], setup["arrays"]
-    dt, stride, n_steps, status = setup["dt"], setup["stride"], setup["n_steps"], setup["status"]
+    runs, dt, stride, n_steps, status = setup["runs"], setup["dt"], setup["stride"], setup["n_steps"], setup["status"]
     R = len(runs)
+    state = State(setup["X"], setup["V"], np.full(R, dt))
+    log = _log(setup, adaptive=False)
     chunk = max(stride, (_CHUNK_STEPS // stride) * stride)
     done = 0
     while True:
@@ -136,8 +153,8 @@ def _run_rk4(setup: dict[str, Any], progress: Progress | None) -> Iterator[tuple
         first = done // stride
         outs = _buffers(R, m // stride if m else 1, setup["n"])
         with limit_threads(threads_for(R, serial_below=2)):  # parallel over runs: one run is serial
-            ode.integrate_chunk(X, V, *arrays, qh, th, dt, m, stride, *outs, first, setup["limit"], status,
-                                setup["n_valid"], first)
+            ode.integrate_chunk(state, setup["arrays"], Forcing(qh, th, done * dt, 0.5 * dt),
+                                Steps(m, stride, first, first), setup["limit"], outs, log)
         done += m
         yield first, outs
         if progress is not None:
@@ -167,10 +184,10 @@ def _run_dopri5(setup: dict[str, Any], progress: Progress | None
                                                   np.repeat((atol_x * w)[:, None], n, axis=1)], axis=1))
     tableau = _dopri_tableau() if method == "dopri5" else _rodas4_tableau()
     kernel = ode.integrate_adaptive if method == "dopri5" else ode.integrate_rosenbrock
-    H = np.minimum(h_max, 0.1 / w)
-    setup.update(counts=np.zeros((R, 4)), ev_t=np.full((R, _MAX_EVENTS), np.nan),
-                 ev_k=np.zeros((R, _MAX_EVENTS), dtype=np.int64), n_ev=np.zeros(R, dtype=np.int64), atol=atol_a,
-                 h_max=h_max)
+    state = State(X, V, np.minimum(h_max, 0.1 / w))
+    control = Control(rtol, atol_a, h_max, setup["limit"])
+    log = _log(setup, adaptive=True)
+    setup.update(atol=atol_a, h_max=h_max)
     per = _FORCING_PER_SAMPLE
     o_first = 0
     while o_first < n_out:
@@ -181,11 +198,8 @@ def _run_dopri5(setup: dict[str, Any], progress: Progress | None
         qg, tg = _profile_samples(runs, setup["x_start"], g)
         outs = _buffers(R, o_last - o_first + 1, n)
         with limit_threads(threads_for(R, serial_below=2)):  # parallel over runs: one run is serial
-            kernel(
-                X, V, H, *arrays, qg, tg, g[0], 1.0 / (fs * per), t_a, t_b, fs, o_first, o_last, o_first, *tableau,
-                rtol, atol_a, h_max, *outs, setup["limit"], status, setup["n_valid"], setup["counts"], setup["ev_t"],
-                setup["ev_k"], setup["n_ev"],
-            )
+            kernel(state, arrays, Forcing(qg, tg, g[0], 1.0 / (fs * per)), Span(t_a, t_b, fs, o_first, o_last, o_first),
+                   tableau, control, outs, log)
         yield o_first, outs
         if progress is not None:
             progress(o_last, n_out - 1)

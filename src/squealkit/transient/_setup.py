@@ -12,6 +12,7 @@ import numpy as np
 
 from .._threads import thread_limit
 from .._validation import InputError, check_budget, validate_finite, validate_fs, validate_positive
+from ..solvers.ode.bundles import Model
 from ._runs import _Run, _validate_method
 from ._step import _check_sampling, _step_size
 from .contact import Contact, contact_geometry
@@ -134,8 +135,6 @@ def _prepare(
     s = np.array([float(r.model.sliding_direction) for r in runs])
     mu = np.array([r.mu for r in runs])
     v = np.array([r.speed for r in runs])
-    # the speed at which each run's profile passes the forcing's interpolation: 0 where the slope is not dq/dx
-    vq = np.array([r.speed if r.profile.slope_is_dq_dx else 0.0 for r in runs])
     opts = contact.options()
 
     X = np.empty((R, n))
@@ -145,7 +144,10 @@ def _prepare(
         X[i], V[i] = _initial_state(run, contact, x0, v0, perturbation, noise[i], x_start)
     status = np.zeros(R, dtype=np.int64)
     n_valid = np.zeros(R, dtype=np.int64)
-    arrays = (bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, f, fhat, kc, s, mu, v, vq, opts)
+    # the speed at which each run's profile passes the forcing's interpolation: 0 where the slope is not dq/dx
+    # (ConstantIncline holds tan(theta) apart from q; every other profile's slope is dq/dx)
+    vq = np.array([r.speed if r.profile.slope_is_dq_dx else 0.0 for r in runs])
+    arrays = Model(bM, fM, C, K0, Kn, Kf, Knx, Kfx, kin, F0, fn, ff, b, fhat, kc, s, mu, v, vq, opts)
     return dict(runs=runs, X=X, V=V, arrays=arrays, n=n, n_out=n_out, n_steps=n_steps, status=status,
                 n_valid=n_valid, dt=dt, dt_user=dt_user, stride=stride, x_start=x_start, limit=limit, contact=contact,
                 rtol=rtol, atol_user=atol, bounds=bounds, method=method, fs=fs)

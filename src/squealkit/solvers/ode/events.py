@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from .force import _forcing, _gap_and_slip
+from .force import _contact_at
 
 # Event codes recorded per run:
 EVENT_CONTACT_OPENS = 1
@@ -51,17 +51,16 @@ def _interp(z, z1, St, Co, h, th, rosenbrock, out):
 
 
 @njit(cache=True, error_model="numpy")  # called at events only: compiled once, not inlined at each call
-def _locate(slip, side_old, n_iter, z, z1, St, Co, h, rosenbrock, t, tg0, hg, qg, tgr, vq, v, b, fhat, kc, s, kin,
-            v_reg, zd):
+def _locate(slip, side_old, n_iter, z, z1, St, Co, h, rosenbrock, t, rhs, zd):
     """Fraction of the step at which the contact force changes sign (``slip`` False) or the sliding
-    speed crosses the stick band ``|w| < v_reg`` (``slip`` True), by bisection on the dense output."""
-    n = zd.shape[0] // 2
+    speed crosses the stick band ``|w| < v_reg`` (``slip`` True), by bisection on the dense output
+    (:func:`_interp`); ``rhs``: the run's bundle (:func:`.force._run_rhs`)."""
+    v_reg = rhs[12][4]
     lo, hi = 0.0, 1.0
     for _ in range(n_iter):
         mid = 0.5 * (lo + hi)
         _interp(z, z1, St, Co, h, mid, rosenbrock, zd)
-        qm, tm = _forcing(t + mid * h, tg0, hg, qg, tgr, vq)
-        gm, wm = _gap_and_slip(zd[:n], zd[n:], qm, tm, v, b, fhat, kc, s, kin)
+        gm, wm = _contact_at(t + mid * h, zd, rhs)
         side = (wm < v_reg) if slip else (gm > 0.0)
         if side == side_old:
             lo = mid
@@ -71,28 +70,29 @@ def _locate(slip, side_old, n_iter, z, z1, St, Co, h, rosenbrock, t, tg0, hg, qg
 
 
 @njit(cache=True, error_model="numpy")
-def _log_event(r, t_ev, kind, ev_t, ev_k, n_ev):
-    """Record event ``kind`` at ``t_ev`` for run ``r`` (counted even when the buffer is full)."""
-    k_ev = n_ev[r]
-    if k_ev < ev_t.shape[1]:
-        ev_t[r, k_ev] = t_ev
-        ev_k[r, k_ev] = kind
-    n_ev[r] = k_ev + 1
+def _log_event(r, t_ev, kind, log):
+    """Record event ``kind`` at ``t_ev`` for run ``r`` in ``log`` (:class:`.bundles.Log`; counted even
+    when the buffer is full)."""
+    k_ev = log.n_ev[r]
+    if k_ev < log.ev_t.shape[1]:
+        log.ev_t[r, k_ev] = t_ev
+        log.ev_k[r, k_ev] = kind
+    log.n_ev[r] = k_ev + 1
 
 
 @njit(cache=True, error_model="numpy")
-def _store(r, o, o_base, z, dz, nc, me, limit, out_x, out_v, out_a, out_nc, out_me, n_valid):
-    """Write output sample ``o`` of run ``r`` at row ``o - o_base`` of the output buffers; False
-    (nothing written) if some |x_i| > ``limit``."""
-    n = out_x.shape[2]
+def _store(r, o, o_base, z, dz, nc, me, limit, out, n_valid):
+    """Write output sample ``o`` of run ``r`` at row ``o - o_base`` of the output buffers ``out``
+    (:class:`.bundles.Outputs`); False (nothing written) if some |x_i| > ``limit``."""
+    n = out.x.shape[2]
     for i in range(n):
         if not (abs(z[i]) <= limit):
             return False
     for i in range(n):
-        out_x[r, o - o_base, i] = z[i]
-        out_v[r, o - o_base, i] = z[n + i]
-        out_a[r, o - o_base, i] = dz[n + i]
-    out_nc[r, o - o_base] = nc
-    out_me[r, o - o_base] = me
+        out.x[r, o - o_base, i] = z[i]
+        out.v[r, o - o_base, i] = z[n + i]
+        out.a[r, o - o_base, i] = dz[n + i]
+    out.nc[r, o - o_base] = nc
+    out.me[r, o - o_base] = me
     n_valid[r] = o + 1
     return True

@@ -2,7 +2,8 @@
 
 All matrices and load vectors arrive premultiplied by M^-1 (``K0 = M^-1 K0`` and so on; ``bM``
 and ``fM`` are M^-1 b and M^-1 f), so the right-hand side is the acceleration directly; a run's
-13 arrays travel bundled in two (:func:`_bundle`).
+13 arrays travel bundled in two (:func:`_bundle`), and with its forcing and scalars in one tuple
+(:func:`_run_rhs`) to the integrators' right-hand side :func:`_f`.
 
 Contact force (the part of eq. 4 carried by the contact), for each run::
 
@@ -54,9 +55,10 @@ def _bundle(C, K0, Kn, Kf, Knx, Kfx, bM, fM, F0, fn, ff, b, fhat):
 
 
 @njit(cache=True, inline="always")
-def _rhs(x, ox, xd, od, n, q, t, mu, v, kin, kc, s, mats, vecs, opts, acc):
-    """Accelerations ``acc`` at the displacements ``x[ox:ox + n]`` and velocities ``xd[od:od + n]``;
+def _rhs(x, ox, xd, od, q, t, mu, v, kin, kc, s, mats, vecs, opts, acc):
+    """Accelerations ``acc`` (n,) at the displacements ``x[ox:ox + n]`` and velocities ``xd[od:od + n]``;
     returns (N cos theta, effective mu). ``mats``, ``vecs``: the run's arrays (:func:`_bundle`)."""
+    n = acc.shape[0]
     for i in range(n):
         ri = vecs[_F0, i]
         for j in range(n):
@@ -107,8 +109,8 @@ def _forcing(tt, tg0, hg, qg, tgr, vel):
     """q and tan(theta) at time tt: cubic Hermite in time through the samples of q and dq/dt = v tan(theta).
 
     ``vel`` is the speed at which the profile passes (``vq`` of the kernels): 0 for a profile whose slope is
-    not dq/dx (a held incline, :class:`~squealkit.transient.profiles.ConstantIncline`), whose q and
-    tan(theta) are then each interpolated on their own (q with zero end slopes, tan(theta) linearly)."""
+    not dq/dx (a held incline), whose q and tan(theta) are then each interpolated on their own (q with zero
+    end slopes, tan(theta) linearly)."""
     G = qg.shape[0]
     u = (tt - tg0) / hg
     j = math.floor(u)
@@ -133,13 +135,27 @@ def _forcing(tt, tg0, hg, qg, tgr, vel):
 
 
 @njit(cache=True, inline="always")
-def _f(tt, z, dz, k, n, tg0, hg, qg, tgr, mu, v, vq, kin, kc, s, mats, vecs, opts, acc):
+def _run_rhs(r, model, forcing, acc):
+    """Run ``r``'s right-hand side, bundled (the argument ``rhs`` of :func:`_f`): ``(t0, h, q, tan_theta,
+    mu, v, vq, kin, kc, s, mats, vecs, opts, acc)``, the forcing grid's row r (:class:`.bundles.Forcing`),
+    the run's scalars, its arrays in two (:func:`_bundle`), the contact law's flags and ``acc``, a scratch (n,)."""
+    mats, vecs = _bundle(model.C[r], model.K0[r], model.Kn[r], model.Kf[r], model.Knx[r], model.Kfx[r],
+                         model.bM[r], model.fM[r], model.F0[r], model.fn[r], model.ff[r], model.b[r], model.fhat[r])
+    return (forcing.t0, forcing.h, forcing.q[r], forcing.tan_theta[r], model.mu[r], model.v[r], model.vq[r],
+            model.kin[r], model.kc[r], model.s[r], mats, vecs, model.opts, acc)
+
+
+@njit(cache=True, inline="always")
+def _f(tt, z, dz, k, rhs):
     """First-order right-hand side ``dz[k] = [x', x'']`` at (tt, z); returns (N cos theta, mu_eff, q, tan theta).
 
-    Inlined where the integrators call it every stage (one call site in each one's step); elsewhere
-    :func:`_f_call`: each inlined copy of the right-hand side costs seconds of compile time."""
+    ``rhs``: the run's bundle (:func:`_run_rhs`). Inlined where the integrators call it every stage (one
+    call site in each one's step); elsewhere :func:`_f_call`: each inlined copy of the right-hand side
+    costs seconds of compile time."""
+    tg0, hg, qg, tgr, mu, v, vq, kin, kc, s, mats, vecs, opts, acc = rhs
+    n = acc.shape[0]
     q, tan_t = _forcing(tt, tg0, hg, qg, tgr, vq)
-    nc, me = _rhs(z, 0, z, n, n, q, tan_t, mu, v, kin, kc, s, mats, vecs, opts, acc)
+    nc, me = _rhs(z, 0, z, n, q, tan_t, mu, v, kin, kc, s, mats, vecs, opts, acc)
     for i in range(n):
         dz[k, i] = z[n + i]
         dz[k, n + i] = acc[i]
@@ -147,9 +163,9 @@ def _f(tt, z, dz, k, n, tg0, hg, qg, tgr, mu, v, vq, kin, kc, s, mats, vecs, opt
 
 
 @njit(cache=True, error_model="numpy")
-def _f_call(tt, z, dz, k, n, tg0, hg, qg, tgr, mu, v, vq, kin, kc, s, mats, vecs, opts, acc):
+def _f_call(tt, z, dz, k, rhs):
     """:func:`_f` compiled once, called: for the first sample of a chunk and the dense output."""
-    return _f(tt, z, dz, k, n, tg0, hg, qg, tgr, mu, v, vq, kin, kc, s, mats, vecs, opts, acc)
+    return _f(tt, z, dz, k, rhs)
 
 
 @njit(cache=True, inline="always")
@@ -165,14 +181,32 @@ def _gap_and_slip(x, xd, q, tan_t, v, b, fhat, kc, s, kin):
 
 
 @njit(cache=True, inline="always")
-def _jacobian(x, xd, q, t, mu, v, C, K0, Kn, Kf, Knx, Kfx, kin, bM, fM, b, fhat, kc, s, opts, Jx, Jv):
-    """Analytic d(acc)/dx into Jx and d(acc)/dx' into Jv (the force law of :func:`_rhs`).
+def _contact(z, q, tan_t, rhs):
+    """:func:`_gap_and_slip` of the state ``z = [x, x']`` under the forcing ``q``, ``tan_t``; ``rhs``: the
+    run's bundle (:func:`_run_rhs`)."""
+    _tg0, _hg, _qg, _tgr, _mu, v, _vq, kin, kc, s, _mats, vecs, _opts, _acc = rhs
+    n = z.shape[0] // 2
+    return _gap_and_slip(z[:n], z[n:], q, tan_t, v, vecs[_B], vecs[_FHAT], kc, s, kin)
+
+
+@njit(cache=True, inline="always")
+def _contact_at(tt, z, rhs):
+    """:func:`_contact` at time ``tt`` (the forcing evaluated there)."""
+    q, tan_t = _forcing(tt, rhs[0], rhs[1], rhs[2], rhs[3], rhs[6])
+    return _contact(z, q, tan_t, rhs)
+
+
+@njit(cache=True, inline="always")
+def _jacobian(x, xd, q, t, mu, v, kin, kc, s, mats, vecs, opts, Jx, Jv):
+    """Analytic d(acc)/dx into Jx and d(acc)/dx' into Jv (the force law of :func:`_rhs`, the same arguments).
 
     Linear law: -K0 - g (Kn + kin s t Knx) - e (Kf + kin s t Kfx), and -C. Structured law with
     Nc = -kc (b_t.x - q) (0 and flat when the contact is open), mu_e(w) = mu(w) tanh(w / v_reg),
     w = v - s fhat.x': d/dx adds (g bM + e fM) dNc/dx, d/dx' adds Nc (s fM - t bM) mu_e'(w) (-s fhat).
     """
     n = x.shape[0]
+    C, K0, Kn, Kf, Knx, Kfx = mats[_C], mats[_K0], mats[_KN], mats[_KF], mats[_KNX], mats[_KFX]
+    bM, fM, b, fhat = vecs[_BM], vecs[_FM], vecs[_B], vecs[_FHAT]
     for i in range(n):
         for j in range(n):
             Jx[i, j] = -K0[i, j]
