@@ -19,6 +19,7 @@ Kept apart from ``make_golden_kernels.py``, in a folder of its own: ``test_golde
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import sys
 import warnings
 from pathlib import Path
@@ -42,17 +43,16 @@ def _small_chunks(samples: int, steps: int):
         _driver._CHUNK_SAMPLES, _driver._CHUNK_STEPS = old
 
 
-def _arrays(ds) -> dict[str, np.ndarray]:
-    """Every numeric variable and coordinate of a Dataset, and its numeric attributes."""
-    out: dict[str, np.ndarray] = {}
-    for name in list(ds.data_vars) + list(ds.coords):
-        a = np.asarray(ds[name].values)
-        if a.dtype.kind in "fciub":
-            out[f"var:{name}"] = a
-    for k, v in ds.attrs.items():
-        if isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):
-            out[f"attr:{k}"] = np.asarray(v)
-    return out
+def _golden_kernels_script():
+    """``make_golden_kernels.py`` beside this file (a script, not a package), loaded by its path."""
+    spec = importlib.util.spec_from_file_location("make_golden_kernels", HERE / "make_golden_kernels.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+#: Every numeric variable, coordinate and attribute of a Dataset: the same arrays the kernels' golden cases keep.
+_arrays = _golden_kernels_script()._dataset_arrays
 
 
 def cases() -> dict[str, dict[str, np.ndarray]]:
